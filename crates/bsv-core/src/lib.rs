@@ -1,0 +1,11 @@
+//! BSV core: the types every crate shares (triangle mesh, point cloud, segment ids), PLY/OBJ I/O,
+//! mesh checks and repairs, geometry helpers, the camera model, point-cloud cleaning and the
+//! virtual two-camera scanner. No registration or volume logic lives here.
+
+pub mod cloud;
+pub mod mesh;
+pub mod segment;
+
+pub use cloud::PointCloud;
+pub use mesh::TriMesh;
+pub use segment::{Aggregate, Segment, EXTREMITIES, PALETTE, SEGMENT_COUNT, TRUNK_LIMBS};

@@ -2,9 +2,16 @@
 //! mesh checks and repairs, geometry helpers, the camera model, point-cloud cleaning and the
 //! virtual two-camera scanner. No registration or volume logic lives here.
 
+pub mod camera;
+pub mod check;
+pub mod clean;
 pub mod cloud;
+pub mod geometry;
+pub mod io;
 pub mod mesh;
+pub mod scanner;
 pub mod segment;
+pub mod shapes;
 
 pub use cloud::PointCloud;
 pub use mesh::TriMesh;

@@ -1,0 +1,1 @@
+//! PLY and OBJ readers and writers (in progress).

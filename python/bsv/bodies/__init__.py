@@ -8,12 +8,16 @@ from __future__ import annotations
 
 from .asset import AssetError, asset_path, load_asset
 from .body import Body, SolveError, make_body, solve_stature_bmi
+from .cohort import Subject, cohort, iter_cohort, subject, volumes_json, write_cohort, write_subject
+from .collide import penetrations
 from .labels import PALETTE, LabelError, aggregates, segment_volumes, volume
 from .model import Phenotype, PhenotypeError, shape
 from .pose import Pose, PoseError
+from .template import templates, write_templates
 
 __all__ = [
     "AssetError", "Body", "LabelError", "PALETTE", "Phenotype", "PhenotypeError", "Pose", "PoseError",
     "SolveError", "aggregates", "asset_path", "load_asset", "make_body", "segment_volumes", "shape",
-    "solve_stature_bmi", "volume",
+    "solve_stature_bmi", "volume", "Subject", "cohort", "iter_cohort", "subject", "volumes_json", "write_cohort",
+    "write_subject", "penetrations", "templates", "write_templates",
 ]

@@ -15,7 +15,11 @@ from .pose import Pose, pose_vertices
 
 
 class SolveError(ValueError):
-    """The stature/BMI solver cannot reach the requested values."""
+    """The stature/BMI solver cannot reach the requested values (``reachable``: the attainable range)."""
+
+    def __init__(self, message: str, reachable: tuple[float, float] | None = None) -> None:
+        super().__init__(message)
+        self.reachable = reachable
 
 
 @lru_cache(maxsize=1)
@@ -94,7 +98,7 @@ def _solve1d(f, lo: float, hi: float, target: float, tol: float, what: str) -> f
     flo, fhi = f(lo) - target, f(hi) - target
     if flo > 0 or fhi < 0:
         raise SolveError(f"{what}: target {target:.3f} is outside the reachable range "
-                         f"[{flo + target:.3f}, {fhi + target:.3f}]")
+                         f"[{flo + target:.3f}, {fhi + target:.3f}]", (flo + target, fhi + target))
     side = 0
     x = lo
     for _ in range(60):

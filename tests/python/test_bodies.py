@@ -1,0 +1,195 @@
+"""Synthetic MakeHuman bodies: closure, orientation, volumes, symmetry, cross-check numbers, solver, cohort."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import sys
+import types
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _import_bodies():
+    """bsv.bodies is pure numpy: import it even when the Rust extension bsv._bsv is not built."""
+    sys.path.insert(0, str(ROOT / "python"))
+    try:
+        importlib.import_module("bsv")
+    except ImportError:
+        for k in [k for k in sys.modules if k == "bsv" or k.startswith("bsv.")]:
+            del sys.modules[k]
+        pkg = types.ModuleType("bsv")
+        pkg.__path__ = [str(ROOT / "python" / "bsv")]
+        sys.modules["bsv"] = pkg
+    return importlib.import_module("bsv.bodies")
+
+
+bodies = _import_bodies()
+from bsv.bodies.collide import penetrations, winding_numbers  # noqa: E402
+from bsv.bodies.labels import boundary_loops  # noqa: E402
+from bsv.bodies.meshio import read_ply  # noqa: E402
+
+
+def edges_closed(faces: np.ndarray) -> bool:
+    """Every directed edge appears once and its reverse once: closed and consistently oriented."""
+    e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]).astype(np.int64)
+    n = int(faces.max()) + 1
+    key, rev = e[:, 0] * n + e[:, 1], e[:, 1] * n + e[:, 0]
+    return len(np.unique(key)) == len(key) and np.array_equal(np.sort(key), np.sort(rev))
+
+
+@pytest.fixture(scope="module")
+def default_body():
+    return bodies.make_body()
+
+
+def test_clean_body_is_watertight_and_outward(default_body):
+    b = default_body
+    assert edges_closed(b.faces)
+    assert b.volume_l > 0
+    # outward: a point far outside has winding number 0, the pelvis centre 1
+    w = winding_numbers(np.array([[0.0, 0.95, 0.0], [3.0, 1.0, 3.0]]), b.vertices, b.faces)
+    assert w[0] == pytest.approx(1.0, abs=1e-6) and w[1] == pytest.approx(0.0, abs=1e-6)
+    # Euler characteristic 2 (genus 0)
+    ne = len(b.faces) * 3 // 2
+    assert len(b.vertices) - ne + len(b.faces) == 2
+
+
+def test_fourteen_segments_each_one_patch(default_body):
+    b = default_body
+    assert set(np.unique(b.face_labels)) == set(range(1, 15))
+    assert set(np.unique(b.vertex_labels)) == set(range(1, 15))
+    # each boundary between two segments is a closed loop; the limb chain has the expected neighbours
+    pairs = {(s, t) for s, t, _ in boundary_loops(b.faces, b.face_labels)}
+    assert pairs == {(1, 2), (2, 3), (2, 4), (3, 5), (4, 6), (5, 7), (6, 8), (2, 9), (2, 10), (9, 11),
+                     (10, 12), (11, 13), (12, 14)}
+    # the left segments lie at +X (the subject's left)
+    for left, right in ((3, 4), (5, 6), (9, 10), (13, 14)):
+        assert b.vertices[b.vertex_labels == left, 0].mean() > 0.05
+        assert b.vertices[b.vertex_labels == right, 0].mean() < -0.05
+
+
+def test_segment_volumes_add_up_to_whole(default_body):
+    b = default_body
+    v = b.volumes_l()
+    segs = [k for k in v if k not in ("whole", "trunk_limbs", "arm_l", "arm_r", "leg_l", "leg_r")]
+    assert len(segs) == 14
+    assert sum(v[k] for k in segs) == pytest.approx(b.volume_l, rel=1e-12)
+    assert v["whole"] == pytest.approx(b.volume_l, rel=1e-12)
+    assert v["arm_l"] == pytest.approx(v["upper_arm_l"] + v["forearm_l"])
+    assert v["trunk_limbs"] < v["whole"]
+
+
+def test_volume_of_translated_body_is_unchanged(default_body):
+    b = default_body
+    shifted = bodies.segment_volumes(b.vertices + np.array([5.0, -2.0, 7.0]), b.faces, b.face_labels)
+    orig = bodies.segment_volumes(b.vertices, b.faces, b.face_labels)
+    for k in orig:
+        assert shifted[k] == pytest.approx(orig[k], rel=1e-9)
+
+
+def test_left_right_symmetry(default_body):
+    v = default_body.volumes_l()
+    for seg in ("upper_arm", "forearm", "hand", "thigh", "shin", "foot"):
+        assert abs(v[f"{seg}_l"] - v[f"{seg}_r"]) / v[f"{seg}_l"] < 0.005, seg
+
+
+@pytest.mark.parametrize("gender,stature,litres", [(1.0, 1.73, 63.5), (0.0, 1.59, 48.0), (0.5, 1.66, 55.0)])
+def test_cross_check_against_independent_numbers(gender, stature, litres):
+    b = bodies.make_body(bodies.Phenotype(gender=gender, age=bodies.Phenotype.age_from_years(25)))
+    assert b.stature == pytest.approx(stature, rel=0.02)
+    assert b.volume_l == pytest.approx(litres, rel=0.02)
+    assert b.vertices[:, 1].min() == pytest.approx(0.0, abs=1e-12)
+
+
+def test_phenotype_changes_volume_in_the_expected_direction():
+    heavy = bodies.make_body(bodies.Phenotype(weight=1.0)).volume_l
+    light = bodies.make_body(bodies.Phenotype(weight=0.0)).volume_l
+    tall = bodies.make_body(bodies.Phenotype(height=1.0)).stature
+    assert heavy > 1.1 * light
+    assert tall > 2.2
+
+
+def test_pose_angles_are_applied():
+    a = bodies.load_asset()
+    for down in (25.0, 50.0):
+        b = bodies.make_body(pose=bodies.Pose.symmetric(arm_down=down, elbow=0.0))
+        v, j = bodies.shape(bodies.Phenotype(), a)
+        from bsv.bodies.pose import bone_transforms
+        R, T = bone_transforms(j, bodies.Pose.symmetric(arm_down=down, elbow=0.0), a)
+        sh, el = (R[a.bone(n)] @ j[a.bone(n), 0] + T[a.bone(n)] for n in ("upperarm01.L", "lowerarm01.L"))
+        d = el - sh
+        assert np.degrees(np.arctan2(-d[1], d[0])) == pytest.approx(down, abs=1e-6)
+        assert b.stature > 1.6
+
+
+def test_dual_quaternion_pose_keeps_forearm_volume():
+    a = bodies.load_asset()
+    v, j = bodies.shape(bodies.Phenotype(), a)
+    rest = bodies.segment_volumes(v, a.faces, bodies.make_body().face_labels)
+    posed = bodies.make_body().volumes_l()
+    assert posed["forearm_l"] == pytest.approx(rest[5] * 1e3, rel=0.03)
+
+
+def test_stature_bmi_solver():
+    ph = bodies.solve_stature_bmi(1.76, 25.0, bodies.Phenotype(gender=0.5))
+    b = bodies.make_body(ph)
+    assert abs(b.stature - 1.76) < 1e-3
+    assert abs(b.bmi - 25.0) < 0.1
+    assert ph.muscle <= 0.5
+    with pytest.raises(bodies.SolveError):
+        bodies.solve_stature_bmi(1.76, 60.0)
+
+
+def test_bad_inputs_are_rejected():
+    with pytest.raises(bodies.PhenotypeError):
+        bodies.make_body(bodies.Phenotype(weight=1.5))
+    with pytest.raises(bodies.PhenotypeError):
+        bodies.make_body(bodies.Phenotype(local={"nose/nose-huge": 0.5}))
+    with pytest.raises(bodies.PoseError):
+        bodies.make_body(pose=bodies.Pose(arm_down_l=170.0))
+
+
+def test_local_modifier_moves_its_segment():
+    base = bodies.make_body().volumes_l()
+    fat = bodies.make_body(bodies.Phenotype(local={"legs/l-upperleg-fat": 1.0})).volumes_l()
+    assert fat["thigh_l"] > base["thigh_l"] * 1.05
+    assert fat["thigh_r"] == pytest.approx(base["thigh_r"], rel=1e-9)
+
+
+def test_penetration_check_detects_contact():
+    clean = bodies.make_body()
+    assert penetrations(clean.vertices, clean.faces, clean.face_labels) == {}
+    bad = bodies.make_body(bodies.Phenotype(weight=1.0, muscle=0.0), bodies.Pose.symmetric(80.0, 0.0, -3.0))
+    hits = penetrations(bad.vertices, bad.faces, bad.face_labels)
+    assert "upper_arm_l/torso" in hits and "thigh_l/thigh_r" in hits
+
+
+def test_cohort_is_deterministic_and_plausible(tmp_path):
+    a = bodies.write_cohort(tmp_path / "a", 2, seed=7)
+    b = bodies.write_cohort(tmp_path / "b", 2, seed=7)
+    for (pa, ja), (pb, jb) in zip(a, b):
+        assert pa.read_bytes() == pb.read_bytes()
+        assert ja.read_bytes() == jb.read_bytes()
+    doc = json.loads(a[0][1].read_text())
+    assert doc["subject"]["sex"] == "female" and json.loads(a[1][1].read_text())["subject"]["sex"] == "male"
+    for _, j in a:
+        d = json.loads(j.read_text())
+        vol = d["volumes_l"]
+        assert {"whole", "trunk_limbs", "arm_l", "arm_r", "leg_l", "leg_r", "torso"} <= set(vol)
+        assert 18.3 <= d["subject"]["bmi"] <= 35.2
+        assert abs(d["subject"]["stature_m"] - d["subject"]["stature_target_m"]) < 1e-3
+        assert d["subject"]["phenotype"]["local"], "local modifiers are on by default"
+    v, f, vl, fl = read_ply(a[0][0])
+    s0 = bodies.subject(0, seed=7)
+    assert np.array_equal(v, s0.body.vertices) and np.array_equal(fl, s0.body.face_labels)
+    assert edges_closed(f)
+    vols = bodies.segment_volumes(v, f, fl)
+    assert sum(vols.values()) * 1e3 == pytest.approx(doc["volumes_l"]["whole"], rel=1e-6)
+    assert penetrations(v, f, fl) == {}
+    other = bodies.subject(0, seed=8)
+    assert not np.array_equal(other.body.vertices, s0.body.vertices)

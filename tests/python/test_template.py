@@ -1,0 +1,102 @@
+"""The shipped default templates: watertight, outward, labelled, and identical to what the code builds."""
+
+from __future__ import annotations
+
+import importlib
+import sys
+import types
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+TEMPLATES = ROOT / "assets" / "template"
+
+
+def _import_bodies():
+    sys.path.insert(0, str(ROOT / "python"))
+    try:
+        importlib.import_module("bsv")
+    except ImportError:  # the Rust extension is not built; bsv.bodies is pure numpy
+        for k in [k for k in sys.modules if k == "bsv" or k.startswith("bsv.")]:
+            del sys.modules[k]
+        pkg = types.ModuleType("bsv")
+        pkg.__path__ = [str(ROOT / "python" / "bsv")]
+        sys.modules["bsv"] = pkg
+    return importlib.import_module("bsv.bodies")
+
+
+bodies = _import_bodies()
+from bsv.bodies.meshio import ply_bytes, read_ply  # noqa: E402
+from bsv.bodies.template import check_watertight, obj_text, templates  # noqa: E402
+
+
+def edges_closed(faces: np.ndarray) -> bool:
+    e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]).astype(np.int64)
+    n = int(faces.max()) + 1
+    key, rev = e[:, 0] * n + e[:, 1], e[:, 1] * n + e[:, 0]
+    return len(np.unique(key)) == len(key) and np.array_equal(np.sort(key), np.sort(rev))
+
+
+def signed_volume(v, f):
+    return float(np.einsum("ij,ij->i", v[f[:, 0]], np.cross(v[f[:, 1]], v[f[:, 2]])).sum() / 6.0)
+
+
+@pytest.fixture(scope="module")
+def built():
+    return templates()
+
+
+@pytest.mark.parametrize("name,labels", [("template", {2, 3, 4, 5, 6, 9, 10, 11, 12}),
+                                         ("template_fine", {2, 3, 4, 5, 6, 9, 10, 11, 12}),
+                                         ("template_full", set(range(1, 15)))])
+def test_shipped_template_is_watertight_outward_labelled(name, labels):
+    v, f, vl, fl = read_ply(TEMPLATES / f"{name}.ply")
+    assert edges_closed(f)
+    assert signed_volume(v, f) > 0.04
+    assert set(np.unique(fl)) == labels
+    assert set(np.unique(vl)) == labels
+    # floor at y = 0 (the feet of the full body; the 9-segment templates keep the same placement)
+    assert v[:, 1].min() == pytest.approx(0.0, abs=1e-9) if 13 in labels else 0.05 < v[:, 1].min() < 0.12
+
+
+def test_shipped_files_match_the_builder(built):
+    for name, m in built.items():
+        assert (TEMPLATES / f"{name}.ply").read_bytes() == ply_bytes(m.vertices, m.faces, m.vertex_labels,
+                                                                     m.face_labels), name
+        text = (TEMPLATES / f"{name}.obj").read_text()
+        assert text.endswith(obj_text(m.vertices, m.faces, m.face_labels)), name
+
+
+def test_obj_groups_are_segment_names():
+    text = (TEMPLATES / "template.obj").read_text()
+    groups = {line.split()[1] for line in text.splitlines() if line.startswith("g ")}
+    assert groups == {"torso", "upper_arm_l", "upper_arm_r", "forearm_l", "forearm_r", "thigh_l", "thigh_r",
+                      "shin_l", "shin_r"}
+    n_f = sum(1 for line in text.splitlines() if line.startswith("f "))
+    n_v = sum(1 for line in text.splitlines() if line.startswith("v "))
+    v, f, _, _ = read_ply(TEMPLATES / "template.ply")
+    assert (n_v, n_f) == (len(v), len(f))
+
+
+def test_template_segments_equal_the_full_body_segments(built):
+    trunk = bodies.segment_volumes(built["template"].vertices, built["template"].faces,
+                                   built["template"].face_labels)
+    full = bodies.segment_volumes(built["template_full"].vertices, built["template_full"].faces,
+                                  built["template_full"].face_labels)
+    fine = bodies.segment_volumes(built["template_fine"].vertices, built["template_fine"].faces,
+                                  built["template_fine"].face_labels)
+    for k, vol in trunk.items():
+        assert vol == pytest.approx(full[k], rel=1e-6)
+        assert fine[k] == pytest.approx(vol, rel=1e-9)
+    assert sum(trunk.values()) == pytest.approx(bodies.volume(built["template"].vertices,
+                                                              built["template"].faces), rel=1e-12)
+
+
+def test_watertight_check_rejects_an_open_mesh(built):
+    m = built["template"]
+    with pytest.raises(Exception):
+        check_watertight(m.vertices, m.faces[1:])
+    with pytest.raises(Exception):
+        check_watertight(m.vertices, m.faces[:, ::-1])

@@ -178,3 +178,21 @@ def write_cohort(out_dir: str | Path, n: int, seed: int = 0, local: bool = True)
              "subjects": [{"mesh": p.name, "volumes": j.name} for p, j in paths]}
     (out / "cohort.json").write_text(json.dumps(index, indent=1) + "\n")
     return paths
+
+
+def main(argv: list[str] | None = None) -> None:
+    """``python -m bsv.bodies.cohort OUT_DIR N [SEED] [--no-local]``: write a cohort."""
+    import argparse
+
+    ap = argparse.ArgumentParser(description="Write a synthetic MakeHuman cohort (PLY + ground-truth JSON).")
+    ap.add_argument("out_dir")
+    ap.add_argument("n", type=int)
+    ap.add_argument("seed", type=int, nargs="?", default=0)
+    ap.add_argument("--no-local", action="store_true", help="macro phenotypes only (no local modifiers)")
+    args = ap.parse_args(argv)
+    for ply, js in write_cohort(args.out_dir, args.n, args.seed, not args.no_local):
+        print(ply, js)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,141 @@
+//! Writing a virtual capture the way a real one is written, so the front-end can be tested
+//! without a camera.
+//!
+//! Layout of `dir`:
+//! - `<camera>/depth.png`: 16-bit depth, metres = value x `depth_scale` (0.00025, like the L515), 0 = none;
+//! - `<camera>/color.png`: 8-bit RGB, the body in a Lambert-shaded skin tone on a mid-grey background;
+//! - `<camera>/labels.png`: 8-bit grey, the segment id of each pixel (0 = background/unlabelled);
+//! - `<camera>/camera.json`: [`CaptureCamera`] (intrinsics, the estimated extrinsics a calibration
+//!   would give, the true ones, the applied error, the depth scale, file names);
+//! - `calibration.json`: `{"cameras": {"front": {"intrinsics", "camera_to_world"}, "back": ...}}`
+//!   with the estimated extrinsics;
+//! - `scan.json`: condition and seed.
+
+use super::{ExtrinsicError, Scan, ScanError};
+use crate::camera::{CameraCalibration, Extrinsics, Intrinsics};
+use image::{ImageBuffer, Luma, Rgb};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Depth units of the written 16-bit depth PNG, metres per unit (L515 default).
+pub const DEPTH_SCALE: f64 = 0.00025;
+
+/// Skin tone of the colour render (sRGB).
+const SKIN: [f64; 3] = [224.0, 172.0, 140.0];
+/// Background grey of the colour render.
+const BACKGROUND: [u8; 3] = [128, 128, 128];
+
+/// Contents of `<camera>/camera.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CaptureCamera {
+    /// Camera name.
+    pub name: String,
+    /// Intrinsics of the depth, colour and label images (aligned).
+    pub intrinsics: Intrinsics,
+    /// Camera-to-world extrinsics as calibrated (the estimated ones).
+    pub camera_to_world: Extrinsics,
+    /// The true camera-to-world extrinsics (ground truth, virtual captures only).
+    pub true_camera_to_world: Extrinsics,
+    /// The calibration error applied (camera frame).
+    pub extrinsic_error: ExtrinsicError,
+    /// Metres per unit of `depth.png`.
+    pub depth_scale: f64,
+    /// Depth image file name.
+    pub depth: String,
+    /// Colour image file name.
+    pub color: String,
+    /// Label image file name.
+    pub labels: String,
+}
+
+#[derive(Serialize)]
+struct CalibrationFile {
+    cameras: BTreeMap<String, CameraCalibration>,
+}
+
+#[derive(Serialize)]
+struct ScanInfo<'a> {
+    condition: &'a str,
+    seed: u64,
+    cameras: Vec<&'a str>,
+    n_points: usize,
+}
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ScanError + '_ {
+    move |source| ScanError::Io { path: path.to_path_buf(), source }
+}
+
+fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), ScanError> {
+    let text = serde_json::to_string_pretty(value)
+        .map_err(|e| ScanError::Io { path: path.to_path_buf(), source: std::io::Error::other(e) })?;
+    std::fs::write(path, text + "\n").map_err(io_err(path))
+}
+
+fn image_err(path: &Path) -> impl FnOnce(image::ImageError) -> ScanError + '_ {
+    move |e| ScanError::Image { path: path.to_path_buf(), message: e.to_string() }
+}
+
+/// Writes the capture folder described in the module docs (creating `dir` and sub-folders).
+pub fn write_capture(scan: &Scan, dir: &Path) -> Result<(), ScanError> {
+    std::fs::create_dir_all(dir).map_err(io_err(dir))?;
+    let mut calibration = BTreeMap::new();
+    for view in &scan.views {
+        let cdir = dir.join(&view.name);
+        std::fs::create_dir_all(&cdir).map_err(io_err(&cdir))?;
+        let (w, h) = (view.intrinsics.width, view.intrinsics.height);
+        let size_err = |p: &Path| ScanError::Image { path: p.to_path_buf(), message: "image size does not match the intrinsics".into() };
+
+        let depth_path = cdir.join("depth.png");
+        let raw: Vec<u16> = view
+            .depth
+            .iter()
+            .map(|&z| if z > 0.0 { (f64::from(z) / DEPTH_SCALE).round().clamp(1.0, 65535.0) as u16 } else { 0 })
+            .collect();
+        let img: ImageBuffer<Luma<u16>, _> = ImageBuffer::from_raw(w, h, raw).ok_or_else(|| size_err(&depth_path))?;
+        img.save(&depth_path).map_err(image_err(&depth_path))?;
+
+        let color_path = cdir.join("color.png");
+        let mut rgb = Vec::with_capacity(view.depth.len() * 3);
+        for (z, s) in view.depth.iter().zip(&view.shade) {
+            if *z > 0.0 {
+                let f = 0.3 + 0.7 * f64::from(*s);
+                rgb.extend(SKIN.map(|c| (c * f).round().clamp(0.0, 255.0) as u8));
+            } else {
+                rgb.extend(BACKGROUND);
+            }
+        }
+        let img: ImageBuffer<Rgb<u8>, _> = ImageBuffer::from_raw(w, h, rgb).ok_or_else(|| size_err(&color_path))?;
+        img.save(&color_path).map_err(image_err(&color_path))?;
+
+        let label_path = cdir.join("labels.png");
+        let img: ImageBuffer<Luma<u8>, _> =
+            ImageBuffer::from_raw(w, h, view.labels.clone()).ok_or_else(|| size_err(&label_path))?;
+        img.save(&label_path).map_err(image_err(&label_path))?;
+
+        let cam = CaptureCamera {
+            name: view.name.clone(),
+            intrinsics: view.intrinsics,
+            camera_to_world: view.estimated_extrinsics,
+            true_camera_to_world: view.true_extrinsics,
+            extrinsic_error: view.error,
+            depth_scale: DEPTH_SCALE,
+            depth: "depth.png".into(),
+            color: "color.png".into(),
+            labels: "labels.png".into(),
+        };
+        write_json(&cdir.join("camera.json"), &cam)?;
+        calibration.insert(
+            view.name.clone(),
+            CameraCalibration { intrinsics: view.intrinsics, camera_to_world: view.estimated_extrinsics },
+        );
+    }
+    write_json(&dir.join("calibration.json"), &CalibrationFile { cameras: calibration })?;
+    let info = ScanInfo {
+        condition: scan.condition.name(),
+        seed: scan.seed,
+        cameras: scan.views.iter().map(|v| v.name.as_str()).collect(),
+        n_points: scan.cloud.len(),
+    };
+    write_json(&dir.join("scan.json"), &info)
+}

@@ -1,1 +1,133 @@
-//! PLY and OBJ readers and writers (in progress).
+//! PLY and OBJ readers and writers (DESIGN.md "Formats").
+//!
+//! File-level entry points pick the format from the extension (`.ply`, `.obj`, case-insensitive) and
+//! wrap the format errors with the path. The in-memory parsers and encoders live in [`ply`] and
+//! [`obj`] (used by tests and fuzzing).
+
+pub mod error;
+pub mod obj;
+pub mod ply;
+mod validate;
+
+use std::path::Path;
+
+use crate::{PointCloud, TriMesh};
+
+pub use error::{AttributeError, ReadError, WriteError};
+pub use ply::PlyEncoding;
+
+/// File formats known by extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// Stanford PLY (`.ply`).
+    Ply,
+    /// Wavefront OBJ (`.obj`).
+    Obj,
+}
+
+/// The extensions this module reads and writes, for messages.
+pub const SUPPORTED_EXTENSIONS: &str = ".ply, .obj";
+
+impl Format {
+    /// The format of `path` from its extension (case-insensitive), or `None`.
+    pub fn from_path(path: &Path) -> Option<Format> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "ply" => Some(Format::Ply),
+            "obj" => Some(Format::Obj),
+            _ => None,
+        }
+    }
+}
+
+fn extension_of(path: &Path) -> String {
+    path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default()
+}
+
+fn read_bytes(path: &Path) -> Result<Vec<u8>, ReadError> {
+    std::fs::read(path).map_err(|source| ReadError::Io { path: path.to_path_buf(), source })
+}
+
+/// Reads a triangle mesh from a `.ply` (with a face element) or `.obj` file.
+pub fn read_mesh(path: &Path) -> Result<TriMesh, ReadError> {
+    read_mesh_with_report(path).map(|(m, _)| m)
+}
+
+/// Reads a triangle mesh like [`read_mesh`] and also returns the OBJ report (unknown group names and
+/// the like; empty for PLY files).
+pub fn read_mesh_with_report(path: &Path) -> Result<(TriMesh, obj::ObjReport), ReadError> {
+    let format = Format::from_path(path).ok_or_else(|| ReadError::UnsupportedExtension {
+        path: path.to_path_buf(),
+        extension: extension_of(path),
+    })?;
+    let bytes = read_bytes(path)?;
+    match format {
+        Format::Ply => ply::parse_mesh(&bytes)
+            .map(|m| (m, obj::ObjReport::default()))
+            .map_err(|source| ReadError::Ply { path: path.to_path_buf(), source }),
+        Format::Obj => {
+            obj::parse(&bytes).map_err(|source| ReadError::Obj { path: path.to_path_buf(), source })
+        }
+    }
+}
+
+/// Reads a point cloud: a PLY's vertex element (a mesh PLY's vertices too), or an OBJ's `v` lines.
+pub fn read_point_cloud(path: &Path) -> Result<PointCloud, ReadError> {
+    let format = Format::from_path(path).ok_or_else(|| ReadError::UnsupportedExtension {
+        path: path.to_path_buf(),
+        extension: extension_of(path),
+    })?;
+    let bytes = read_bytes(path)?;
+    match format {
+        Format::Ply => {
+            ply::parse_cloud(&bytes).map_err(|source| ReadError::Ply { path: path.to_path_buf(), source })
+        }
+        Format::Obj => obj::parse_points(&bytes)
+            .map(PointCloud::new)
+            .map_err(|source| ReadError::Obj { path: path.to_path_buf(), source }),
+    }
+}
+
+fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
+    std::fs::write(path, bytes).map_err(|source| WriteError::Io { path: path.to_path_buf(), source })
+}
+
+fn format_for_write(path: &Path) -> Result<Format, WriteError> {
+    Format::from_path(path).ok_or_else(|| WriteError::UnsupportedExtension {
+        path: path.to_path_buf(),
+        extension: extension_of(path),
+    })
+}
+
+/// Writes a mesh by extension: `.ply` as binary little-endian PLY, `.obj` as OBJ with segment groups.
+pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<(), WriteError> {
+    write_mesh_with(path, mesh, PlyEncoding::BinaryLittleEndian)
+}
+
+/// Writes a mesh by extension with the given PLY encoding (ignored for `.obj`).
+pub fn write_mesh_with(path: &Path, mesh: &TriMesh, encoding: PlyEncoding) -> Result<(), WriteError> {
+    let invalid = |source| WriteError::Invalid { path: path.to_path_buf(), source };
+    let bytes = match format_for_write(path)? {
+        Format::Ply => ply::mesh_to_bytes(mesh, encoding).map_err(invalid)?,
+        Format::Obj => obj::to_string(mesh).map_err(invalid)?.into_bytes(),
+    };
+    write_bytes(path, &bytes)
+}
+
+/// Writes a point cloud as binary little-endian PLY (`.ply`) or as OBJ `v` lines (`.obj`).
+pub fn write_point_cloud(path: &Path, cloud: &PointCloud) -> Result<(), WriteError> {
+    write_point_cloud_with(path, cloud, PlyEncoding::BinaryLittleEndian)
+}
+
+/// Writes a point cloud with the given PLY encoding (ignored for `.obj`, which keeps points only).
+pub fn write_point_cloud_with(path: &Path, cloud: &PointCloud, encoding: PlyEncoding) -> Result<(), WriteError> {
+    let invalid = |source| WriteError::Invalid { path: path.to_path_buf(), source };
+    let bytes = match format_for_write(path)? {
+        Format::Ply => ply::cloud_to_bytes(cloud, encoding).map_err(invalid)?,
+        Format::Obj => {
+            let mesh = TriMesh::new(cloud.points.clone(), Vec::new());
+            obj::to_string(&mesh).map_err(invalid)?.into_bytes()
+        }
+    };
+    write_bytes(path, &bytes)
+}

@@ -1,0 +1,312 @@
+//! Wavefront OBJ reader and writer with segment groups.
+//!
+//! Reader: `v x y z` (an optional `w` or vertex colour after x, y, z is ignored), `f` in every index
+//! form (`v`, `v/vt`, `v//vn`, `v/vt/vn`, negative = relative to the vertices read so far), polygons
+//! fan-triangulated, `g`/`o` lines whose name is a segment name (DESIGN.md ids; exact, else
+//! case-insensitive) label the faces that follow. Unknown group names leave faces unlabelled (0) and are
+//! listed in [`ObjReport::unknown_groups`]. `vt`, `vn`, `s`, `usemtl`, `mtllib` and comments are ignored;
+//! other statements (`l`, `p`, curves) are counted in [`ObjReport::ignored_statements`].
+//! Face labels are present when at least one group name is a segment name. When every face is labelled
+//! (no 0), vertex labels are derived too: each vertex takes the label most of its faces carry, ties going
+//! to the smaller id, unreferenced vertices 0.
+//!
+//! Writer: `v` lines with the shortest decimal that parses back to the same f64 (exact round trip),
+//! `f` lines in face order, and a `g <segment name>` line whenever the face label changes. A mesh with
+//! vertex labels but no face labels gets face labels by majority of its three corners (ties to the
+//! smaller id), since OBJ cannot store vertex labels.
+
+use std::borrow::Cow;
+use std::fmt::Write as _;
+
+use serde::Serialize;
+use thiserror::Error;
+
+use super::error::AttributeError;
+use super::validate;
+use crate::segment::{Segment, SEGMENT_COUNT};
+use crate::TriMesh;
+
+/// What the reader noticed besides the mesh itself.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
+pub struct ObjReport {
+    /// Group/object names that are not segment names (faces under them are unlabelled), in order.
+    pub unknown_groups: Vec<String>,
+    /// Faces with more than three vertices that were fan-triangulated.
+    pub polygons_triangulated: usize,
+    /// Statements skipped because BSV does not use them (`l`, `p`, curves, unknown keywords).
+    pub ignored_statements: usize,
+    /// True when vertex labels were derived from face labels (every face labelled).
+    pub vertex_labels_derived: bool,
+}
+
+/// Why OBJ text could not be read. Every message names the line and says what to do.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ObjError {
+    /// Zero bytes.
+    #[error("the file is empty (0 bytes); check the path, or export the mesh again")]
+    Empty,
+    /// No `v` line at all.
+    #[error("the file has no `v` (vertex) lines; it is not an OBJ mesh — check the file, or export it again")]
+    NoVertices,
+    /// A malformed `v` line.
+    #[error("line {line}: bad vertex: {message}; a vertex line is `v x y z` with numbers — fix the line")]
+    BadVertex {
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A NaN or infinite coordinate.
+    #[error("line {line}: vertex {vertex} has a non-finite coordinate ({value}); remove NaN/inf vertices and export again")]
+    NonFinite {
+        /// 1-based line number.
+        line: usize,
+        /// 0-based vertex index.
+        vertex: usize,
+        /// The value read.
+        value: f64,
+    },
+    /// A malformed `f` line.
+    #[error("line {line}: bad face: {message}; a face line is `f i j k ...` with 1-based (or negative) vertex indices — fix the line")]
+    BadFace {
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A face with fewer than three vertices.
+    #[error("line {line}: face has {n} vertices; faces need at least 3 — remove the line or export again")]
+    FaceTooSmall {
+        /// 1-based line number.
+        line: usize,
+        /// Vertices on the line.
+        n: usize,
+    },
+    /// A face index outside the vertex list.
+    #[error("line {line}: face index {index} is out of range: the file has {vertex_count} vertices (valid 1..={vertex_count} or -1..=-{vertex_count} relative); the file is corrupt or truncated — export it again")]
+    IndexOutOfRange {
+        /// 1-based line number.
+        line: usize,
+        /// The index as written in the file.
+        index: i64,
+        /// Vertices available (read so far for relative indices, in the file for absolute ones).
+        vertex_count: usize,
+    },
+}
+
+/// The segment a group/object name designates: exact name, else case-insensitive.
+fn segment_of(name: &str) -> Option<Segment> {
+    Segment::from_name(name).or_else(|| Segment::from_name(&name.to_ascii_lowercase()))
+}
+
+fn lines(bytes: &[u8]) -> impl Iterator<Item = (usize, Cow<'_, str>)> {
+    bytes.split(|&b| b == b'\n').enumerate().map(|(i, raw)| {
+        let raw = raw.split(|&b| b == b'#').next().unwrap_or(&[]);
+        (i + 1, String::from_utf8_lossy(raw))
+    })
+}
+
+fn parse_vertex(line_no: usize, vertex: usize, mut words: std::str::SplitAsciiWhitespace<'_>) -> Result<[f64; 3], ObjError> {
+    let mut p = [0.0; 3];
+    for (k, c) in p.iter_mut().enumerate() {
+        let w = words.next().ok_or_else(|| ObjError::BadVertex {
+            line: line_no,
+            message: format!("it has {k} coordinate(s), 3 are needed"),
+        })?;
+        let v: f64 =
+            w.parse().map_err(|_| ObjError::BadVertex { line: line_no, message: format!("{w:?} is not a number") })?;
+        if !v.is_finite() {
+            return Err(ObjError::NonFinite { line: line_no, vertex, value: v });
+        }
+        *c = v;
+    }
+    Ok(p)
+}
+
+/// Reads only the `v` lines (for reading an OBJ as a point cloud).
+pub fn parse_points(bytes: &[u8]) -> Result<Vec<[f64; 3]>, ObjError> {
+    if bytes.is_empty() {
+        return Err(ObjError::Empty);
+    }
+    let mut points = Vec::new();
+    for (line_no, line) in lines(bytes) {
+        let mut words = line.split_ascii_whitespace();
+        if words.next() == Some("v") {
+            points.push(parse_vertex(line_no, points.len(), words)?);
+        }
+    }
+    if points.is_empty() {
+        return Err(ObjError::NoVertices);
+    }
+    Ok(points)
+}
+
+/// Parses OBJ bytes into a triangle mesh with optional segment labels, and a report.
+pub fn parse(bytes: &[u8]) -> Result<(TriMesh, ObjReport), ObjError> {
+    if bytes.is_empty() {
+        return Err(ObjError::Empty);
+    }
+    let mut report = ObjReport::default();
+    let mut vertices: Vec<[f64; 3]> = Vec::new();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    let mut labels: Vec<u8> = Vec::new();
+    let mut any_segment_group = false;
+    let mut current = 0u8;
+    // Absolute indices that pointed past the vertices read so far: checked at the end.
+    let mut forward: Vec<(usize, i64, u32)> = Vec::new();
+    let mut poly: Vec<u32> = Vec::with_capacity(8);
+    for (line_no, line) in lines(bytes) {
+        let mut words = line.split_ascii_whitespace();
+        let Some(keyword) = words.next() else { continue };
+        match keyword {
+            "v" => vertices.push(parse_vertex(line_no, vertices.len(), words)?),
+            "f" => {
+                poly.clear();
+                for w in words {
+                    let head = w.split('/').next().unwrap_or("");
+                    let i: i64 = head.parse().map_err(|_| ObjError::BadFace {
+                        line: line_no,
+                        message: format!("{w:?} does not start with a vertex index"),
+                    })?;
+                    let n = vertices.len() as i64;
+                    let resolved = match i {
+                        0 => {
+                            return Err(ObjError::BadFace {
+                                line: line_no,
+                                message: "index 0 (OBJ indices start at 1)".into(),
+                            })
+                        }
+                        i if i < 0 => {
+                            if n + i < 0 {
+                                return Err(ObjError::IndexOutOfRange { line: line_no, index: i, vertex_count: vertices.len() });
+                            }
+                            n + i
+                        }
+                        i => i - 1,
+                    };
+                    let Ok(r) = u32::try_from(resolved) else {
+                        return Err(ObjError::IndexOutOfRange { line: line_no, index: i, vertex_count: vertices.len() });
+                    };
+                    if resolved >= n {
+                        forward.push((line_no, i, r));
+                    }
+                    poly.push(r);
+                }
+                if poly.len() < 3 {
+                    return Err(ObjError::FaceTooSmall { line: line_no, n: poly.len() });
+                }
+                if poly.len() > 3 {
+                    report.polygons_triangulated += 1;
+                }
+                for k in 1..poly.len() - 1 {
+                    triangles.push([poly[0], poly[k], poly[k + 1]]);
+                    labels.push(current);
+                }
+            }
+            "g" | "o" => {
+                let names: Vec<&str> = words.collect();
+                match names.iter().find_map(|n| segment_of(n)) {
+                    Some(s) => {
+                        current = s.id();
+                        any_segment_group = true;
+                    }
+                    None => {
+                        current = 0;
+                        let name = names.join(" ");
+                        if !name.is_empty() && name != "default" && !report.unknown_groups.contains(&name) {
+                            report.unknown_groups.push(name);
+                        }
+                    }
+                }
+            }
+            "vt" | "vn" | "vp" | "s" | "usemtl" | "mtllib" => {}
+            _ => report.ignored_statements += 1,
+        }
+    }
+    if vertices.is_empty() {
+        return Err(ObjError::NoVertices);
+    }
+    if let Some(&(line, index, _)) = forward.iter().find(|f| f.2 as usize >= vertices.len()) {
+        return Err(ObjError::IndexOutOfRange { line, index, vertex_count: vertices.len() });
+    }
+    let mut mesh = TriMesh::new(vertices, triangles);
+    if any_segment_group {
+        if !labels.is_empty() && labels.iter().all(|&l| l != 0) {
+            mesh.vertex_labels = Some(vertex_labels_by_majority(mesh.n_vertices(), &mesh.triangles, &labels));
+            report.vertex_labels_derived = true;
+        }
+        mesh.face_labels = Some(labels);
+    }
+    Ok((mesh, report))
+}
+
+/// Each vertex takes the label most of its faces carry (ties to the smaller id; unreferenced: 0).
+fn vertex_labels_by_majority(n_vertices: usize, triangles: &[[u32; 3]], face_labels: &[u8]) -> Vec<u8> {
+    let mut votes = vec![[0u32; SEGMENT_COUNT]; n_vertices];
+    for (t, &l) in triangles.iter().zip(face_labels) {
+        for &v in t {
+            votes[v as usize][usize::from(l).min(SEGMENT_COUNT - 1)] += 1;
+        }
+    }
+    votes
+        .iter()
+        .map(|c| {
+            let mut best = 0usize;
+            for (id, &n) in c.iter().enumerate() {
+                if n > c[best] {
+                    best = id;
+                }
+            }
+            best as u8
+        })
+        .collect()
+}
+
+/// Label of a face from its corners' labels: the majority, ties to the smaller id.
+fn face_label_from_corners(l: [u8; 3]) -> u8 {
+    if l[0] == l[1] || l[0] == l[2] {
+        l[0]
+    } else if l[1] == l[2] {
+        l[1]
+    } else {
+        l[0].min(l[1]).min(l[2])
+    }
+}
+
+/// Encodes a mesh as OBJ text (see the module docs for how labels become groups).
+pub fn to_string(mesh: &TriMesh) -> Result<String, AttributeError> {
+    let n = mesh.n_vertices();
+    validate::length("vertex_labels", mesh.vertex_labels.as_deref(), n)?;
+    validate::labels("vertex_labels", mesh.vertex_labels.as_deref())?;
+    validate::length("face_labels", mesh.face_labels.as_deref(), mesh.n_triangles())?;
+    validate::labels("face_labels", mesh.face_labels.as_deref())?;
+    validate::finite(&mesh.vertices)?;
+    validate::indices(&mesh.triangles, n)?;
+    let mut s = String::with_capacity(n * 60 + mesh.n_triangles() * 30 + 64);
+    let _ = writeln!(s, "# generated by bsv {}", env!("CARGO_PKG_VERSION"));
+    let _ = writeln!(s, "# {} vertices, {} triangles; groups are segment names", n, mesh.n_triangles());
+    for p in &mesh.vertices {
+        // `{:?}` is the shortest decimal that parses back to the same f64.
+        let _ = writeln!(s, "v {:?} {:?} {:?}", p[0], p[1], p[2]);
+    }
+    let label_of = |t: usize| -> Option<u8> {
+        if let Some(fl) = &mesh.face_labels {
+            return Some(fl[t]);
+        }
+        let vl = mesh.vertex_labels.as_ref()?;
+        let tri = mesh.triangles[t];
+        Some(face_label_from_corners(tri.map(|v| vl[v as usize])))
+    };
+    let mut group: Option<u8> = None;
+    for (t, f) in mesh.triangles.iter().enumerate() {
+        if let Some(l) = label_of(t) {
+            if group != Some(l) {
+                let name = Segment::from_id(l).unwrap_or(Segment::Unlabelled).name();
+                let _ = writeln!(s, "g {name}");
+                group = Some(l);
+            }
+        }
+        let _ = writeln!(s, "f {} {} {}", f[0] + 1, f[1] + 1, f[2] + 1);
+    }
+    Ok(s)
+}

@@ -1,0 +1,575 @@
+//! PLY body decoding: a fast fixed-stride path for binary vertex elements (parallel, no per-record
+//! allocation) and a streaming record reader shared by ascii and binary bodies for everything else.
+
+use rayon::prelude::*;
+
+use super::header::{Element, Header, PropKind, Scalar};
+use super::{PlyData, PlyEncoding, PlyError};
+use crate::segment::SEGMENT_COUNT;
+
+/// Records above which the binary vertex path runs in parallel.
+const PAR_MIN_RECORDS: usize = 1 << 16;
+
+/// Decodes one binary scalar (the slice holds at least `ty.size()` bytes).
+#[inline(always)]
+fn decode(b: &[u8], ty: Scalar, big: bool) -> f64 {
+    macro_rules! rd {
+        ($t:ty, $n:expr) => {{
+            let mut a = [0u8; $n];
+            a.copy_from_slice(&b[..$n]);
+            (if big { <$t>::from_be_bytes(a) } else { <$t>::from_le_bytes(a) }) as f64
+        }};
+    }
+    match ty {
+        Scalar::I8 => f64::from(b[0] as i8),
+        Scalar::U8 => f64::from(b[0]),
+        Scalar::I16 => rd!(i16, 2),
+        Scalar::U16 => rd!(u16, 2),
+        Scalar::I32 => rd!(i32, 4),
+        Scalar::U32 => rd!(u32, 4),
+        Scalar::F32 => rd!(f32, 4),
+        Scalar::F64 => rd!(f64, 8),
+    }
+}
+
+/// A source of record values: a binary cursor or an ascii line tokenizer.
+trait Source<'a> {
+    /// Starts record `index` of `element`.
+    fn begin(&mut self, element: &'a Element, index: usize) -> Result<(), PlyError>;
+    /// The next value of the current record.
+    fn value(&mut self, ty: Scalar) -> Result<f64, PlyError>;
+    /// Ends the current record.
+    fn end(&mut self) -> Result<(), PlyError>;
+}
+
+/// Binary cursor over the body.
+struct Binary<'a> {
+    body: &'a [u8],
+    pos: usize,
+    big: bool,
+    element: &'a str,
+    count: usize,
+    index: usize,
+    record_start: usize,
+}
+
+impl<'a> Source<'a> for Binary<'a> {
+    #[inline]
+    fn begin(&mut self, element: &'a Element, index: usize) -> Result<(), PlyError> {
+        self.element = &element.name;
+        self.count = element.count;
+        self.index = index;
+        self.record_start = self.pos;
+        Ok(())
+    }
+
+    #[inline]
+    fn value(&mut self, ty: Scalar) -> Result<f64, PlyError> {
+        let n = ty.size();
+        match self.body.get(self.pos..self.pos + n) {
+            Some(b) => {
+                self.pos += n;
+                Ok(decode(b, ty, self.big))
+            }
+            None => Err(PlyError::Truncated {
+                element: self.element.to_string(),
+                index: self.index,
+                count: self.count,
+                offset: self.record_start,
+                needed: self.pos + n - self.record_start,
+                available: self.body.len() - self.record_start,
+            }),
+        }
+    }
+
+    #[inline]
+    fn end(&mut self) -> Result<(), PlyError> {
+        Ok(())
+    }
+}
+
+/// Ascii tokenizer: one record per non-empty line.
+struct Ascii<'a> {
+    text: &'a [u8],
+    /// Start of the next unread line.
+    pos: usize,
+    /// Line number of the line after `pos`'s previous line (1-based numbering of the whole file).
+    line_no: usize,
+    /// The current record's line and the cursor within it.
+    line: &'a [u8],
+    cursor: usize,
+    element: &'a str,
+    index: usize,
+}
+
+impl<'a> Ascii<'a> {
+    fn record_error(&self, message: String) -> PlyError {
+        PlyError::AsciiRecord { line: self.line_no, element: self.element.to_string(), index: self.index, message }
+    }
+
+    /// The next non-empty line, advancing the line counter.
+    fn next_line(&mut self) -> Option<&'a [u8]> {
+        while self.pos < self.text.len() {
+            let rest = &self.text[self.pos..];
+            let (line, adv) = match rest.iter().position(|&b| b == b'\n') {
+                Some(i) => (&rest[..i], i + 1),
+                None => (rest, rest.len()),
+            };
+            self.pos += adv;
+            self.line_no += 1;
+            if line.iter().any(|b| !b.is_ascii_whitespace()) {
+                return Some(line);
+            }
+        }
+        None
+    }
+
+    fn token(&mut self) -> Option<&'a [u8]> {
+        let line = self.line;
+        let mut i = self.cursor;
+        while i < line.len() && line[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        if i == line.len() {
+            self.cursor = i;
+            return None;
+        }
+        let start = i;
+        while i < line.len() && !line[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        self.cursor = i;
+        Some(&line[start..i])
+    }
+}
+
+impl<'a> Source<'a> for Ascii<'a> {
+    fn begin(&mut self, element: &'a Element, index: usize) -> Result<(), PlyError> {
+        self.element = &element.name;
+        self.index = index;
+        match self.next_line() {
+            Some(line) => {
+                self.line = line;
+                self.cursor = 0;
+                Ok(())
+            }
+            None => Err(PlyError::EndsEarly { element: element.name.clone(), index, count: element.count }),
+        }
+    }
+
+    fn value(&mut self, _ty: Scalar) -> Result<f64, PlyError> {
+        let Some(tok) = self.token() else {
+            return Err(self.record_error("the line has fewer values than the header's properties".into()));
+        };
+        match std::str::from_utf8(tok).ok().and_then(|s| s.parse::<f64>().ok()) {
+            Some(v) => Ok(v),
+            None => Err(self.record_error(format!("{:?} is not a number", String::from_utf8_lossy(tok)))),
+        }
+    }
+
+    fn end(&mut self) -> Result<(), PlyError> {
+        if self.token().is_some() {
+            return Err(self.record_error("the line has more values than the header's properties".into()));
+        }
+        Ok(())
+    }
+}
+
+/// Slots of the vertex values BSV keeps.
+const X: usize = 0;
+const NX: usize = 3;
+const RED: usize = 6;
+const LABEL: usize = 9;
+const N_SLOTS: usize = 10;
+
+/// Where each vertex property goes (`None` = skipped) and the types of the kept ones.
+struct VertexPlan {
+    slot_of_prop: Vec<Option<usize>>,
+    types: [Scalar; N_SLOTS],
+    has_normals: bool,
+    has_colors: bool,
+    has_label: bool,
+}
+
+fn scalar_prop(el: &Element, name: &str) -> Option<(usize, Scalar)> {
+    let i = el.find(name)?;
+    match el.props[i].kind {
+        PropKind::Scalar(s) => Some((i, s)),
+        PropKind::List { .. } => None,
+    }
+}
+
+fn vertex_plan(el: &Element) -> Result<VertexPlan, PlyError> {
+    let mut slot_of_prop = vec![None; el.props.len()];
+    let mut types = [Scalar::F64; N_SLOTS];
+    let mut assign = |slot: usize, (p, ty): (usize, Scalar)| {
+        slot_of_prop[p] = Some(slot);
+        types[slot] = ty;
+    };
+    for (k, name) in ["x", "y", "z"].iter().enumerate() {
+        let found = scalar_prop(el, name).ok_or_else(|| PlyError::MissingProperty {
+            element: el.name.clone(),
+            property: (*name).to_string(),
+            hint: "vertices need x, y and z (float or double); export the cloud with its coordinates",
+        })?;
+        assign(X + k, found);
+    }
+    let normals = ["nx", "ny", "nz"].map(|n| scalar_prop(el, n));
+    let has_normals = normals.iter().all(Option::is_some);
+    if has_normals {
+        for (k, f) in normals.into_iter().enumerate() {
+            if let Some(f) = f {
+                assign(NX + k, f);
+            }
+        }
+    }
+    let mut colors = ["red", "green", "blue"].map(|n| scalar_prop(el, n));
+    if !colors.iter().all(Option::is_some) {
+        colors = ["diffuse_red", "diffuse_green", "diffuse_blue"].map(|n| scalar_prop(el, n));
+    }
+    let has_colors = colors.iter().all(Option::is_some);
+    if has_colors {
+        for (k, f) in colors.into_iter().enumerate() {
+            if let Some(f) = f {
+                assign(RED + k, f);
+            }
+        }
+    }
+    let label = scalar_prop(el, "label");
+    let has_label = label.is_some();
+    if let Some(f) = label {
+        assign(LABEL, f);
+    }
+    Ok(VertexPlan { slot_of_prop, types, has_normals, has_colors, has_label })
+}
+
+/// Columns being filled for the vertex element.
+#[derive(Default)]
+struct VertexCols {
+    points: Vec<[f64; 3]>,
+    normals: Option<Vec<[f64; 3]>>,
+    colors: Option<Vec<[u8; 3]>>,
+    labels: Option<Vec<u8>>,
+}
+
+#[inline]
+fn to_color(v: f64, ty: Scalar) -> u8 {
+    let v = if ty.is_float() { (v * 255.0).round() } else { v };
+    // NaN maps to 0 through the saturating cast.
+    v.clamp(0.0, 255.0) as u8
+}
+
+/// A label value as a segment id, or `None` when it is not one.
+#[inline]
+fn to_label(v: f64) -> Option<u8> {
+    if v >= 0.0 && v < SEGMENT_COUNT as f64 && v.fract() == 0.0 {
+        Some(v as u8)
+    } else {
+        None
+    }
+}
+
+/// Reads the vertex element from a fixed-stride binary body slice, in parallel for large clouds.
+fn vertices_fixed(data: &[u8], stride: usize, el: &Element, plan: &VertexPlan, big: bool) -> Result<VertexCols, PlyError> {
+    let mut offsets = [0usize; N_SLOTS];
+    let mut off = 0;
+    for (p, prop) in el.props.iter().enumerate() {
+        if let Some(slot) = plan.slot_of_prop[p] {
+            offsets[slot] = off;
+        }
+        if let PropKind::Scalar(s) = prop.kind {
+            off += s.size();
+        }
+    }
+    let t = plan.types;
+    let par = el.count >= PAR_MIN_RECORDS;
+    fn run<T: Send, F: Fn(&[u8]) -> T + Sync + Send>(data: &[u8], stride: usize, par: bool, f: F) -> Vec<T> {
+        if par {
+            data.par_chunks_exact(stride).with_min_len(4096).map(f).collect()
+        } else {
+            data.chunks_exact(stride).map(f).collect()
+        }
+    }
+    let triple = |base: usize| {
+        let (o, tt) = (offsets, t);
+        move |r: &[u8]| {
+            [
+                decode(&r[o[base]..], tt[base], big),
+                decode(&r[o[base + 1]..], tt[base + 1], big),
+                decode(&r[o[base + 2]..], tt[base + 2], big),
+            ]
+        }
+    };
+    let points = run(data, stride, par, triple(X));
+    let normals = plan.has_normals.then(|| run(data, stride, par, triple(NX)));
+    let colors = plan.has_colors.then(|| {
+        let f = triple(RED);
+        run(data, stride, par, move |r: &[u8]| {
+            let c = f(r);
+            [to_color(c[0], t[RED]), to_color(c[1], t[RED + 1]), to_color(c[2], t[RED + 2])]
+        })
+    });
+    let labels = if plan.has_label {
+        let (o, ty) = (offsets[LABEL], t[LABEL]);
+        let raw = run(data, stride, par, move |r: &[u8]| to_label(decode(&r[o..], ty, big)).unwrap_or(u8::MAX));
+        if let Some(index) = raw.iter().position(|&l| l == u8::MAX) {
+            let value = decode(&data[index * stride + o..], ty, big);
+            return Err(PlyError::LabelOutOfRange { element: el.name.clone(), index, value });
+        }
+        Some(raw)
+    } else {
+        None
+    };
+    Ok(VertexCols { points, normals, colors, labels })
+}
+
+/// Reads one record's list or scalar that BSV does not keep.
+#[inline]
+fn skip_prop<'a, S: Source<'a>>(src: &mut S, kind: PropKind, el: &Element, index: usize) -> Result<(), PlyError> {
+    match kind {
+        PropKind::Scalar(s) => {
+            src.value(s)?;
+        }
+        PropKind::List { count, item } => {
+            let n = list_len(src.value(count)?, el, index)?;
+            for _ in 0..n {
+                src.value(item)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+fn list_len(v: f64, el: &Element, index: usize) -> Result<usize, PlyError> {
+    if v >= 0.0 && v.fract() == 0.0 && v <= u32::MAX as f64 {
+        Ok(v as usize)
+    } else {
+        Err(PlyError::BadListCount { element: el.name.clone(), index, value: v })
+    }
+}
+
+/// Capacity hint bounded by what the remaining body could hold (never trusts a header count blindly).
+fn capacity(count: usize, remaining: usize, min_record: usize) -> usize {
+    count.min(remaining / min_record.max(1) + 1)
+}
+
+/// Reads the vertex element record by record (ascii, or binary with list properties).
+fn vertices_stream<'a, S: Source<'a>>(src: &mut S, el: &'a Element, plan: &VertexPlan, remaining: usize) -> Result<VertexCols, PlyError> {
+    let cap = capacity(el.count, remaining, el.min_size());
+    let mut cols = VertexCols {
+        points: Vec::with_capacity(cap),
+        normals: plan.has_normals.then(|| Vec::with_capacity(cap)),
+        colors: plan.has_colors.then(|| Vec::with_capacity(cap)),
+        labels: plan.has_label.then(|| Vec::with_capacity(cap)),
+    };
+    let t = plan.types;
+    for index in 0..el.count {
+        src.begin(el, index)?;
+        let mut v = [0.0f64; N_SLOTS];
+        for (p, prop) in el.props.iter().enumerate() {
+            match (plan.slot_of_prop[p], prop.kind) {
+                (Some(slot), PropKind::Scalar(s)) => v[slot] = src.value(s)?,
+                (_, kind) => skip_prop(src, kind, el, index)?,
+            }
+        }
+        src.end()?;
+        cols.points.push([v[X], v[X + 1], v[X + 2]]);
+        if let Some(n) = cols.normals.as_mut() {
+            n.push([v[NX], v[NX + 1], v[NX + 2]]);
+        }
+        if let Some(c) = cols.colors.as_mut() {
+            c.push([to_color(v[RED], t[RED]), to_color(v[RED + 1], t[RED + 1]), to_color(v[RED + 2], t[RED + 2])]);
+        }
+        if let Some(l) = cols.labels.as_mut() {
+            let value = v[LABEL];
+            l.push(to_label(value).ok_or_else(|| PlyError::LabelOutOfRange { element: el.name.clone(), index, value })?);
+        }
+    }
+    Ok(cols)
+}
+
+/// Triangles and optional labels of the face element.
+struct FaceCols {
+    triangles: Vec<[u32; 3]>,
+    labels: Option<Vec<u8>>,
+}
+
+fn faces_stream<'a, S: Source<'a>>(src: &mut S, el: &'a Element, n_vertices: usize, remaining: usize) -> Result<FaceCols, PlyError> {
+    let list = ["vertex_indices", "vertex_index"]
+        .iter()
+        .find_map(|n| el.find(n).filter(|&i| matches!(el.props[i].kind, PropKind::List { .. })))
+        .ok_or_else(|| PlyError::MissingProperty {
+            element: el.name.clone(),
+            property: "vertex_indices (or vertex_index) list".into(),
+            hint: "faces need a list of vertex indices; export the mesh with its faces, or drop the face element",
+        })?;
+    let label = scalar_prop(el, "label").map(|(i, _)| i);
+    let cap = capacity(el.count, remaining, el.min_size());
+    let mut triangles: Vec<[u32; 3]> = Vec::with_capacity(cap);
+    let mut labels: Option<Vec<u8>> = label.map(|_| Vec::with_capacity(cap));
+    let index_of = |v: f64, face: usize| -> Result<u32, PlyError> {
+        if v >= 0.0 && v < n_vertices as f64 && v.fract() == 0.0 {
+            Ok(v as u32)
+        } else {
+            Err(PlyError::FaceIndexOutOfRange { face, index: v, vertex_count: n_vertices })
+        }
+    };
+    for face in 0..el.count {
+        src.begin(el, face)?;
+        let before = triangles.len();
+        let mut face_label = 0u8;
+        for (p, prop) in el.props.iter().enumerate() {
+            match prop.kind {
+                PropKind::List { count, item } if p == list => {
+                    let n = list_len(src.value(count)?, el, face)?;
+                    if n < 3 {
+                        return Err(PlyError::FaceTooSmall { face, n });
+                    }
+                    let a = index_of(src.value(item)?, face)?;
+                    let mut b = index_of(src.value(item)?, face)?;
+                    for _ in 2..n {
+                        let c = index_of(src.value(item)?, face)?;
+                        triangles.push([a, b, c]);
+                        b = c;
+                    }
+                }
+                PropKind::Scalar(s) if Some(p) == label => {
+                    let value = src.value(s)?;
+                    face_label = to_label(value)
+                        .ok_or_else(|| PlyError::LabelOutOfRange { element: el.name.clone(), index: face, value })?;
+                }
+                kind => skip_prop(src, kind, el, face)?,
+            }
+        }
+        src.end()?;
+        if let Some(l) = labels.as_mut() {
+            l.resize(l.len() + triangles.len() - before, face_label);
+        }
+    }
+    Ok(FaceCols { triangles, labels })
+}
+
+fn skip_stream<'a, S: Source<'a>>(src: &mut S, el: &'a Element) -> Result<(), PlyError> {
+    if el.props.is_empty() {
+        // Records without properties hold no data in either encoding.
+        return Ok(());
+    }
+    for index in 0..el.count {
+        src.begin(el, index)?;
+        for prop in &el.props {
+            skip_prop(src, prop.kind, el, index)?;
+        }
+        src.end()?;
+    }
+    Ok(())
+}
+
+/// First non-finite coordinate, as a typed error.
+fn check_finite(points: &[[f64; 3]]) -> Result<(), PlyError> {
+    let bad = if points.len() >= PAR_MIN_RECORDS {
+        points.par_iter().position_first(|p| !p.iter().all(|c| c.is_finite()))
+    } else {
+        points.iter().position(|p| !p.iter().all(|c| c.is_finite()))
+    };
+    match bad {
+        Some(vertex) => {
+            let value = points[vertex].iter().copied().find(|c| !c.is_finite()).unwrap_or(f64::NAN);
+            Err(PlyError::NonFinite { vertex, value })
+        }
+        None => Ok(()),
+    }
+}
+
+/// Decodes the body that follows `header` in `bytes`.
+pub(super) fn read_body(bytes: &[u8], header: &Header) -> Result<PlyData, PlyError> {
+    let body = bytes.get(header.body_offset..).unwrap_or(&[]);
+    let vertex_el = header
+        .elements
+        .iter()
+        .find(|e| e.name == "vertex")
+        .ok_or_else(|| PlyError::MissingElement { element: "vertex".into() })?;
+    let plan = vertex_plan(vertex_el)?;
+    let n_vertices = vertex_el.count;
+    let mut data = PlyData { encoding: header.encoding, comments: header.comments.clone(), ..PlyData::default() };
+    let mut vcols = None;
+    let mut fcols = None;
+    match header.encoding {
+        PlyEncoding::Ascii => {
+            let mut src = Ascii {
+                text: body,
+                pos: 0,
+                line_no: header.lines,
+                line: &[],
+                cursor: 0,
+                element: "",
+                index: 0,
+            };
+            for el in &header.elements {
+                let remaining = body.len() - src.pos.min(body.len());
+                match el.name.as_str() {
+                    "vertex" => vcols = Some(vertices_stream(&mut src, el, &plan, remaining)?),
+                    "face" => fcols = Some(faces_stream(&mut src, el, n_vertices, remaining)?),
+                    _ => skip_stream(&mut src, el)?,
+                }
+            }
+            let mut extra_lines = 0usize;
+            let first_extra = src.line_no + 1;
+            while src.next_line().is_some() {
+                extra_lines += 1;
+            }
+            if extra_lines > 0 {
+                return Err(extra_data(header, format!("{extra_lines} extra non-empty line(s) from line {first_extra}")));
+            }
+        }
+        PlyEncoding::BinaryLittleEndian | PlyEncoding::BinaryBigEndian => {
+            let big = header.encoding == PlyEncoding::BinaryBigEndian;
+            let mut src = Binary { body, pos: 0, big, element: "", count: 0, index: 0, record_start: 0 };
+            for el in &header.elements {
+                let remaining = body.len() - src.pos;
+                match (el.name.as_str(), el.fixed_size()) {
+                    ("face", _) => fcols = Some(faces_stream(&mut src, el, n_vertices, remaining)?),
+                    (name, Some(stride)) if stride > 0 => {
+                        let needed = stride.checked_mul(el.count).unwrap_or(usize::MAX);
+                        if needed > remaining {
+                            return Err(PlyError::Truncated {
+                                element: el.name.clone(),
+                                index: remaining / stride,
+                                count: el.count,
+                                offset: src.pos,
+                                needed,
+                                available: remaining,
+                            });
+                        }
+                        if name == "vertex" {
+                            let span = &body[src.pos..src.pos + needed];
+                            vcols = Some(vertices_fixed(span, stride, el, &plan, big)?);
+                        }
+                        src.pos += needed;
+                    }
+                    ("vertex", _) => vcols = Some(vertices_stream(&mut src, el, &plan, remaining)?),
+                    _ => skip_stream(&mut src, el)?,
+                }
+            }
+            let extra = &body[src.pos..];
+            if extra.iter().any(|&b| b != 0 && !b.is_ascii_whitespace()) {
+                return Err(extra_data(header, format!("{} extra byte(s) at body offset {}", extra.len(), src.pos)));
+            }
+        }
+    }
+    let v = vcols.unwrap_or_default();
+    check_finite(&v.points)?;
+    data.points = v.points;
+    data.normals = v.normals;
+    data.colors = v.colors;
+    data.vertex_labels = v.labels;
+    if let Some(f) = fcols {
+        data.triangles = Some(f.triangles);
+        data.face_labels = f.labels;
+    }
+    Ok(data)
+}
+
+fn extra_data(header: &Header, extra: String) -> PlyError {
+    let (element, count) = header.elements.last().map(|e| (e.name.clone(), e.count)).unwrap_or_default();
+    PlyError::ExtraData { element, count, extra }
+}

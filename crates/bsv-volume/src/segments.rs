@@ -1,0 +1,405 @@
+//! Segment volumes whose sum is the whole volume by construction.
+//!
+//! Each segment S is closed by caps built on its boundary, and every cap triangle of S is also a cap
+//! triangle of the neighbouring segment, with the opposite orientation. Summed over the segments the
+//! caps cancel triangle by triangle (each pair contributes `+d` and `-d` of the same computed number),
+//! so the segment volumes add up to the whole volume up to summation round-off, whatever the labels.
+//!
+//! Construction, on a closed, edge-manifold, consistently oriented mesh with one label per face:
+//! 1. Interface edges are the edges whose two faces carry different labels S < T. They are chained into
+//!    pieces through "regular" vertices (exactly two interface edges, same label pair); vertices where
+//!    three or more segments meet (or two segments touch at a point) are junctions and end pieces. A
+//!    piece is either a closed loop between two segments (the usual limb cut) or a path from junction
+//!    to junction.
+//! 2. Each piece gets one apex, the centroid of its vertices, shared by both sides: the cap is the fan of
+//!    the piece's edges to that apex. For a closed loop this is exactly "fan the loop to its centroid".
+//! 3. An open piece's fan leaves two spokes (junction to apex) unmatched. All pieces that touch each
+//!    other through junctions form a junction cluster with one hub, the centroid of its junction
+//!    vertices (a cluster has at least two); each spoke is closed by the triangle (apex, junction, hub),
+//!    again shared by the two sides of the piece. At a junction the spokes of one segment come in and go
+//!    out in equal numbers, and so do the hub edges, so every segment's surface is closed. The hub lies
+//!    on the line where the cut surfaces meet when the junctions do (two triple points of a limb joint,
+//!    the poles of a sphere cut in three sectors), so planar cuts stay planar and the parts are exact.
+//!
+//! Because every segment surface is closed, its volume does not depend on the reference point of the
+//! tetrahedra (the mesh centroid is used for round-off). Faces labelled 0 (unlabelled) are treated as a
+//! segment of their own: they count in `whole` but produce no segment entry.
+
+use crate::closed::{open_error, prepare, Hole};
+use crate::edges::{det6, used_centroid, validate, EdgeTable};
+use crate::labels::{face_labels_from_vertices, merge_small_islands, IslandOptions, IslandReport};
+use crate::VolumeError;
+use bsv_core::geometry::{add, scale};
+use bsv_core::{Segment, TriMesh};
+use std::collections::BTreeMap;
+
+/// Where the face labels used for segment volumes came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LabelSource {
+    /// The mesh's face labels.
+    Faces,
+    /// Derived from the mesh's vertex labels (majority of the corners).
+    Vertices,
+    /// The mesh has no labels: only the whole volume is known.
+    None,
+}
+
+/// Options of `segment_volumes_with`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SegmentOptions {
+    /// Close holes by centroid fans instead of failing with `OpenMesh` (cap faces take the most common
+    /// label along their loop).
+    pub close_holes: bool,
+    /// Merge small label islands into their surroundings before measuring (`None`: labels as given).
+    pub islands: Option<IslandOptions>,
+}
+
+/// Volumes of the segments of a labelled closed mesh, m^3.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SegmentVolumes {
+    /// Volume enclosed by the whole mesh, m^3 (= the sum of the segments and the unlabelled region).
+    pub whole_m3: f64,
+    /// Volume of every labelled segment present in the mesh, m^3 (absent segments are absent).
+    pub segments: BTreeMap<Segment, f64>,
+    /// Volume of the region of unlabelled faces when the mesh has both labelled and unlabelled faces.
+    pub unlabelled_m3: Option<f64>,
+    /// Where the labels came from.
+    pub label_source: LabelSource,
+    /// Holes closed before measuring (only with `close_holes`).
+    pub holes: Vec<Hole>,
+    /// True when the triangles faced inward and every volume was negated.
+    pub inverted: bool,
+    /// What island merging changed, when requested.
+    pub islands: Option<IslandReport>,
+    /// Statistics of the caps between segments.
+    pub caps: CapStats,
+    /// Human-readable remarks (missing labels, unlabelled faces, inverted mesh, ...).
+    pub notes: Vec<String>,
+}
+
+impl SegmentVolumes {
+    /// The volume of a segment, m^3, if present.
+    pub fn get(&self, s: Segment) -> Option<f64> {
+        self.segments.get(&s).copied()
+    }
+}
+
+/// Counts describing the caps built between segments.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct CapStats {
+    /// Interface edges (edges between faces of different labels).
+    pub interface_edges: usize,
+    /// Interface pieces that are closed loops.
+    pub closed_loops: usize,
+    /// Interface pieces that run from junction to junction.
+    pub open_pieces: usize,
+    /// Vertices where three or more segments meet (or two touch at a point).
+    pub junctions: usize,
+    /// Junction clusters (each with one hub point).
+    pub clusters: usize,
+}
+
+/// Volume of the whole mesh and of every label present, by the construction of the module docs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LabelVolumes {
+    /// Whole enclosed volume, m^3.
+    pub whole_m3: f64,
+    /// `(label, volume m^3, face count)` for every label that has faces, by label.
+    pub by_label: Vec<(u8, f64, usize)>,
+    /// Cap statistics.
+    pub caps: CapStats,
+}
+
+/// Segment volumes with default options (labels as given, no hole closing).
+/// Uses the face labels, or derives them from the vertex labels; with no labels only `whole` is given.
+pub fn segment_volumes(mesh: &TriMesh) -> Result<SegmentVolumes, VolumeError> {
+    segment_volumes_with(mesh, &SegmentOptions::default())
+}
+
+/// Segment volumes with options (hole closing, island merging).
+pub fn segment_volumes_with(mesh: &TriMesh, opts: &SegmentOptions) -> Result<SegmentVolumes, VolumeError> {
+    let (closed, holes, table) = prepare(mesh, opts.close_holes)?;
+    let mut notes = Vec::new();
+    let (mut labels, source) = match (&closed.face_labels, &closed.vertex_labels) {
+        (Some(f), _) => (f.clone(), LabelSource::Faces),
+        (None, Some(v)) => (face_labels_from_vertices(&closed.triangles, v), LabelSource::Vertices),
+        (None, None) => (vec![0u8; closed.triangles.len()], LabelSource::None),
+    };
+    let islands = match (opts.islands, source) {
+        (Some(o), LabelSource::Faces | LabelSource::Vertices) => Some(merge_small_islands(&closed, &mut labels, &o)),
+        _ => None,
+    };
+    let lv = label_volumes(&closed.vertices, &closed.triangles, &table, &labels);
+    let inverted = lv.whole_m3 < 0.0;
+    let sign = if inverted { -1.0 } else { 1.0 };
+    let mut segments = BTreeMap::new();
+    let mut unlabelled = None;
+    let n_labelled: usize = lv.by_label.iter().filter(|l| l.0 != 0).map(|l| l.2).sum();
+    for &(l, v, count) in &lv.by_label {
+        match Segment::from_id(l) {
+            Some(Segment::Unlabelled) | None => {
+                if n_labelled > 0 {
+                    unlabelled = Some(sign * v);
+                    notes.push(format!(
+                        "{count} of {} faces are unlabelled: their region ({:.3} L) counts in whole but in no segment",
+                        labels.len(),
+                        sign * v * 1e3
+                    ));
+                }
+            }
+            Some(s) => {
+                segments.insert(s, sign * v);
+            }
+        }
+    }
+    if source == LabelSource::None {
+        notes.push("the mesh has no segment labels (neither face nor vertex labels): only the whole volume is given".into());
+    } else if n_labelled == 0 {
+        notes.push("every face is unlabelled (label 0): only the whole volume is given".into());
+    }
+    if inverted {
+        notes.push("the triangles face inward (negative enclosed volume): every volume was negated; orient the mesh outward".into());
+    }
+    if !holes.is_empty() {
+        notes.push(format!("{} hole(s) were closed by centroid fans before measuring", holes.len()));
+    }
+    for (s, v) in &segments {
+        if *v <= 0.0 {
+            notes.push(format!("segment {s} has a non-positive volume ({:.4} L): its labels are probably scattered; merge small islands", v * 1e3));
+        }
+    }
+    Ok(SegmentVolumes {
+        whole_m3: sign * lv.whole_m3,
+        segments,
+        unlabelled_m3: unlabelled,
+        label_source: source,
+        holes,
+        inverted,
+        islands,
+        caps: lv.caps,
+        notes,
+    })
+}
+
+/// Volumes (m^3, signed) of every label of a closed mesh, `face_labels` one per triangle. The caller
+/// guarantees a validated mesh and its edge table (closed, manifold, consistently oriented).
+pub(crate) fn label_volumes(
+    vertices: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    table: &EdgeTable,
+    face_labels: &[u8],
+) -> LabelVolumes {
+    let r = used_centroid(vertices, triangles);
+    let pos = |v: u32| vertices[v as usize];
+    let mut acc = [0.0f64; 256];
+    let mut count = [0usize; 256];
+    let mut whole = 0.0;
+    for (t, &l) in triangles.iter().zip(face_labels) {
+        let d = det6(r, pos(t[0]), pos(t[1]), pos(t[2]));
+        acc[usize::from(l)] += d;
+        count[usize::from(l)] += 1;
+        whole += d;
+    }
+
+    // 1. Interface edges, oriented as the face with the smaller label runs them.
+    struct IEdge {
+        a: u32,
+        b: u32,
+        lo: u8,
+        hi: u8,
+    }
+    let iface: Vec<IEdge> = table
+        .interior
+        .iter()
+        .filter_map(|e| {
+            let (s, t) = (face_labels[e.face_fwd as usize], face_labels[e.face_back as usize]);
+            match s.cmp(&t) {
+                std::cmp::Ordering::Equal => None,
+                std::cmp::Ordering::Less => Some(IEdge { a: e.from, b: e.to, lo: s, hi: t }),
+                std::cmp::Ordering::Greater => Some(IEdge { a: e.to, b: e.from, lo: t, hi: s }),
+            }
+        })
+        .collect();
+    let mut caps = CapStats { interface_edges: iface.len(), ..CapStats::default() };
+    if iface.is_empty() {
+        return finish(acc, count, whole, caps);
+    }
+
+    // Interface edges at each vertex (CSR).
+    let n = vertices.len();
+    let mut start = vec![0usize; n + 1];
+    for e in &iface {
+        start[e.a as usize + 1] += 1;
+        start[e.b as usize + 1] += 1;
+    }
+    for k in 0..n {
+        start[k + 1] += start[k];
+    }
+    let mut fill = start.clone();
+    let mut at = vec![0u32; start[n]];
+    for (k, e) in iface.iter().enumerate() {
+        for v in [e.a, e.b] {
+            at[fill[v as usize]] = k as u32;
+            fill[v as usize] += 1;
+        }
+    }
+
+    // Pieces: union interface edges through regular vertices.
+    let mut uf = UnionFind::new(iface.len());
+    for v in 0..n {
+        let inc = &at[start[v]..start[v + 1]];
+        if let [e0, e1] = inc {
+            let (x, y) = (&iface[*e0 as usize], &iface[*e1 as usize]);
+            if (x.lo, x.hi) == (y.lo, y.hi) {
+                uf.union(*e0 as usize, *e1 as usize);
+            }
+        }
+    }
+    let mut piece_of_root = vec![u32::MAX; iface.len()];
+    let mut piece = vec![0u32; iface.len()];
+    let mut n_pieces = 0u32;
+    for k in 0..iface.len() {
+        let root = uf.find(k);
+        if piece_of_root[root] == u32::MAX {
+            piece_of_root[root] = n_pieces;
+            n_pieces += 1;
+        }
+        piece[k] = piece_of_root[root];
+    }
+    let np = n_pieces as usize;
+
+    // 2. Apex of each piece: centroid of its distinct vertices. Also the out-minus-in degree of every
+    //    (piece, vertex) on the smaller label's side: non-zero only at the ends of open pieces.
+    let mut incid: Vec<(u32, u32, i32)> = Vec::with_capacity(iface.len() * 2);
+    for (k, e) in iface.iter().enumerate() {
+        incid.push((piece[k], e.a, 1));
+        incid.push((piece[k], e.b, -1));
+    }
+    incid.sort_unstable_by_key(|x| (x.0, x.1));
+    let mut apex_sum = vec![[0.0f64; 3]; np];
+    let mut apex_n = vec![0usize; np];
+    let mut spokes: Vec<(u32, u32, i32)> = Vec::new(); // (piece, vertex, out - in)
+    let mut i = 0;
+    while i < incid.len() {
+        let (p, v, _) = incid[i];
+        let mut d = 0;
+        while i < incid.len() && incid[i].0 == p && incid[i].1 == v {
+            d += incid[i].2;
+            i += 1;
+        }
+        apex_sum[p as usize] = add(apex_sum[p as usize], pos(v));
+        apex_n[p as usize] += 1;
+        if d != 0 {
+            spokes.push((p, v, d));
+        }
+    }
+    let apex: Vec<[f64; 3]> =
+        apex_sum.iter().zip(&apex_n).map(|(s, &c)| scale(*s, 1.0 / c.max(1) as f64)).collect();
+    let pair: Vec<(u8, u8)> = {
+        let mut pr = vec![(0u8, 0u8); np];
+        for (k, e) in iface.iter().enumerate() {
+            pr[piece[k] as usize] = (e.lo, e.hi);
+        }
+        pr
+    };
+
+    // Piece fans: the smaller label gets (apex, b, a), the larger the same triangle reversed.
+    for (k, e) in iface.iter().enumerate() {
+        let d = det6(r, apex[piece[k] as usize], pos(e.b), pos(e.a));
+        acc[usize::from(e.lo)] += d;
+        acc[usize::from(e.hi)] -= d;
+    }
+
+    // 3. Junction clusters: pieces and junction vertices linked by spokes; one hub per cluster.
+    let mut open = vec![false; np];
+    let mut junction_id = vec![u32::MAX; n];
+    let mut junctions: Vec<u32> = Vec::new();
+    for &(p, v, _) in &spokes {
+        open[p as usize] = true;
+        if junction_id[v as usize] == u32::MAX {
+            junction_id[v as usize] = junctions.len() as u32;
+            junctions.push(v);
+        }
+    }
+    let mut cuf = UnionFind::new(np + junctions.len());
+    for &(p, v, _) in &spokes {
+        cuf.union(p as usize, np + junction_id[v as usize] as usize);
+    }
+    let mut hub_sum = vec![[0.0f64; 3]; np + junctions.len()];
+    let mut hub_n = vec![0usize; np + junctions.len()];
+    for (j, &v) in junctions.iter().enumerate() {
+        let root = cuf.find(np + j);
+        hub_sum[root] = add(hub_sum[root], pos(v));
+        hub_n[root] += 1;
+    }
+    for &(p, v, d) in &spokes {
+        let root = cuf.find(p as usize);
+        let hub = scale(hub_sum[root], 1.0 / hub_n[root].max(1) as f64);
+        let w = f64::from(d) * det6(r, apex[p as usize], pos(v), hub);
+        let (lo, hi) = pair[p as usize];
+        acc[usize::from(lo)] += w;
+        acc[usize::from(hi)] -= w;
+    }
+    caps.open_pieces = open.iter().filter(|&&o| o).count();
+    caps.closed_loops = np - caps.open_pieces;
+    caps.junctions = junctions.len();
+    caps.clusters = (0..np + junctions.len())
+        .filter(|&x| (x >= np || open[x]) && cuf.find(x) == x)
+        .count();
+    finish(acc, count, whole, caps)
+}
+
+fn finish(acc: [f64; 256], count: [usize; 256], whole: f64, caps: CapStats) -> LabelVolumes {
+    let by_label = (0..256usize)
+        .filter(|&l| count[l] > 0)
+        .map(|l| (l as u8, acc[l] / 6.0, count[l]))
+        .collect();
+    LabelVolumes { whole_m3: whole / 6.0, by_label, caps }
+}
+
+/// Volumes of every label of a mesh, m^3, signed: the whole and `(label, volume, faces)` per label.
+/// The mesh must be closed, edge-manifold and consistently oriented; `face_labels` has one entry per
+/// triangle (any u8). Exposed for callers with their own labels (e.g. a labelling under test).
+pub fn volumes_by_label(mesh: &TriMesh, face_labels: &[u8]) -> Result<LabelVolumes, VolumeError> {
+    if face_labels.len() != mesh.triangles.len() {
+        return Err(VolumeError::LabelCountMismatch {
+            what: "face",
+            got: face_labels.len(),
+            expected: mesh.triangles.len(),
+        });
+    }
+    validate(mesh)?;
+    let table = EdgeTable::build(&mesh.triangles);
+    table.check_manifold(&mesh.vertices)?;
+    if !table.boundary.is_empty() {
+        return Err(open_error(&mesh.vertices, &table));
+    }
+    Ok(label_volumes(&mesh.vertices, &mesh.triangles, &table, face_labels))
+}
+
+/// Union-find with path halving; roots are the smallest member (deterministic).
+struct UnionFind {
+    parent: Vec<u32>,
+}
+
+impl UnionFind {
+    fn new(n: usize) -> Self {
+        UnionFind { parent: (0..n as u32).collect() }
+    }
+
+    fn find(&mut self, mut x: usize) -> usize {
+        while self.parent[x] as usize != x {
+            let gp = self.parent[self.parent[x] as usize];
+            self.parent[x] = gp;
+            x = gp as usize;
+        }
+        x
+    }
+
+    fn union(&mut self, a: usize, b: usize) {
+        let (a, b) = (self.find(a), self.find(b));
+        if a != b {
+            self.parent[a.max(b)] = a.min(b) as u32;
+        }
+    }
+}

@@ -86,8 +86,7 @@ pub(crate) fn prepare(
         let mut perimeter = 0.0;
         let mut face_votes = Vec::with_capacity(n);
         let mut vertex_votes = Vec::with_capacity(n);
-        for k in 0..n {
-            let (a, b, f) = l[k];
+        for &(a, b, f) in l {
             perimeter += dist2(mesh.vertices[a as usize], mesh.vertices[b as usize]).sqrt();
             out.triangles.push([apex, b, a]);
             if let Some(fl) = &mesh.face_labels {
@@ -116,7 +115,7 @@ pub(crate) fn open_error(vertices: &[[f64; 3]], table: &EdgeTable) -> VolumeErro
     let loops = boundary_cycles(&table.boundary);
     let mut described: Vec<(usize, [f64; 3])> =
         loops.iter().map(|l| (l.len(), loop_centroid(vertices, l))).collect();
-    described.sort_by(|a, b| b.0.cmp(&a.0));
+    described.sort_by_key(|d| std::cmp::Reverse(d.0));
     VolumeError::OpenMesh {
         loops: loops.len(),
         boundary_edges: table.boundary.len(),

@@ -1,4 +1,5 @@
 //! Volumes of closed meshes, hole closing and the typed errors of bad meshes.
+#![allow(clippy::unwrap_used)]
 
 use bsv_core::geometry::{cross, dot, norm, sub};
 use bsv_core::shapes::{cuboid, icosphere, translate};

@@ -12,6 +12,7 @@ pub mod mesh;
 pub mod scanner;
 pub mod segment;
 pub mod shapes;
+pub mod template;
 pub mod topology;
 
 pub use cloud::PointCloud;

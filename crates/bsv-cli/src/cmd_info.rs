@@ -1,0 +1,101 @@
+//! `bsv-cli info`: what a file holds and whether it is a usable mesh.
+
+use crate::output::{check_writable, CliError};
+use bsv_core::check::{check_mesh, repair_mesh};
+use bsv_core::geometry::Aabb;
+use bsv_core::io;
+use bsv_core::Segment;
+use std::path::PathBuf;
+
+/// Arguments of `info`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// A PLY or OBJ file (mesh or point cloud).
+    file: PathBuf,
+    /// Print the report as JSON instead of text.
+    #[arg(long)]
+    json: bool,
+    /// Repair the mesh (drop degenerate, duplicate and unreferenced elements, orient outward) and write it here.
+    #[arg(long, value_name = "OUT")]
+    repair: Option<PathBuf>,
+    /// Overwrite the --repair output if it exists.
+    #[arg(long)]
+    force: bool,
+}
+
+fn label_counts(labels: &[u8]) -> Vec<(String, usize)> {
+    let mut counts = [0usize; 256];
+    for &l in labels {
+        counts[usize::from(l)] += 1;
+    }
+    counts
+        .iter()
+        .enumerate()
+        .filter(|(_, &c)| c > 0)
+        .map(|(id, &c)| {
+            let name = u8::try_from(id).ok().and_then(Segment::from_id).map_or_else(|| format!("id {id}"), |s| s.name().to_string());
+            (name, c)
+        })
+        .collect()
+}
+
+/// Runs `info`.
+pub fn run(a: Args) -> Result<(), CliError> {
+    let cloud = io::read_point_cloud(&a.file)?;
+    let mesh = io::read_mesh(&a.file).ok().filter(|m| m.n_triangles() > 0);
+    let bbox = Aabb::of_points(&cloud.points);
+    let mut json = serde_json::json!({
+        "file": a.file.display().to_string(),
+        "points": cloud.len(),
+        "normals": cloud.normals.is_some(),
+        "colors": cloud.colors.is_some(),
+        "bounding_box_m": bbox.map(|b| serde_json::json!({"min": b.min, "max": b.max, "extent": b.extent()})),
+        "vertex_labels": cloud.labels.as_deref().map(label_counts),
+    });
+    if !a.json {
+        println!("{}: {} vertices/points", a.file.display(), cloud.len());
+        println!("  normals: {}, colours: {}", cloud.normals.is_some(), cloud.colors.is_some());
+        if let Some(b) = bbox {
+            let e = b.extent();
+            println!("  bounding box: min {:.4?} max {:.4?} (extent {:.3} x {:.3} x {:.3} m)", b.min, b.max, e[0], e[1], e[2]);
+            if e.iter().fold(0.0f64, |m, v| m.max(*v)) > 5.0 {
+                println!("  note: larger than 5 m: is it in millimetres? BSV expects metres");
+            }
+        }
+        match cloud.labels.as_deref() {
+            Some(l) => {
+                println!("  labels:");
+                for (name, c) in label_counts(l) {
+                    println!("    {name:<12} {c:>9}");
+                }
+            }
+            None => println!("  labels: none"),
+        }
+    }
+    if let Some(mut m) = mesh {
+        let report = check_mesh(&m);
+        json["mesh"] = serde_json::to_value(&report)?;
+        if let Some(fl) = m.face_labels.as_deref() {
+            json["face_labels"] = serde_json::to_value(label_counts(fl))?;
+        }
+        if !a.json {
+            println!("{report}");
+        }
+        if let Some(out) = &a.repair {
+            check_writable(out, a.force)?;
+            let log = repair_mesh(&mut m);
+            io::write_mesh(out, &m)?;
+            json["repair"] = serde_json::to_value(&log)?;
+            if !a.json {
+                println!("{log}");
+                println!("repaired mesh written to {}", out.display());
+            }
+        }
+    } else if a.repair.is_some() {
+        return Err(format!("{} has no faces: only meshes can be repaired", a.file.display()).into());
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&json)?);
+    }
+    Ok(())
+}

@@ -2,6 +2,8 @@
 //! statistical outlier removal of 300k points. Prints a table of medians of 5 runs.
 //! Run: `cargo run -p bsv-core --release --example scan_bench [-- --naive] [-- --images DIR]`.
 
+#![allow(clippy::unwrap_used)]
+
 use bsv_core::clean::{mean_knn_distances, mean_knn_distances_naive, statistical_outliers, SorParams};
 use bsv_core::scanner::{scan, write_capture, Condition, Rig};
 use bsv_core::{shapes, TriMesh};

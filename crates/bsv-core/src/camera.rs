@@ -215,7 +215,7 @@ impl Intrinsics {
 
     /// Projects a camera-frame point to pixel coordinates (with distortion); `None` when z <= 0.
     pub fn project(&self, p: [f64; 3]) -> Option<[f64; 2]> {
-        if !(p[2] > 0.0) {
+        if p[2].is_nan() || p[2] <= 0.0 {
             return None;
         }
         let [xd, yd] = self.distort(p[0] / p[2], p[1] / p[2]);

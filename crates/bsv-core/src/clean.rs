@@ -285,8 +285,8 @@ pub fn voxel_downsample(cloud: &PointCloud, voxel: f64) -> Result<PointCloud, Cl
         }
         let mut c = [0.0; 3];
         for &i in &idx[s..e] {
-            for a in 0..3 {
-                c[a] += cloud.points[i as usize][a];
+            for (ca, pa) in c.iter_mut().zip(cloud.points[i as usize]) {
+                *ca += pa;
             }
         }
         let c = c.map(|x| x / (e - s) as f64);

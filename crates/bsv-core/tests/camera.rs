@@ -1,6 +1,8 @@
 //! Camera model: intrinsics from FOV, validation, projection/deprojection with distortion,
 //! extrinsics algebra, JSON, depth-image deprojection.
 
+#![allow(clippy::unwrap_used)]
+
 use bsv_core::camera::{deproject_depth, CameraCalibration, CameraError, Extrinsics, Intrinsics};
 
 fn distorted() -> Intrinsics {

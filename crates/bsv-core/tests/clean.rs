@@ -1,6 +1,8 @@
 //! Point-cloud cleaning: the fast exact k-NN mean distances against plain k-NN, statistical outlier
 //! removal on a surface with injected outliers, segment dropping, voxel down-sampling, errors.
 
+#![allow(clippy::unwrap_used)]
+
 use bsv_core::clean::{
     drop_segments, mean_knn_distances, mean_knn_distances_naive, remove_statistical_outliers,
     statistical_outliers, voxel_downsample, CleanError, SorParams,
@@ -24,7 +26,8 @@ fn fast_mean_distances_are_exact() {
     shapes::translate(&mut body, [0.0, 0.9, 0.0]);
     let (mut pts, _) = shapes::sample_surface(&body, 20_000, 3);
     // Duplicates, a far cluster and isolated points exercise the bounds and the fallbacks.
-    pts.extend_from_slice(&pts[..50].to_vec());
+    let dup = pts[..50].to_vec();
+    pts.extend_from_slice(&dup);
     let mut rng = rand::rngs::StdRng::seed_from_u64(5);
     for _ in 0..300 {
         pts.push([rng.random_range(3.0..3.1), rng.random_range(0.0..0.1), rng.random_range(0.0..0.1)]);

@@ -1,6 +1,8 @@
 //! Virtual scanner against ground truth: points on the mesh with the right labels, noise spread,
 //! calibration-error spread, visibility of a box at 45 deg, determinism, capture files.
 
+#![allow(clippy::unwrap_used)]
+
 use bsv_core::camera::{CameraCalibration, Intrinsics};
 use bsv_core::scanner::{
     face_labels, parry_mesh, scan, write_capture, Condition, ExtrinsicSigma, Rig, ScanError, DEPTH_SCALE,

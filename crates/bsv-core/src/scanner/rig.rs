@@ -224,7 +224,7 @@ impl Rig {
     pub fn paper_default() -> Rig {
         // The constants are valid, so these cannot fail; fall back to a computed value regardless.
         let intr = Intrinsics::from_fov(PAPER_WIDTH, PAPER_HEIGHT, PAPER_HFOV_DEG, PAPER_VFOV_DEG)
-            .unwrap_or_else(|_| Intrinsics {
+            .unwrap_or(Intrinsics {
                 width: PAPER_WIDTH,
                 height: PAPER_HEIGHT,
                 fx: 737.6,

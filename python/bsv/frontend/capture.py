@@ -245,6 +245,11 @@ def _read_recording(rs, name: str, path: Path, config: CaptureConfig) -> _Frames
         s.open(s.get_stream_profiles())
         s.start(on_frame)
     try:
+        # the status reads "stopped" until playback has really started: wait for it to play first
+        start = time.monotonic() + max(config.timeout_ms / 1000.0, 1.0)
+        while (pb.current_status() != rs.playback_status.playing and not frames.depth and not frames.colour
+               and time.monotonic() < start):
+            time.sleep(0.002)
         deadline = time.monotonic() + max(config.timeout_ms / 1000.0, 1.0) * 60
         while pb.current_status() != rs.playback_status.stopped and time.monotonic() < deadline:
             time.sleep(0.005)

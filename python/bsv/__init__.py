@@ -1,0 +1,240 @@
+"""BSV: body segment volumes from two RGB-D cameras.
+
+numpy in, numpy out. Every length is in metres, every volume in litres. The heavy lifting (file I/O,
+mesh checks, volumes, the virtual scanner, the ARAP registration) runs in the Rust extension
+``bsv._bsv``; this package converts, orchestrates and draws.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any, Callable, Optional, Union
+
+import numpy as np
+
+from . import _bsv
+from ._bsv import (
+    BsvError,
+    FormatError,
+    InputError,
+    MeshError,
+    RegistrationError,
+    ScanError,
+    VolumeError,
+    WriteError,
+)
+from .interop import as_cloud, as_mesh, opt_labels
+from .types import SEGMENT_IDS, SEGMENT_NAMES, TRUNK_LIMBS, Mesh, PointCloud, Registration
+
+__version__: str = _bsv.__version__
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+def __getattr__(name: str) -> Any:
+    """Lazy submodules: ``bsv.bodies`` (synthetic MakeHuman bodies) and the others load on first use."""
+    import importlib
+
+    if name in _LAZY_SUBMODULES:
+        return importlib.import_module(f".{name}", __name__)
+    raise AttributeError(f"module 'bsv' has no attribute {name!r}")
+
+
+_LAZY_SUBMODULES = ("bodies", "frontend", "bench", "report", "cli")
+
+
+def _out_path(path: PathLike, overwrite: bool) -> str:
+    p = Path(path)
+    if p.exists() and not overwrite:
+        raise FileExistsError(f"{p} already exists; pass overwrite=True to replace it")
+    return str(p)
+
+
+def read_mesh(path: PathLike) -> Mesh:
+    """Reads a PLY or OBJ triangle mesh (polygons are triangulated, OBJ groups become face labels)."""
+    v, f, vl, fl = _bsv.read_mesh(str(path))
+    return Mesh(v, f, vl, fl)
+
+
+def read_point_cloud(path: PathLike) -> PointCloud:
+    """Reads a PLY point cloud (x, y, z and optional normals, colours and ``label``)."""
+    p, n, c, l = _bsv.read_point_cloud(str(path))
+    return PointCloud(p, n, c, l)
+
+
+def write_mesh(
+    path: PathLike,
+    mesh: Any,
+    faces: Any = None,
+    *,
+    vertex_labels: Any = None,
+    face_labels: Any = None,
+    ascii: bool = False,
+    overwrite: bool = False,
+) -> None:
+    """Writes a mesh as PLY (binary little-endian unless ``ascii``, labels + palette colours) or OBJ."""
+    m = as_mesh(mesh, faces, vertex_labels, face_labels)
+    _bsv.write_mesh(
+        _out_path(path, overwrite), m.vertices, m.faces, opt_labels(m.vertex_labels), opt_labels(m.face_labels), ascii
+    )
+
+
+def write_point_cloud(
+    path: PathLike,
+    cloud: Any,
+    *,
+    normals: Any = None,
+    colors: Any = None,
+    labels: Any = None,
+    ascii: bool = False,
+    overwrite: bool = False,
+) -> None:
+    """Writes a point cloud as PLY (binary little-endian unless ``ascii``)."""
+    c = as_cloud(cloud, labels=labels, normals=normals, colors=colors)
+    _bsv.write_point_cloud(_out_path(path, overwrite), c.points, c.normals, c.colors, opt_labels(c.labels), ascii)
+
+
+def check_mesh(mesh: Any, faces: Any = None) -> dict[str, Any]:
+    """The mesh-check report: degenerate/duplicate faces, boundary and non-manifold edges, orientation, ..."""
+    m = as_mesh(mesh, faces)
+    return json.loads(_bsv.check_mesh(m.vertices, m.faces))
+
+
+def volumes(
+    mesh: Any,
+    faces: Any = None,
+    labels: Any = None,
+    *,
+    density: float = 1000.0,
+    close_holes: bool = False,
+) -> dict[str, Any]:
+    """Segment volumes (litres), aggregates, ratios and mass of a closed mesh.
+
+    ``labels`` are per-vertex segment ids (or per-face when their length equals the face count);
+    without labels only ``whole`` is reported. Returns the volumes JSON of DESIGN.md as a dict.
+    """
+    m = as_mesh(mesh, faces)
+    vl, fl = m.vertex_labels, m.face_labels
+    if labels is not None:
+        lab = opt_labels(labels)
+        assert lab is not None
+        if len(lab) == len(m.vertices):
+            vl = lab
+        elif len(lab) == len(m.faces):
+            fl = lab
+        else:
+            raise InputError(
+                f"labels has {len(lab)} entries; expected one per vertex ({len(m.vertices)}) or per face ({len(m.faces)})"
+            )
+    return json.loads(_bsv.volumes(m.vertices, m.faces, vl, fl, float(density), bool(close_holes)))
+
+
+def default_template(full: bool = False) -> Mesh:
+    """The embedded MakeHuman template: 9 segments (head, hands, feet removed), or all 14 with ``full``."""
+    v, f, vl, fl = _bsv.default_template(bool(full))
+    return Mesh(v, f, vl, fl)
+
+
+def register(
+    points: Any,
+    labels: Any = None,
+    template: Any = None,
+    *,
+    progress: Union[bool, Callable[[dict[str, Any]], None]] = False,
+    density: float = 1000.0,
+    **params: Any,
+) -> Registration:
+    """Fits the template to a point cloud by regularized ARAP and measures the segment volumes.
+
+    ``points``: (N, 3) metres, a bsv.PointCloud, or a trimesh/Open3D cloud; ``labels``: per-point
+    segment ids (optional: without them the template's labels are used); ``template``: a mesh (default:
+    the embedded template). ``params``: alpha, cell_weight, data_weight, schedule (e.g.
+    "m2p:5,p2m:5,m2p:10"), prealign ("isotropic", "per_axis", "auto"), labels ("cloud" or "template"),
+    threads, ... The GIL is released while the solver runs.
+    """
+    cloud = as_cloud(points, labels=labels)
+    tmpl = default_template() if template is None else as_mesh(template)
+    callback: Optional[Callable[[dict[str, Any]], None]]
+    if progress is True:
+        callback = _print_iteration
+    elif callable(progress):
+        callback = progress
+    else:
+        callback = None
+    if cloud.labels is None and "labels" not in params:
+        params["labels"] = "template"
+    wrapped = None if callback is None else (lambda s: callback(json.loads(s)))
+    v, vl, result_json = _bsv.register(
+        tmpl.vertices,
+        tmpl.faces,
+        tmpl.vertex_labels,
+        tmpl.face_labels,
+        cloud.points,
+        cloud.normals,
+        opt_labels(cloud.labels),
+        json.dumps(params),
+        wrapped,
+    )
+    result = json.loads(result_json)
+    fitted = Mesh(v, tmpl.faces, vl, None)
+    vols = volumes(fitted, density=density)
+    vols["registration"] = result["summary"]
+    return Registration(mesh=fitted, volumes=vols, log=result["log"], seconds=result["summary"]["seconds"])
+
+
+def _print_iteration(it: dict[str, Any]) -> None:
+    print(
+        f"  [{it['stage']}:{it['kind']} {it['iteration']:>2}] rms m->p {it['rms_mesh_to_points_mm']:.2f} mm"
+        f"  p->m {it['rms_points_to_mesh_mm']:.2f} mm  E={it['energy']['total']:.4g}",
+        flush=True,
+    )
+
+
+def scan(
+    mesh: Any,
+    condition: str = "noer",
+    seed: int = 0,
+    *,
+    images: Optional[PathLike] = None,
+    overwrite: bool = False,
+) -> PointCloud:
+    """Virtual two-camera capture (DESIGN.md rig) of a labelled mesh: a merged, labelled cloud.
+
+    ``condition``: "noer", "l515", "cali" or "l5ca". With ``images``, also writes per-camera depth and
+    colour PNGs and camera JSON into that folder, as a real capture would.
+    """
+    m = as_mesh(mesh)
+    img = None if images is None else str(images)
+    if img is not None and Path(img).exists() and any(Path(img).iterdir()) and not overwrite:
+        raise FileExistsError(f"{img} is not empty; pass overwrite=True to write into it")
+    p, n, c, l = _bsv.scan(m.vertices, m.faces, opt_labels(m.vertex_labels), opt_labels(m.face_labels), condition, int(seed), img)
+    return PointCloud(p, n, c, l)
+
+
+__all__ = [
+    "BsvError",
+    "FormatError",
+    "InputError",
+    "MeshError",
+    "Mesh",
+    "PointCloud",
+    "Registration",
+    "RegistrationError",
+    "ScanError",
+    "SEGMENT_IDS",
+    "SEGMENT_NAMES",
+    "TRUNK_LIMBS",
+    "VolumeError",
+    "WriteError",
+    "check_mesh",
+    "default_template",
+    "read_mesh",
+    "read_point_cloud",
+    "register",
+    "scan",
+    "volumes",
+    "write_mesh",
+    "write_point_cloud",
+]

@@ -92,6 +92,18 @@ fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
     std::fs::write(path, bytes).map_err(|source| WriteError::Io { path: path.to_path_buf(), source })
 }
 
+/// Streams PLY into a new file at `path` (no file-sized buffer in memory) once `check` accepted the data.
+fn write_ply_file(
+    path: &Path,
+    check: impl FnOnce() -> Result<(), AttributeError>,
+    write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
+) -> Result<(), WriteError> {
+    check().map_err(|source| WriteError::Invalid { path: path.to_path_buf(), source })?;
+    let io_err = |source| WriteError::Io { path: path.to_path_buf(), source };
+    let mut file = std::fs::File::create(path).map_err(io_err)?;
+    write(&mut file).map_err(io_err)
+}
+
 fn format_for_write(path: &Path) -> Result<Format, WriteError> {
     Format::from_path(path).ok_or_else(|| WriteError::UnsupportedExtension {
         path: path.to_path_buf(),
@@ -107,11 +119,10 @@ pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<(), WriteError> {
 /// Writes a mesh by extension with the given PLY encoding (ignored for `.obj`).
 pub fn write_mesh_with(path: &Path, mesh: &TriMesh, encoding: PlyEncoding) -> Result<(), WriteError> {
     let invalid = |source| WriteError::Invalid { path: path.to_path_buf(), source };
-    let bytes = match format_for_write(path)? {
-        Format::Ply => ply::mesh_to_bytes(mesh, encoding).map_err(invalid)?,
-        Format::Obj => obj::to_string(mesh).map_err(invalid)?.into_bytes(),
-    };
-    write_bytes(path, &bytes)
+    match format_for_write(path)? {
+        Format::Ply => write_ply_file(path, || ply::check_mesh(mesh), |f| ply::write_mesh_to(f, mesh, encoding)),
+        Format::Obj => write_bytes(path, obj::to_string(mesh).map_err(invalid)?.as_bytes()),
+    }
 }
 
 /// Writes a point cloud as binary little-endian PLY (`.ply`) or as OBJ `v` lines (`.obj`).
@@ -122,12 +133,11 @@ pub fn write_point_cloud(path: &Path, cloud: &PointCloud) -> Result<(), WriteErr
 /// Writes a point cloud with the given PLY encoding (ignored for `.obj`, which keeps points only).
 pub fn write_point_cloud_with(path: &Path, cloud: &PointCloud, encoding: PlyEncoding) -> Result<(), WriteError> {
     let invalid = |source| WriteError::Invalid { path: path.to_path_buf(), source };
-    let bytes = match format_for_write(path)? {
-        Format::Ply => ply::cloud_to_bytes(cloud, encoding).map_err(invalid)?,
+    match format_for_write(path)? {
+        Format::Ply => write_ply_file(path, || ply::check_cloud(cloud), |f| ply::write_cloud_to(f, cloud, encoding)),
         Format::Obj => {
             let mesh = TriMesh::new(cloud.points.clone(), Vec::new());
-            obj::to_string(&mesh).map_err(invalid)?.into_bytes()
+            write_bytes(path, obj::to_string(&mesh).map_err(invalid)?.as_bytes())
         }
-    };
-    write_bytes(path, &bytes)
+    }
 }

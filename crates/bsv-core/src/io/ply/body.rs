@@ -262,14 +262,115 @@ fn to_color(v: f64, ty: Scalar) -> u8 {
 /// A label value as a segment id, or `None` when it is not one.
 #[inline]
 fn to_label(v: f64) -> Option<u8> {
-    if v >= 0.0 && v < SEGMENT_COUNT as f64 && v.fract() == 0.0 {
+    // `v as u8 as f64 == v` holds exactly for integral 0..=255 (NaN and negatives fail it).
+    if v < SEGMENT_COUNT as f64 && f64::from(v as u8) == v {
         Some(v as u8)
     } else {
         None
     }
 }
 
-/// Reads the vertex element from a fixed-stride binary body slice, in parallel for large clouds.
+/// A binary scalar reader monomorphized on type and endianness (keeps the hot loops free of matches).
+trait Rd {
+    fn rd(b: &[u8]) -> f64;
+}
+
+macro_rules! readers {
+    ($($name:ident: $t:ty, $n:expr, $from:ident;)*) => {$(
+        struct $name;
+        impl Rd for $name {
+            #[inline(always)]
+            fn rd(b: &[u8]) -> f64 {
+                let mut a = [0u8; $n];
+                a.copy_from_slice(&b[..$n]);
+                <$t>::$from(a) as f64
+            }
+        }
+    )*};
+}
+
+readers! {
+    LeI8: i8, 1, from_le_bytes; LeU8: u8, 1, from_le_bytes;
+    LeI16: i16, 2, from_le_bytes; BeI16: i16, 2, from_be_bytes;
+    LeU16: u16, 2, from_le_bytes; BeU16: u16, 2, from_be_bytes;
+    LeI32: i32, 4, from_le_bytes; BeI32: i32, 4, from_be_bytes;
+    LeU32: u32, 4, from_le_bytes; BeU32: u32, 4, from_be_bytes;
+    LeF32: f32, 4, from_le_bytes; BeF32: f32, 4, from_be_bytes;
+    LeF64: f64, 8, from_le_bytes; BeF64: f64, 8, from_be_bytes;
+}
+
+/// Calls `$f::<Reader>($args)` with the reader for `($ty, $big)`.
+macro_rules! dispatch {
+    ($ty:expr, $big:expr, $f:ident($($arg:expr),*)) => {
+        match ($ty, $big) {
+            (Scalar::I8, _) => $f::<LeI8>($($arg),*),
+            (Scalar::U8, _) => $f::<LeU8>($($arg),*),
+            (Scalar::I16, false) => $f::<LeI16>($($arg),*),
+            (Scalar::I16, true) => $f::<BeI16>($($arg),*),
+            (Scalar::U16, false) => $f::<LeU16>($($arg),*),
+            (Scalar::U16, true) => $f::<BeU16>($($arg),*),
+            (Scalar::I32, false) => $f::<LeI32>($($arg),*),
+            (Scalar::I32, true) => $f::<BeI32>($($arg),*),
+            (Scalar::U32, false) => $f::<LeU32>($($arg),*),
+            (Scalar::U32, true) => $f::<BeU32>($($arg),*),
+            (Scalar::F32, false) => $f::<LeF32>($($arg),*),
+            (Scalar::F32, true) => $f::<BeF32>($($arg),*),
+            (Scalar::F64, false) => $f::<LeF64>($($arg),*),
+            (Scalar::F64, true) => $f::<BeF64>($($arg),*),
+        }
+    };
+}
+
+/// Fills a triple column from records when its three fields share a type.
+fn fill3<R: Rd>(data: &[u8], stride: usize, o: [usize; 3], out: &mut [[f64; 3]]) {
+    for (r, p) in data.chunks_exact(stride).zip(out) {
+        *p = [R::rd(&r[o[0]..]), R::rd(&r[o[1]..]), R::rd(&r[o[2]..])];
+    }
+}
+
+/// Fills a triple column whatever its fields' types.
+fn triple_column(data: &[u8], stride: usize, o: [usize; 3], t: [Scalar; 3], big: bool, out: &mut [[f64; 3]]) {
+    if t[0] == t[1] && t[1] == t[2] {
+        dispatch!(t[0], big, fill3(data, stride, o, out));
+    } else {
+        for (r, p) in data.chunks_exact(stride).zip(out) {
+            *p = [decode(&r[o[0]..], t[0], big), decode(&r[o[1]..], t[1], big), decode(&r[o[2]..], t[2], big)];
+        }
+    }
+}
+
+/// Records per parallel block of the binary vertex path.
+const BLOCK: usize = 1 << 14;
+
+/// One block of the binary vertex path: its records and its slices of every output column.
+struct Block<'a> {
+    first: usize,
+    data: &'a [u8],
+    points: &'a mut [[f64; 3]],
+    normals: Option<&'a mut [[f64; 3]]>,
+    colors: Option<&'a mut [[u8; 3]]>,
+    labels: Option<&'a mut [u8]>,
+}
+
+/// Per-block problems: first non-finite point and first bad label (absolute indices).
+#[derive(Clone, Copy, Default)]
+struct BlockIssues {
+    non_finite: Option<usize>,
+    bad_label: Option<usize>,
+}
+
+impl BlockIssues {
+    fn merge(a: BlockIssues, b: BlockIssues) -> BlockIssues {
+        let min = |x: Option<usize>, y: Option<usize>| match (x, y) {
+            (Some(x), Some(y)) => Some(x.min(y)),
+            (x, y) => x.or(y),
+        };
+        BlockIssues { non_finite: min(a.non_finite, b.non_finite), bad_label: min(a.bad_label, b.bad_label) }
+    }
+}
+
+/// Reads the vertex element from a fixed-stride binary body slice in one fused pass over blocks
+/// (parallel for large clouds), with readers specialised per type and endianness.
 fn vertices_fixed(data: &[u8], stride: usize, el: &Element, plan: &VertexPlan, big: bool) -> Result<VertexCols, PlyError> {
     let mut offsets = [0usize; N_SLOTS];
     let mut off = 0;
@@ -281,45 +382,83 @@ fn vertices_fixed(data: &[u8], stride: usize, el: &Element, plan: &VertexPlan, b
             off += s.size();
         }
     }
+    let n = el.count;
     let t = plan.types;
-    let par = el.count >= PAR_MIN_RECORDS;
-    fn run<T: Send, F: Fn(&[u8]) -> T + Sync + Send>(data: &[u8], stride: usize, par: bool, f: F) -> Vec<T> {
-        if par {
-            data.par_chunks_exact(stride).with_min_len(4096).map(f).collect()
-        } else {
-            data.chunks_exact(stride).map(f).collect()
+    let mut points = vec![[0.0f64; 3]; n];
+    let mut normals = plan.has_normals.then(|| vec![[0.0f64; 3]; n]);
+    let mut colors = plan.has_colors.then(|| vec![[0u8; 3]; n]);
+    let mut labels = plan.has_label.then(|| vec![0u8; n]);
+    let run = |b: Block<'_>| -> BlockIssues {
+        let mut issues = BlockIssues::default();
+        let o3 = |base: usize| [offsets[base], offsets[base + 1], offsets[base + 2]];
+        let t3 = |base: usize| [t[base], t[base + 1], t[base + 2]];
+        triple_column(b.data, stride, o3(X), t3(X), big, b.points);
+        issues.non_finite =
+            b.points.iter().position(|p| !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite())).map(|i| b.first + i);
+        if let Some(nrm) = b.normals {
+            triple_column(b.data, stride, o3(NX), t3(NX), big, nrm);
+        }
+        if let Some(col) = b.colors {
+            let (o, tt) = (o3(RED), t3(RED));
+            if tt.iter().all(|&x| x == Scalar::U8) {
+                for (r, c) in b.data.chunks_exact(stride).zip(col.iter_mut()) {
+                    *c = [r[o[0]], r[o[1]], r[o[2]]];
+                }
+            } else {
+                for (r, c) in b.data.chunks_exact(stride).zip(col.iter_mut()) {
+                    *c = [0, 1, 2].map(|k| to_color(decode(&r[o[k]..], tt[k], big), tt[k]));
+                }
+            }
+        }
+        if let Some(col) = b.labels {
+            let (o, ty) = (offsets[LABEL], t[LABEL]);
+            for (i, (r, l)) in b.data.chunks_exact(stride).zip(col.iter_mut()).enumerate() {
+                let label = if ty == Scalar::U8 {
+                    Some(r[o]).filter(|&l| usize::from(l) < SEGMENT_COUNT)
+                } else {
+                    to_label(decode(&r[o..], ty, big))
+                };
+                match label {
+                    Some(x) => *l = x,
+                    None => {
+                        issues.bad_label.get_or_insert(b.first + i);
+                    }
+                }
+            }
+        }
+        issues
+    };
+    let mut blocks = Vec::with_capacity(n / BLOCK + 1);
+    {
+        let mut pc = points.chunks_mut(BLOCK);
+        let mut nc = normals.as_mut().map(|v| v.chunks_mut(BLOCK));
+        let mut cc = colors.as_mut().map(|v| v.chunks_mut(BLOCK));
+        let mut lc = labels.as_mut().map(|v| v.chunks_mut(BLOCK));
+        for (k, d) in data.chunks(BLOCK * stride).enumerate() {
+            let Some(p) = pc.next() else { break };
+            blocks.push(Block {
+                first: k * BLOCK,
+                data: d,
+                points: p,
+                normals: nc.as_mut().and_then(Iterator::next),
+                colors: cc.as_mut().and_then(Iterator::next),
+                labels: lc.as_mut().and_then(Iterator::next),
+            });
         }
     }
-    let triple = |base: usize| {
-        let (o, tt) = (offsets, t);
-        move |r: &[u8]| {
-            [
-                decode(&r[o[base]..], tt[base], big),
-                decode(&r[o[base + 1]..], tt[base + 1], big),
-                decode(&r[o[base + 2]..], tt[base + 2], big),
-            ]
-        }
-    };
-    let points = run(data, stride, par, triple(X));
-    let normals = plan.has_normals.then(|| run(data, stride, par, triple(NX)));
-    let colors = plan.has_colors.then(|| {
-        let f = triple(RED);
-        run(data, stride, par, move |r: &[u8]| {
-            let c = f(r);
-            [to_color(c[0], t[RED]), to_color(c[1], t[RED + 1]), to_color(c[2], t[RED + 2])]
-        })
-    });
-    let labels = if plan.has_label {
-        let (o, ty) = (offsets[LABEL], t[LABEL]);
-        let raw = run(data, stride, par, move |r: &[u8]| to_label(decode(&r[o..], ty, big)).unwrap_or(u8::MAX));
-        if let Some(index) = raw.iter().position(|&l| l == u8::MAX) {
-            let value = decode(&data[index * stride + o..], ty, big);
-            return Err(PlyError::LabelOutOfRange { element: el.name.clone(), index, value });
-        }
-        Some(raw)
+    let issues = if n >= PAR_MIN_RECORDS {
+        blocks.into_par_iter().map(run).reduce(BlockIssues::default, BlockIssues::merge)
     } else {
-        None
+        blocks.into_iter().map(run).fold(BlockIssues::default(), BlockIssues::merge)
     };
+    if let Some(index) = issues.bad_label {
+        let value = decode(&data[index * stride + offsets[LABEL]..], t[LABEL], big);
+        return Err(PlyError::LabelOutOfRange { element: el.name.clone(), index, value });
+    }
+    if let Some(vertex) = issues.non_finite {
+        let value = points[vertex].iter().copied().find(|c| !c.is_finite()).unwrap_or(f64::NAN);
+        return Err(PlyError::NonFinite { vertex, value });
+    }
     Ok(VertexCols { points, normals, colors, labels })
 }
 
@@ -394,15 +533,106 @@ struct FaceCols {
     labels: Option<Vec<u8>>,
 }
 
-fn faces_stream<'a, S: Source<'a>>(src: &mut S, el: &'a Element, n_vertices: usize, remaining: usize) -> Result<FaceCols, PlyError> {
-    let list = ["vertex_indices", "vertex_index"]
+/// Layout of a binary face element whose records would all be triangles: every property a scalar
+/// except the index list, read as if each list held 3 items.
+struct TriLayout {
+    stride: usize,
+    count_off: usize,
+    count_ty: Scalar,
+    idx_off: usize,
+    idx_ty: Scalar,
+    label: Option<(usize, Scalar)>,
+}
+
+fn tri_layout(el: &Element, list: usize) -> Option<TriLayout> {
+    let mut off = 0;
+    let mut layout = TriLayout { stride: 0, count_off: 0, count_ty: Scalar::U8, idx_off: 0, idx_ty: Scalar::U8, label: None };
+    for (p, prop) in el.props.iter().enumerate() {
+        match prop.kind {
+            PropKind::List { count, item } if p == list => {
+                layout.count_off = off;
+                layout.count_ty = count;
+                layout.idx_off = off + count.size();
+                layout.idx_ty = item;
+                off += count.size() + 3 * item.size();
+            }
+            PropKind::List { .. } => return None,
+            PropKind::Scalar(s) => {
+                if prop.name == "label" {
+                    layout.label = Some((off, s));
+                }
+                off += s.size();
+            }
+        }
+    }
+    layout.stride = off;
+    Some(layout)
+}
+
+/// Decodes triangle records; false when a record is not a triangle or an index is invalid (the
+/// streaming reader then re-reads the element and reports the exact problem).
+fn fill_tris<R: Rd>(data: &[u8], l: &TriLayout, big: bool, n_vertices: usize, out: &mut [[u32; 3]]) -> bool {
+    let isz = l.idx_ty.size();
+    let nv = n_vertices as f64;
+    let valid = |v: f64| v < nv && f64::from(v as u32) == v;
+    for (r, t) in data.chunks_exact(l.stride).zip(out) {
+        let n = if l.count_ty == Scalar::U8 { f64::from(r[l.count_off]) } else { decode(&r[l.count_off..], l.count_ty, big) };
+        let o = l.idx_off;
+        let (a, b, c) = (R::rd(&r[o..]), R::rd(&r[o + isz..]), R::rd(&r[o + 2 * isz..]));
+        if n != 3.0 || !(valid(a) && valid(b) && valid(c)) {
+            return false;
+        }
+        *t = [a as u32, b as u32, c as u32];
+    }
+    true
+}
+
+/// Fast path for binary face elements made only of triangles: fixed stride, parallel blocks.
+/// `None` when the element does not fit that shape (the caller streams it instead).
+fn faces_fixed(body: &[u8], el: &Element, list: usize, n_vertices: usize, big: bool) -> Option<FaceCols> {
+    let l = tri_layout(el, list)?;
+    let n = el.count;
+    let data = body.get(..l.stride.checked_mul(n)?)?;
+    let mut triangles = vec![[0u32; 3]; n];
+    let mut labels = l.label.map(|_| vec![0u8; n]);
+    let run = |(d, (t, lab)): (&[u8], (&mut [[u32; 3]], Option<&mut [u8]>))| -> bool {
+        if !dispatch!(l.idx_ty, big, fill_tris(d, &l, big, n_vertices, t)) {
+            return false;
+        }
+        if let (Some(lab), Some((o, ty))) = (lab, l.label) {
+            for (r, x) in d.chunks_exact(l.stride).zip(lab.iter_mut()) {
+                match to_label(decode(&r[o..], ty, big)) {
+                    Some(v) => *x = v,
+                    None => return false,
+                }
+            }
+        }
+        true
+    };
+    let mut jobs = Vec::with_capacity(n / BLOCK + 1);
+    {
+        let mut lc = labels.as_mut().map(|v| v.chunks_mut(BLOCK));
+        for (d, t) in data.chunks(BLOCK * l.stride).zip(triangles.chunks_mut(BLOCK)) {
+            jobs.push((d, (t, lc.as_mut().and_then(Iterator::next))));
+        }
+    }
+    let ok = if n >= PAR_MIN_RECORDS { jobs.into_par_iter().all(run) } else { jobs.into_iter().all(run) };
+    ok.then_some(FaceCols { triangles, labels })
+}
+
+fn face_list_prop(el: &Element) -> Result<usize, PlyError> {
+    ["vertex_indices", "vertex_index"]
         .iter()
         .find_map(|n| el.find(n).filter(|&i| matches!(el.props[i].kind, PropKind::List { .. })))
         .ok_or_else(|| PlyError::MissingProperty {
             element: el.name.clone(),
             property: "vertex_indices (or vertex_index) list".into(),
             hint: "faces need a list of vertex indices; export the mesh with its faces, or drop the face element",
-        })?;
+        })
+}
+
+fn faces_stream<'a, S: Source<'a>>(src: &mut S, el: &'a Element, n_vertices: usize, remaining: usize) -> Result<FaceCols, PlyError> {
+    let list = face_list_prop(el)?;
     let label = scalar_prop(el, "label").map(|(i, _)| i);
     let cap = capacity(el.count, remaining, el.min_size());
     let mut triangles: Vec<[u32; 3]> = Vec::with_capacity(cap);
@@ -464,14 +694,9 @@ fn skip_stream<'a, S: Source<'a>>(src: &mut S, el: &'a Element) -> Result<(), Pl
     Ok(())
 }
 
-/// First non-finite coordinate, as a typed error.
+/// First non-finite coordinate, as a typed error (the binary fixed-stride path checks while decoding).
 fn check_finite(points: &[[f64; 3]]) -> Result<(), PlyError> {
-    let bad = if points.len() >= PAR_MIN_RECORDS {
-        points.par_iter().position_first(|p| !p.iter().all(|c| c.is_finite()))
-    } else {
-        points.iter().position(|p| !p.iter().all(|c| c.is_finite()))
-    };
-    match bad {
+    match points.iter().position(|p| !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite())) {
         Some(vertex) => {
             let value = points[vertex].iter().copied().find(|c| !c.is_finite()).unwrap_or(f64::NAN);
             Err(PlyError::NonFinite { vertex, value })
@@ -507,7 +732,11 @@ pub(super) fn read_body(bytes: &[u8], header: &Header) -> Result<PlyData, PlyErr
             for el in &header.elements {
                 let remaining = body.len() - src.pos.min(body.len());
                 match el.name.as_str() {
-                    "vertex" => vcols = Some(vertices_stream(&mut src, el, &plan, remaining)?),
+                    "vertex" => {
+                        let cols = vertices_stream(&mut src, el, &plan, remaining)?;
+                        check_finite(&cols.points)?;
+                        vcols = Some(cols);
+                    }
                     "face" => fcols = Some(faces_stream(&mut src, el, n_vertices, remaining)?),
                     _ => skip_stream(&mut src, el)?,
                 }
@@ -527,7 +756,16 @@ pub(super) fn read_body(bytes: &[u8], header: &Header) -> Result<PlyData, PlyErr
             for el in &header.elements {
                 let remaining = body.len() - src.pos;
                 match (el.name.as_str(), el.fixed_size()) {
-                    ("face", _) => fcols = Some(faces_stream(&mut src, el, n_vertices, remaining)?),
+                    ("face", _) => {
+                        let list = face_list_prop(el)?;
+                        match faces_fixed(&body[src.pos..], el, list, n_vertices, big) {
+                            Some(f) => {
+                                src.pos += f.triangles.len() * tri_layout(el, list).map_or(0, |l| l.stride);
+                                fcols = Some(f);
+                            }
+                            None => fcols = Some(faces_stream(&mut src, el, n_vertices, remaining)?),
+                        }
+                    }
                     (name, Some(stride)) if stride > 0 => {
                         let needed = stride.checked_mul(el.count).unwrap_or(usize::MAX);
                         if needed > remaining {
@@ -546,7 +784,11 @@ pub(super) fn read_body(bytes: &[u8], header: &Header) -> Result<PlyData, PlyErr
                         }
                         src.pos += needed;
                     }
-                    ("vertex", _) => vcols = Some(vertices_stream(&mut src, el, &plan, remaining)?),
+                    ("vertex", _) => {
+                        let cols = vertices_stream(&mut src, el, &plan, remaining)?;
+                        check_finite(&cols.points)?;
+                        vcols = Some(cols);
+                    }
                     _ => skip_stream(&mut src, el)?,
                 }
             }
@@ -557,7 +799,6 @@ pub(super) fn read_body(bytes: &[u8], header: &Header) -> Result<PlyData, PlyErr
         }
     }
     let v = vcols.unwrap_or_default();
-    check_finite(&v.points)?;
     data.points = v.points;
     data.normals = v.normals;
     data.colors = v.colors;

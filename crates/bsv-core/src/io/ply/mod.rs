@@ -17,6 +17,7 @@ use thiserror::Error;
 use crate::{PointCloud, TriMesh};
 
 pub use write::{cloud_to_bytes, mesh_to_bytes, to_bytes};
+pub(crate) use write::{check_cloud, check_mesh, write_cloud_to, write_mesh_to};
 
 /// The body encoding of a PLY file (read from headers, chosen when writing).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

@@ -4,6 +4,7 @@
 //! indices, face `label` and palette colours when face labels are present).
 
 use std::fmt::Write as _;
+use std::io::Write;
 
 use rayon::prelude::*;
 
@@ -103,17 +104,13 @@ impl View<'_> {
         13 + if self.face_labels.is_some() { 4 } else { 0 }
     }
 
-    fn binary(&self, big: bool, encoding: PlyEncoding) -> Vec<u8> {
-        let header = self.header(encoding);
+    /// Streams the binary encoding to `w` in blocks through one reused buffer (cache-hot, no
+    /// file-sized allocation); blocks are encoded in parallel for large inputs.
+    fn binary_to<W: Write>(&self, big: bool, encoding: PlyEncoding, w: &mut W) -> std::io::Result<()> {
+        w.write_all(self.header(encoding).as_bytes())?;
         let (vs, fs) = (self.vertex_stride(), self.face_stride());
-        let n_faces = self.triangles.map_or(0, <[_]>::len);
-        let vlen = vs * self.points.len();
-        let mut buf = vec![0u8; header.len() + vlen + fs * n_faces];
-        let (head, body) = buf.split_at_mut(header.len());
-        head.copy_from_slice(header.as_bytes());
-        let (vbody, fbody) = body.split_at_mut(vlen);
         let f64b = |v: f64| if big { v.to_be_bytes() } else { v.to_le_bytes() };
-        let vertex = |(i, r): (usize, &mut [u8])| {
+        let vertex = |i: usize, r: &mut [u8]| {
             let p = self.points[i];
             for k in 0..3 {
                 r[8 * k..8 * k + 8].copy_from_slice(&f64b(p[k]));
@@ -133,13 +130,10 @@ impl View<'_> {
                 r[o] = l[i];
             }
         };
-        if self.points.len() >= PAR_MIN_RECORDS {
-            vbody.par_chunks_mut(vs).with_min_len(4096).enumerate().for_each(vertex);
-        } else {
-            vbody.chunks_mut(vs).enumerate().for_each(vertex);
-        }
+        let mut buf = Vec::new();
+        encode_blocks(self.points.len(), vs, &mut buf, w, vertex)?;
         if let Some(t) = self.triangles {
-            let face = |(i, r): (usize, &mut [u8])| {
+            let face = |i: usize, r: &mut [u8]| {
                 r[0] = 3;
                 for k in 0..3 {
                     // Indices were validated below the vertex count, which fits a PLY `int` here.
@@ -151,13 +145,9 @@ impl View<'_> {
                     r[14..17].copy_from_slice(&PALETTE[usize::from(l[i]).min(PALETTE.len() - 1)]);
                 }
             };
-            if n_faces >= PAR_MIN_RECORDS {
-                fbody.par_chunks_mut(fs).with_min_len(4096).enumerate().for_each(face);
-            } else {
-                fbody.chunks_mut(fs).enumerate().for_each(face);
-            }
+            encode_blocks(t.len(), fs, &mut buf, w, face)?;
         }
-        buf
+        Ok(())
     }
 
     fn ascii(&self) -> Vec<u8> {
@@ -191,23 +181,102 @@ impl View<'_> {
         s.into_bytes()
     }
 
-    fn encode(&self, encoding: PlyEncoding) -> Result<Vec<u8>, AttributeError> {
+    fn check(&self) -> Result<(), AttributeError> {
         self.validate()?;
         if let Some(t) = self.triangles {
             if self.points.len() > i32::MAX as usize && !t.is_empty() {
-                return Err(AttributeError::IndexOutOfRange {
-                    face: 0,
-                    index: u32::MAX,
-                    vertex_count: self.points.len(),
-                });
+                return Err(AttributeError::IndexOutOfRange { face: 0, index: u32::MAX, vertex_count: self.points.len() });
             }
         }
-        Ok(match encoding {
-            PlyEncoding::Ascii => self.ascii(),
-            PlyEncoding::BinaryLittleEndian => self.binary(false, encoding),
-            PlyEncoding::BinaryBigEndian => self.binary(true, encoding),
-        })
+        Ok(())
     }
+
+    fn write_to<W: Write>(&self, encoding: PlyEncoding, w: &mut W) -> std::io::Result<()> {
+        match encoding {
+            PlyEncoding::Ascii => w.write_all(&self.ascii()),
+            PlyEncoding::BinaryLittleEndian => self.binary_to(false, encoding, w),
+            PlyEncoding::BinaryBigEndian => self.binary_to(true, encoding, w),
+        }
+    }
+
+    fn encode(&self, encoding: PlyEncoding) -> Result<Vec<u8>, AttributeError> {
+        self.check()?;
+        let mut out = Vec::new();
+        // Writing into a Vec cannot fail.
+        let _ = self.write_to(encoding, &mut out);
+        Ok(out)
+    }
+
+}
+
+/// Records per encoded block.
+const CHUNK: usize = 1 << 16;
+
+/// Encodes `n` fixed-size records with `f(index, record)` block by block into `buf` and writes them.
+fn encode_blocks<W: Write, F: Fn(usize, &mut [u8]) + Sync>(
+    n: usize,
+    stride: usize,
+    buf: &mut Vec<u8>,
+    w: &mut W,
+    f: F,
+) -> std::io::Result<()> {
+    let mut start = 0;
+    while start < n {
+        let len = CHUNK.min(n - start);
+        buf.resize(len * stride, 0);
+        if n >= PAR_MIN_RECORDS {
+            buf.par_chunks_mut(stride).with_min_len(4096).enumerate().for_each(|(i, r)| f(start + i, r));
+        } else {
+            buf.chunks_mut(stride).enumerate().for_each(|(i, r)| f(start + i, r));
+        }
+        w.write_all(buf)?;
+        start += len;
+    }
+    Ok(())
+}
+
+fn mesh_view(mesh: &TriMesh) -> View<'_> {
+    View {
+        comments: &[],
+        points: &mesh.vertices,
+        normals: None,
+        colors: None,
+        vertex_labels: mesh.vertex_labels.as_deref(),
+        triangles: Some(&mesh.triangles),
+        face_labels: mesh.face_labels.as_deref(),
+    }
+}
+
+fn cloud_view(cloud: &PointCloud) -> View<'_> {
+    View {
+        comments: &[],
+        points: &cloud.points,
+        normals: cloud.normals.as_deref(),
+        colors: cloud.colors.as_deref(),
+        vertex_labels: cloud.labels.as_deref(),
+        triangles: None,
+        face_labels: None,
+    }
+}
+
+/// Checks a mesh before streaming it (lengths, labels, indices, finite coordinates).
+pub(crate) fn check_mesh(mesh: &TriMesh) -> Result<(), AttributeError> {
+    mesh_view(mesh).check()
+}
+
+/// Checks a point cloud before streaming it.
+pub(crate) fn check_cloud(cloud: &PointCloud) -> Result<(), AttributeError> {
+    cloud_view(cloud).check()
+}
+
+/// Streams a mesh already accepted by [`check_mesh`] as PLY to `w`.
+pub(crate) fn write_mesh_to<W: Write>(w: &mut W, mesh: &TriMesh, encoding: PlyEncoding) -> std::io::Result<()> {
+    mesh_view(mesh).write_to(encoding, w)
+}
+
+/// Streams a point cloud already accepted by [`check_cloud`] as PLY to `w`.
+pub(crate) fn write_cloud_to<W: Write>(w: &mut W, cloud: &PointCloud, encoding: PlyEncoding) -> std::io::Result<()> {
+    cloud_view(cloud).write_to(encoding, w)
 }
 
 /// Encodes parsed/constructed PLY data (faces only when `triangles` is `Some`).
@@ -226,28 +295,10 @@ pub fn to_bytes(data: &PlyData, encoding: PlyEncoding) -> Result<Vec<u8>, Attrib
 
 /// Encodes a mesh (vertex labels become `label` plus palette colours so viewers show the segments).
 pub fn mesh_to_bytes(mesh: &TriMesh, encoding: PlyEncoding) -> Result<Vec<u8>, AttributeError> {
-    View {
-        comments: &[],
-        points: &mesh.vertices,
-        normals: None,
-        colors: None,
-        vertex_labels: mesh.vertex_labels.as_deref(),
-        triangles: Some(&mesh.triangles),
-        face_labels: mesh.face_labels.as_deref(),
-    }
-    .encode(encoding)
+    mesh_view(mesh).encode(encoding)
 }
 
 /// Encodes a point cloud (its colours if present, else palette colours from its labels).
 pub fn cloud_to_bytes(cloud: &PointCloud, encoding: PlyEncoding) -> Result<Vec<u8>, AttributeError> {
-    View {
-        comments: &[],
-        points: &cloud.points,
-        normals: cloud.normals.as_deref(),
-        colors: cloud.colors.as_deref(),
-        vertex_labels: cloud.labels.as_deref(),
-        triangles: None,
-        face_labels: None,
-    }
-    .encode(encoding)
+    cloud_view(cloud).encode(encoding)
 }

@@ -8,7 +8,15 @@ if [ ! -x .venv/bin/python ]; then
     "$PY" -m venv .venv
 fi
 .venv/bin/python -m pip install -q --upgrade pip
-.venv/bin/python -m pip install -q -r requirements-dev.txt
+.venv/bin/python -m pip install -q -r requirements-dev.txt -r requirements-frontend.txt
+# pyrealsense2 loads Debian's libusb at import time.
+if ! ldconfig -p 2>/dev/null | grep -q libusb-1.0.so.0; then
+    if [ "$(id -u)" = 0 ]; then
+        (apt-get update -qq && apt-get install -y -qq libusb-1.0-0) >/dev/null
+    else
+        echo "note: install libusb-1.0-0 (sudo apt-get install libusb-1.0-0) for RealSense capture" >&2
+    fi
+fi
 # The extension (bsv._bsv) in the shared, optimised dev profile, installed editable into .venv.
 VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop -q
 cargo build -q -p bsv-cli

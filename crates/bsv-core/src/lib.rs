@@ -6,6 +6,7 @@ pub mod camera;
 pub mod check;
 pub mod clean;
 pub mod cloud;
+pub mod fuse;
 pub mod geometry;
 pub mod io;
 pub mod mesh;

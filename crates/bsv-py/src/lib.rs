@@ -5,6 +5,7 @@
 mod convert;
 mod errors;
 mod functions;
+mod fuse;
 
 use pyo3::prelude::*;
 
@@ -14,5 +15,6 @@ fn _bsv(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     errors::register(m)?;
     functions::register(m)?;
+    fuse::register(m)?;
     Ok(())
 }

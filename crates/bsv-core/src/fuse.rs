@@ -1,0 +1,1 @@
+//! Cloud building from captured depth images (in progress).

@@ -1,0 +1,111 @@
+"""The ``bsv`` console script: one entry point for the lab and benchmark workflows.
+
+``bsv demo``, ``bsv process``, ``bsv calibrate``, ``bsv capture``, ``bsv bench``, ``bsv cohort``.
+Single-file tools (info, volume, scan, register, template) are in the Rust binary ``bsv-cli``.
+Each sub-command lives in its module; this file only routes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Callable, Optional
+
+USAGE = """usage: bsv <command> [options]
+
+commands:
+  demo        the whole chain on a synthetic subject (virtual capture -> segmentation -> cloud ->
+              registration -> report), no camera needed
+  process     CAPTURE_DIR --calibration calibration.json -o OUT: volumes and report of a capture
+  calibrate   per-camera extrinsics from ArUco marker images (or --live alignment window)
+  capture     record both RealSense cameras (or replay recordings with --from-recording)
+  bench       synth | boxes | faust: the validation benchmark tables and figures
+  cohort      OUT N [SEED]: write a synthetic MakeHuman cohort (labelled PLY + ground truth)
+
+Run `bsv <command> --help` for the options of a command. Lengths are metres, volumes litres.
+"""
+
+
+def _capture_main(argv: list[str]) -> int:
+    from .frontend.capture import CaptureConfig, capture
+
+    ap = argparse.ArgumentParser(prog="bsv capture", description="Capture (or replay) the two RealSense cameras.")
+    ap.add_argument("out_dir", help="folder receiving <camera>/color.png, depth.png, camera.json, recording.db3")
+    ap.add_argument("--front", help="serial number of the front camera")
+    ap.add_argument("--back", help="serial number of the back camera")
+    ap.add_argument("--seconds", type=float, default=5.0, help="still acquisition time (default 5 s)")
+    ap.add_argument("--d4xx", action="store_true", help="D4xx stream defaults instead of L515")
+    ap.add_argument("--from-recording", action="store_true", help="replay OUT_DIR/<camera>/recording.db3")
+    ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT_DIR")
+    a = ap.parse_args(argv)
+    config = CaptureConfig.d4xx() if a.d4xx else CaptureConfig()
+    config = type(config)(**{**config.__dict__, "duration_s": a.seconds})
+    serials = None
+    if a.front or a.back:
+        serials = {k: v for k, v in (("front", a.front), ("back", a.back)) if v}
+    caps = capture(a.out_dir, serials, config, from_recording=a.from_recording, overwrite=a.overwrite)
+    for name, cam in caps.items():
+        print(f"{name}: {cam}")
+    return 0
+
+
+def _cohort_main(argv: list[str]) -> int:
+    from .bodies.cohort import main
+
+    main(argv)
+    return 0
+
+
+def _route(name: str) -> Optional[Callable[[list[str]], Optional[int]]]:
+    if name == "demo":
+        from .pipeline import main_demo
+
+        return main_demo
+    if name == "process":
+        from .pipeline import main_process
+
+        return main_process
+    if name == "calibrate":
+        from .frontend.calibrate import main as calibrate_main
+
+        return calibrate_main
+    if name == "capture":
+        return _capture_main
+    if name == "bench":
+        from .bench import main as bench_main
+
+        return bench_main
+    if name == "cohort":
+        return _cohort_main
+    return None
+
+
+def main(argv: Optional[list[str]] = None) -> int:
+    """Entry point of the ``bsv`` console script; returns the exit status."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    if not args or args[0] in ("-h", "--help", "help"):
+        print(USAGE)
+        return 0
+    if args[0] in ("-V", "--version"):
+        from . import __version__
+
+        print(f"bsv {__version__}")
+        return 0
+    handler = _route(args[0])
+    if handler is None:
+        print(f"bsv: unknown command {args[0]!r}\n\n{USAGE}", file=sys.stderr)
+        return 2
+    from . import BsvError
+
+    try:
+        return int(handler(args[1:]) or 0)
+    except BsvError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+    except FileExistsError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -64,9 +64,8 @@ def python_results(out: Path, runs: int) -> dict[tuple[str, str, str], float]:
             res[("trimesh", name, "read")] = median_time(lambda p=path: trimesh.load(p, process=False), runs)
         cloud = trimesh.load(files["cloud_1m"], process=False)
         mesh = trimesh.load(files["mesh_100k"], process=False)
-        tmp = out / "trimesh_out.ply"
-        res[("trimesh", "cloud_1m", "write")] = median_time(lambda: cloud.export(tmp), runs)
-        res[("trimesh", "mesh_100k", "write")] = median_time(lambda: mesh.export(tmp), runs)
+        res[("trimesh", "cloud_1m", "write")] = median_time(lambda: cloud.export(out / "trimesh_cloud_1m.ply"), runs)
+        res[("trimesh", "mesh_100k", "write")] = median_time(lambda: mesh.export(out / "trimesh_mesh_100k.ply"), runs)
     try:
         import open3d as o3d
     except ImportError as e:  # no wheel for this Python, or missing system libraries
@@ -78,9 +77,10 @@ def python_results(out: Path, runs: int) -> dict[tuple[str, str, str], float]:
             lambda: o3d.io.read_triangle_mesh(str(files["mesh_100k"])), runs)
         pcd = o3d.io.read_point_cloud(str(files["cloud_1m"]))
         tm = o3d.io.read_triangle_mesh(str(files["mesh_100k"]))
-        tmp = str(out / "open3d_out.ply")
-        res[("open3d", "cloud_1m", "write")] = median_time(lambda: o3d.io.write_point_cloud(tmp, pcd), runs)
-        res[("open3d", "mesh_100k", "write")] = median_time(lambda: o3d.io.write_triangle_mesh(tmp, tm), runs)
+        res[("open3d", "cloud_1m", "write")] = median_time(
+            lambda: o3d.io.write_point_cloud(str(out / "open3d_cloud_1m.ply"), pcd), runs)
+        res[("open3d", "mesh_100k", "write")] = median_time(
+            lambda: o3d.io.write_triangle_mesh(str(out / "open3d_mesh_100k.ply"), tm), runs)
     return res
 
 
@@ -125,8 +125,10 @@ def main() -> int:
     extra = {(n, o): s for (n, o), (s, _) in bsv.items() if o not in ("read", "write")}
     if extra:
         print("bsv breakdown: " + ", ".join(f"{n} {o} {s * 1e3:.1f} ms" for (n, o), s in extra.items()))
-    print("(write rows: trimesh/Open3D write their own layout of the same data, so sizes differ; MB/s uses "
-          "bsv's file size for all, i.e. the ratio column compares wall times.)")
+    sizes = ", ".join(f"{p.name} {p.stat().st_size / 1e6:.2f} MB" for p in sorted(out.glob("*_*.ply"))
+                      if p.name.startswith(("trimesh_", "open3d_")))
+    print("write rows: each library writes its own layout of the same data (bsv: double xyz + rgb + label); "
+          "MB/s uses bsv's file size for all, so the ratio column compares wall times. Their files: " + sizes)
     if args.json:
         args.json.write_text(json.dumps({"runs": args.runs, "threads": rust["threads"], "rows": rows}, indent=2))
     return 0

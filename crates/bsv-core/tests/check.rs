@@ -1,4 +1,5 @@
 //! Mesh checks and repairs against meshes with known defects.
+#![allow(clippy::unwrap_used)]
 
 use bsv_core::check::{check_mesh, repair_mesh, MeshCheckError};
 use bsv_core::shapes::{cuboid, icosphere, subdivided_cuboid, translate};

@@ -1,5 +1,6 @@
 //! Property tests: random bytes and random mutations of valid PLY/OBJ files never make the readers
 //! panic (they return a value or a typed error), and what parses as a mesh is internally consistent.
+#![allow(clippy::unwrap_used)]
 
 use bsv_core::io::{obj, ply, PlyEncoding};
 use bsv_core::shapes::cuboid;

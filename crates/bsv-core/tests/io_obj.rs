@@ -1,4 +1,5 @@
 //! OBJ reading (quads, negative indices, every index form, groups) and writing (exact round trips).
+#![allow(clippy::unwrap_used)]
 
 use bsv_core::io::obj::{self, ObjError};
 use bsv_core::io::{self as bio, ReadError};

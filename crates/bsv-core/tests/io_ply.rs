@@ -1,5 +1,6 @@
 //! PLY reading (hand-written headers of every scalar type, both endiannesses and ascii), writer round
 //! trips, and typed errors for bad input.
+#![allow(clippy::unwrap_used)]
 
 use std::path::PathBuf;
 
@@ -412,4 +413,31 @@ fn empty_mesh_and_cloud_round_trip() {
     assert_eq!(back, m);
     let c = PointCloud::default();
     assert_eq!(ply::parse_cloud(&ply::cloud_to_bytes(&c, PlyEncoding::Ascii).unwrap()).unwrap(), c);
+}
+
+#[test]
+fn large_inputs_take_the_parallel_paths_exactly() {
+    // Above the parallel thresholds: fused vertex blocks, triangle fast path, blocked writer.
+    let mut c = labelled_cloud(150_000);
+    c.normals = Some(c.points.iter().map(|p| [p[2], p[0], p[1]]).collect());
+    for e in [PlyEncoding::BinaryLittleEndian, PlyEncoding::BinaryBigEndian] {
+        let back = ply::parse_cloud(&ply::cloud_to_bytes(&c, e).unwrap()).unwrap();
+        assert_eq!(back.points, c.points);
+        assert_eq!(back.normals, c.normals);
+        assert_eq!(back.labels, c.labels);
+    }
+    let mut m = bsv_core::shapes::subdivided_cuboid([1.0, 2.0, 3.0], 80); // 76,800 triangles
+    m.face_labels = Some((0..m.n_triangles()).map(|t| (t % 15) as u8).collect());
+    m.vertex_labels = Some((0..m.n_vertices()).map(|v| (v % 13) as u8).collect());
+    let bytes = ply::mesh_to_bytes(&m, PlyEncoding::BinaryLittleEndian).unwrap();
+    assert_eq!(ply::parse_mesh(&bytes).unwrap(), m);
+    // A bad label deep in a large binary cloud is found with its index.
+    let mut bad = c.clone();
+    bad.labels.as_mut().unwrap()[140_001] = 14;
+    let mut bytes = ply::cloud_to_bytes(&bad, PlyEncoding::BinaryLittleEndian).unwrap();
+    let stride = 24 + 24 + 3 + 1;
+    let n = bytes.len();
+    bytes[n - (150_000 - 140_001) * stride + stride - 1] = 99;
+    let err = ply::parse(&bytes).unwrap_err();
+    assert!(matches!(err, PlyError::LabelOutOfRange { index: 140_001, .. }), "{err:?}");
 }

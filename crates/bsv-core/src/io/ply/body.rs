@@ -595,7 +595,8 @@ fn faces_fixed(body: &[u8], el: &Element, list: usize, n_vertices: usize, big: b
     let data = body.get(..l.stride.checked_mul(n)?)?;
     let mut triangles = vec![[0u32; 3]; n];
     let mut labels = l.label.map(|_| vec![0u8; n]);
-    let run = |(d, (t, lab)): (&[u8], (&mut [[u32; 3]], Option<&mut [u8]>))| -> bool {
+    type Job<'a> = (&'a [u8], (&'a mut [[u32; 3]], Option<&'a mut [u8]>));
+    let run = |(d, (t, lab)): Job<'_>| -> bool {
         if !dispatch!(l.idx_ty, big, fill_tris(d, &l, big, n_vertices, t)) {
             return false;
         }
@@ -767,7 +768,7 @@ pub(super) fn read_body(bytes: &[u8], header: &Header) -> Result<PlyData, PlyErr
                         }
                     }
                     (name, Some(stride)) if stride > 0 => {
-                        let needed = stride.checked_mul(el.count).unwrap_or(usize::MAX);
+                        let needed = stride.saturating_mul(el.count);
                         if needed > remaining {
                             return Err(PlyError::Truncated {
                                 element: el.name.clone(),

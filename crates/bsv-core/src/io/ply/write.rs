@@ -117,8 +117,8 @@ impl View<'_> {
             }
             let mut o = 24;
             if let Some(n) = self.normals {
-                for k in 0..3 {
-                    r[o..o + 8].copy_from_slice(&f64b(n[i][k]));
+                for c in n[i] {
+                    r[o..o + 8].copy_from_slice(&f64b(c));
                     o += 8;
                 }
             }

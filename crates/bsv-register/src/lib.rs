@@ -1,1 +1,261 @@
-//! placeholder
+//! BSV registration: warps a template mesh onto a (front + back, gappy) point cloud.
+//!
+//! Pipeline of [`register`]: input checks and the similarity pre-alignment ([`prealign`]), the
+//! cotangent weights ([`cotan`]), the symbolic Cholesky analysis of the global system ([`solver`]),
+//! then for each iteration of the schedule: correspondences ([`correspond`]), the local step
+//! ([`local`], exact per-cell minimiser of the regularized ARAP energy) and the global step (one
+//! sparse solve with the three coordinates at once). Energies, weights and units are documented in
+//! [`params`] and [`local`].
+
+pub mod correspond;
+pub mod cotan;
+pub mod error;
+pub mod local;
+pub mod params;
+pub mod prealign;
+pub mod solver;
+
+pub use error::RegisterError;
+pub use params::{
+    CorrespondenceKind, Energy, IterationLog, LabelSource, PrealignMode, RegisterParams, Schedule, Stage, Timings,
+    DEFAULT_SCHEDULE,
+};
+pub use prealign::Similarity;
+
+use bsv_core::geometry::{add, cross, dot, normalize, scale, sub, total_area};
+use bsv_core::{PointCloud, TriMesh};
+use correspond::{CloudIndex, Pruning};
+use local::{CellMaps, LocalModel};
+use serde::Serialize;
+use std::time::Instant;
+
+/// The result of a registration.
+#[derive(Debug, Clone, Serialize)]
+pub struct Registration {
+    /// The fitted mesh: fitted vertices, the template's triangles, vertex labels (from the cloud, or
+    /// the template's), face labels only in template-label mode.
+    #[serde(skip)]
+    pub mesh: TriMesh,
+    /// One entry per iteration.
+    pub log: Vec<IterationLog>,
+    /// The pre-alignment used.
+    pub prealign: Similarity,
+    /// Checks, pre-alignment, weights, k-d tree and symbolic factorization, seconds.
+    pub setup_seconds: f64,
+    /// Whole registration, seconds.
+    pub total_seconds: f64,
+    /// RMS distance from the fitted vertices to their nearest cloud point, mm.
+    pub rms_mesh_to_points_mm: f64,
+    /// RMS distance from the cloud points to their nearest fitted vertex, mm.
+    pub rms_points_to_mesh_mm: f64,
+    /// Where the vertex labels came from (`None` when the mesh has no labels).
+    pub labels_from: Option<LabelSource>,
+}
+
+/// Area-weighted unit vertex normals of `vertices` with `triangles`.
+pub fn vertex_normals(vertices: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f64; 3]> {
+    let mut acc = vec![[0.0; 3]; vertices.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|v| vertices[v as usize]);
+        let n = cross(sub(b, a), sub(c, a));
+        for &v in t {
+            acc[v as usize] = add(acc[v as usize], n);
+        }
+    }
+    acc.into_iter().map(normalize).collect()
+}
+
+/// Data energy `sum_i d_i |p_i - q_i|^2`.
+fn data_energy(cur: &[[f64; 3]], d: &[f64], q: &[[f64; 3]]) -> f64 {
+    cur.iter()
+        .zip(d)
+        .zip(q)
+        .filter(|((_, &di), _)| di > 0.0)
+        .map(|((p, &di), t)| {
+            let e = sub(*p, *t);
+            di * dot(e, e)
+        })
+        .sum()
+}
+
+/// Registers `template` onto `cloud` (metres, shared world frame). Calls `progress` after every
+/// iteration. Never panics on user data: every failure is a [`RegisterError`].
+pub fn register(
+    template: &TriMesh,
+    cloud: &PointCloud,
+    params: &RegisterParams,
+    progress: &mut dyn FnMut(&IterationLog),
+) -> Result<Registration, RegisterError> {
+    params.validate()?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(params.threads)
+        .build()
+        .map_err(|e| RegisterError::ThreadPool { threads: params.threads, reason: e.to_string() })?;
+    register_in_pool(&pool, template, cloud, params, progress)
+}
+
+/// The registration proper: parallel parts run in `pool`, `progress` is called on this thread.
+fn register_in_pool(
+    pool: &rayon::ThreadPool,
+    template: &TriMesh,
+    cloud: &PointCloud,
+    params: &RegisterParams,
+    progress: &mut dyn FnMut(&IterationLog),
+) -> Result<Registration, RegisterError> {
+    let start = Instant::now();
+    // Checks.
+    let template_box = prealign::check_template(template)?;
+    let cloud_box = prealign::check_cloud(cloud, params)?;
+    if params.labels == LabelSource::Template && template.vertex_labels.is_none() {
+        return Err(RegisterError::TemplateWithoutLabels);
+    }
+    // Pre-alignment.
+    let sim = prealign::similarity(&template_box, &cloud_box, params);
+    let rest: Vec<[f64; 3]> = template.vertices.iter().map(|&p| sim.apply(p)).collect();
+    let n = rest.len();
+    let area = total_area(&TriMesh::new(rest.clone(), template.triangles.clone()));
+    let lambda = params.alpha * 1e-6 * params.cell_weight * area / n as f64;
+    // Weights, solver, local model, cloud index.
+    let weights = cotan::CotanWeights::new(&rest, &template.triangles);
+    let (solver, index) = pool.install(|| {
+        rayon::join(
+            || solver::GlobalSolver::new(&weights, params.cell_weight),
+            || CloudIndex::new(&cloud.points, cloud.normals.as_deref(), params.estimate_normals_k),
+        )
+    });
+    let mut solver = solver.map_err(RegisterError::Solver)?;
+    let index = index.map_err(RegisterError::Solver)?;
+    let model = pool.install(|| LocalModel::new(rest.clone(), weights, params.cell_weight, lambda));
+    let pruning = Pruning {
+        distance_factor: params.prune_distance_factor,
+        distance_floor: params.prune_distance_floor_m,
+        min_cos: if params.prune_normal_angle_deg >= 180.0 {
+            -1.0
+        } else {
+            params.prune_normal_angle_deg.to_radians().cos()
+        },
+    };
+    let setup_seconds = start.elapsed().as_secs_f64();
+
+    let mut cur = rest;
+    let mut maps = CellMaps::identity(n);
+    let mut d = vec![0.0; n];
+    let mut q = vec![[0.0; 3]; n];
+    let mut rhs = vec![[0.0; 3]; n];
+    let mut sol = faer::Mat::<f64>::zeros(n, 3);
+    let (mut arap, mut reg) = (0.0, 0.0);
+    let mut log = Vec::with_capacity(params.schedule.total_iterations());
+    let mut iteration = 0;
+    for (si, stage) in params.schedule.0.iter().enumerate() {
+        for _ in 0..stage.iterations {
+            let t0 = Instant::now();
+            let normals = vertex_normals(&cur, &template.triangles);
+            let (targets, rms_m2p, rms_p2m) = match stage.kind {
+                CorrespondenceKind::M2p => {
+                    let (t, rms) = pool.install(|| index.m2p(&cur, &normals, &pruning));
+                    (t, rms, None)
+                }
+                CorrespondenceKind::P2m => {
+                    let (t, rms) = pool.install(|| index.p2m(&cur, &normals, &pruning)).map_err(RegisterError::Solver)?;
+                    let m2p = pool.install(|| index.nearest(&cur));
+                    let rms_m2p = (m2p.iter().map(|r| r.1).sum::<f64>() / n as f64).sqrt();
+                    (t, rms_m2p, Some(rms))
+                }
+            };
+            let tw = match stage.kind {
+                CorrespondenceKind::M2p => params.tangential_weight,
+                CorrespondenceKind::P2m => params.tangential_weight_p2m,
+            };
+            let mut n_corr = 0;
+            for (v, t) in targets.iter().enumerate() {
+                match t {
+                    Some(res) => {
+                        // Keep the normal part of the residual and a fraction of the tangential one.
+                        let tangential = sub(res.offset, res.normal_part);
+                        q[v] = add(cur[v], add(res.normal_part, scale(tangential, tw)));
+                        d[v] = params.data_weight;
+                        n_corr += 1;
+                    }
+                    None => {
+                        d[v] = 0.0;
+                        q[v] = cur[v];
+                    }
+                }
+            }
+            if n_corr == 0 {
+                return Err(RegisterError::NoCorrespondences { iteration });
+            }
+            let energy_start = arap + reg + data_energy(&cur, &d, &q);
+            let t1 = Instant::now();
+            let (a_loc, r_loc) = pool.install(|| model.local_step(&cur, &mut maps));
+            let energy_after_local = a_loc + r_loc + data_energy(&cur, &d, &q);
+            let t2 = Instant::now();
+            let refactorized = solver.set_data_weights(&d).map_err(RegisterError::Solver)?;
+            pool.install(|| model.rhs(&maps, &mut rhs));
+            for v in 0..n {
+                for k in 0..3 {
+                    sol[(v, k)] = rhs[v][k] + d[v] * q[v][k];
+                }
+            }
+            solver.solve_in_place(sol.as_mut()).map_err(RegisterError::Solver)?;
+            for (v, p) in cur.iter_mut().enumerate() {
+                *p = [sol[(v, 0)], sol[(v, 1)], sol[(v, 2)]];
+            }
+            if cur.iter().any(|p| p.iter().any(|x| !x.is_finite())) {
+                return Err(RegisterError::Diverged { iteration });
+            }
+            let t3 = Instant::now();
+            (arap, reg) = pool.install(|| model.energy(&cur, &maps));
+            let data = data_energy(&cur, &d, &q);
+            let entry = IterationLog {
+                stage: si,
+                iteration,
+                kind: stage.kind,
+                energy_start,
+                energy_after_local,
+                energy: Energy { arap, reg, data, total: arap + reg + data },
+                rms_mesh_to_points_mm: rms_m2p * 1e3,
+                rms_points_to_mesh_mm: rms_p2m.map(|r| r * 1e3),
+                n_correspondences: n_corr,
+                refactorized,
+                timings: Timings {
+                    correspond: (t1 - t0).as_secs_f64(),
+                    local: (t2 - t1).as_secs_f64(),
+                    solve: (t3 - t2).as_secs_f64(),
+                },
+            };
+            progress(&entry);
+            log.push(entry);
+            iteration += 1;
+        }
+    }
+
+    // Final distances and labels.
+    let nearest = pool.install(|| index.nearest(&cur));
+    let rms_m2p = (nearest.iter().map(|r| r.1).sum::<f64>() / n as f64).sqrt();
+    let rms_p2m = pool.install(|| index.rms_points_to_mesh(&cur)).map_err(RegisterError::Solver)?;
+    let mut mesh = TriMesh::new(cur, template.triangles.clone());
+    let labels_from = match (params.labels, &cloud.labels) {
+        (LabelSource::Cloud, Some(labels)) => {
+            mesh.vertex_labels = Some(nearest.iter().map(|r| labels[r.0 as usize]).collect());
+            Some(LabelSource::Cloud)
+        }
+        (LabelSource::Template, _) | (LabelSource::Cloud, None) => {
+            mesh.vertex_labels = template.vertex_labels.clone();
+            if params.labels == LabelSource::Template {
+                mesh.face_labels = template.face_labels.clone();
+            }
+            mesh.vertex_labels.as_ref().map(|_| LabelSource::Template)
+        }
+    };
+    Ok(Registration {
+        mesh,
+        log,
+        prealign: sim,
+        setup_seconds,
+        total_seconds: start.elapsed().as_secs_f64(),
+        rms_mesh_to_points_mm: rms_m2p * 1e3,
+        rms_points_to_mesh_mm: rms_p2m * 1e3,
+        labels_from,
+    })
+}

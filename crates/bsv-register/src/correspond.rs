@@ -1,0 +1,362 @@
+//! Nearest-neighbour correspondences (kiddo k-d trees) with distance and normal pruning.
+//!
+//! - m2p (mesh to points): each vertex's target is its nearest cloud point. The tree over the cloud
+//!   is built once per registration.
+//! - p2m (points to mesh): each cloud point goes to its nearest vertex (a tree over the current
+//!   vertices, rebuilt every iteration); a vertex's target is the mean of its points; a vertex with
+//!   no point gets no data term.
+//!
+//! Pruning (per iteration): a correspondence longer than `factor x median` of the iteration's
+//! correspondence lengths (but never below `floor`) is dropped. Normal pruning compares the
+//! current vertex normal with the cloud normal: the given (oriented) normals, or, when the cloud has
+//! none, unoriented PCA normals of `k` neighbours estimated lazily for the points that m2p actually
+//! matches (and cached); in p2m the normal of the patch of points a vertex collected (PCA of their
+//! scatter) is used, so no per-point normal is ever needed. m2p pulls gap-side vertices onto the
+//! edges of the gaps; their normals are about 90 degrees from the edge points' normals, which is
+//! what the angle test removes.
+
+use bsv_core::geometry::{dot, normalize, sub};
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+use rayon::prelude::*;
+use std::num::NonZeroUsize;
+use std::sync::OnceLock;
+
+/// The data residual of one vertex: its offset to the target split into the part along the
+/// surface normal(s) and the rest.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Residual {
+    /// Offset from the vertex to its target (m2p: the nearest point; p2m: the mean of its points).
+    pub offset: [f64; 3],
+    /// The normal part of the offset: `n (n . offset)` with the cloud normal at the target (m2p),
+    /// the mean of `n_k (n_k . d_k)` over the vertex's points (p2m), or, without cloud normals, the
+    /// current vertex normal (m2p) or the normal of the vertex's patch of points (p2m).
+    /// With the cloud's own normals a vertex lying on the sampled surface has no normal residual even
+    /// where the target sits on a neighbouring (tilted) facet.
+    pub normal_part: [f64; 3],
+}
+
+/// A residual per vertex: `Some` with a data term, `None` without.
+pub type Targets = Vec<Option<Residual>>;
+
+#[inline]
+fn project(n: [f64; 3], d: [f64; 3]) -> [f64; 3] {
+    let s = dot(n, d);
+    [n[0] * s, n[1] * s, n[2] * s]
+}
+
+/// Pruning settings of one registration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pruning {
+    /// Drop correspondences longer than `distance_factor` x the median (0 or inf = off).
+    pub distance_factor: f64,
+    /// Never prune below this length, metres.
+    pub distance_floor: f64,
+    /// Cosine of the largest normal angle (-1 = off).
+    pub min_cos: f64,
+}
+
+impl Pruning {
+    /// The distance limit (squared) for correspondences with squared lengths `d2`.
+    fn limit2(&self, d2: &mut [f64]) -> f64 {
+        if !(self.distance_factor > 0.0 && self.distance_factor.is_finite()) || d2.is_empty() {
+            return f64::INFINITY;
+        }
+        let mid = d2.len() / 2;
+        let (_, &mut med2, _) = d2.select_nth_unstable_by(mid, f64::total_cmp);
+        let lim = self.distance_factor * med2.sqrt();
+        let lim = lim.max(self.distance_floor);
+        lim * lim
+    }
+}
+
+/// The cloud side: the k-d tree over the points (built once) and the normals.
+pub struct CloudIndex {
+    points: Vec<[f64; 3]>,
+    tree: ImmutableKdTree<f64, 3>,
+    given_normals: Option<Vec<[f64; 3]>>,
+    estimated: Vec<OnceLock<[f64; 3]>>,
+    k_normals: usize,
+}
+
+impl std::fmt::Debug for CloudIndex {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CloudIndex").field("points", &self.points.len()).finish()
+    }
+}
+
+/// Nearest item of every query in a tree (parallel batch query): (index, squared distance).
+pub fn nearest_batch(tree: &ImmutableKdTree<f64, 3>, queries: &[[f64; 3]]) -> Vec<(u32, f64)> {
+    tree.query_batch(queries)
+        .nearest_one::<SquaredEuclidean<f64>>()
+        .execute()
+        .iter()
+        .map(|r| (r.item, r.distance))
+        .collect()
+}
+
+/// Builds an immutable k-d tree over `points`.
+pub fn build_tree(points: &[[f64; 3]]) -> Result<ImmutableKdTree<f64, 3>, String> {
+    ImmutableKdTree::new_from_slice(points).map_err(|e| format!("k-d tree construction failed: {e:?}"))
+}
+
+/// Unit normal (smallest-eigenvalue eigenvector) of the scatter matrix `c` (centred), or `None`
+/// when the patch is degenerate (fewer than 3 independent points).
+pub fn pca_normal(c: &Matrix3<f64>) -> Option<[f64; 3]> {
+    let e = SymmetricEigen::new(*c);
+    let (mut kmin, mut kmax) = (0, 0);
+    for k in 1..3 {
+        if e.eigenvalues[k] < e.eigenvalues[kmin] {
+            kmin = k;
+        }
+        if e.eigenvalues[k] > e.eigenvalues[kmax] {
+            kmax = k;
+        }
+    }
+    let mid = 3 - kmin - kmax;
+    if kmin == kmax || !(e.eigenvalues[mid] > 1e-6 * e.eigenvalues[kmax]) {
+        return None;
+    }
+    let v = e.eigenvectors.column(kmin);
+    Some(normalize([v[0], v[1], v[2]]))
+}
+
+impl CloudIndex {
+    /// Builds the tree; `normals` are used when given (unit, oriented); otherwise, with `k_normals`
+    /// > 2, normals are estimated on demand.
+    pub fn new(points: &[[f64; 3]], normals: Option<&[[f64; 3]]>, k_normals: usize) -> Result<CloudIndex, String> {
+        let tree = build_tree(points)?;
+        let estimated = if normals.is_none() && k_normals > 2 {
+            (0..points.len()).map(|_| OnceLock::new()).collect()
+        } else {
+            Vec::new()
+        };
+        Ok(CloudIndex {
+            points: points.to_vec(),
+            tree,
+            given_normals: normals.map(|n| n.iter().map(|&v| normalize(v)).collect()),
+            estimated,
+            k_normals,
+        })
+    }
+
+    /// The cloud points.
+    pub fn points(&self) -> &[[f64; 3]] {
+        &self.points
+    }
+
+    /// Nearest cloud point of each query: (index, squared distance).
+    pub fn nearest(&self, queries: &[[f64; 3]]) -> Vec<(u32, f64)> {
+        nearest_batch(&self.tree, queries)
+    }
+
+    /// Whether normals are available (given or estimated) and whether they are oriented.
+    pub fn normal_mode(&self) -> Option<bool> {
+        if self.given_normals.is_some() {
+            Some(true)
+        } else if !self.estimated.is_empty() {
+            Some(false)
+        } else {
+            None
+        }
+    }
+
+    /// The normal of cloud point `i` (given, or estimated by PCA of its neighbours and cached).
+    pub fn normal(&self, i: usize) -> Option<[f64; 3]> {
+        if let Some(n) = &self.given_normals {
+            return n.get(i).copied();
+        }
+        let cell = self.estimated.get(i)?;
+        let n = *cell.get_or_init(|| {
+            let k = NonZeroUsize::new(self.k_normals.max(3)).unwrap_or(NonZeroUsize::MIN);
+            let nb = self.tree.query(&self.points[i]).nearest_n::<SquaredEuclidean<f64>>(k).execute();
+            let mut mean = [0.0; 3];
+            for r in &nb {
+                let p = self.points[r.item as usize];
+                for a in 0..3 {
+                    mean[a] += p[a];
+                }
+            }
+            let m = nb.len().max(1) as f64;
+            mean = mean.map(|v| v / m);
+            let mut c = Matrix3::zeros();
+            for r in &nb {
+                let d = sub(self.points[r.item as usize], mean);
+                let v = Vector3::from(d);
+                c += v * v.transpose();
+            }
+            pca_normal(&c).unwrap_or([0.0; 3])
+        });
+        (n != [0.0; 3]).then_some(n)
+    }
+
+    /// Does the angle between the vertex normal `vn` and cloud normal `cn` pass the test?
+    fn normal_ok(vn: [f64; 3], cn: [f64; 3], oriented: bool, min_cos: f64) -> bool {
+        if min_cos <= -1.0 || vn == [0.0; 3] {
+            return true;
+        }
+        let c = dot(vn, cn);
+        if oriented {
+            c >= min_cos
+        } else {
+            c.abs() >= min_cos
+        }
+    }
+
+    /// m2p targets of `vertices` (with their current unit normals), pruned.
+    /// Returns the targets and the RMS (m) of all nearest distances before pruning.
+    pub fn m2p(&self, vertices: &[[f64; 3]], normals: &[[f64; 3]], pruning: &Pruning) -> (Targets, f64) {
+        let nn = self.nearest(vertices);
+        let rms = rms_of(nn.iter().map(|r| r.1));
+        let mut d2: Vec<f64> = nn.iter().map(|r| r.1).collect();
+        let lim2 = pruning.limit2(&mut d2);
+        let mode = if pruning.min_cos > -1.0 { self.normal_mode() } else { None };
+        let targets = nn
+            .par_iter()
+            .enumerate()
+            .map(|(v, &(i, dd))| {
+                if dd > lim2 {
+                    return None;
+                }
+                let cn = if mode.is_some() || self.given_normals.is_some() { self.normal(i as usize) } else { None };
+                if let (Some(oriented), Some(cn)) = (mode, cn) {
+                    if !Self::normal_ok(normals[v], cn, oriented, pruning.min_cos) {
+                        return None;
+                    }
+                }
+                let offset = sub(self.points[i as usize], vertices[v]);
+                let n = match cn {
+                    Some(cn) if self.given_normals.is_some() => cn,
+                    _ => normals[v],
+                };
+                Some(Residual { offset, normal_part: project(n, offset) })
+            })
+            .collect();
+        (targets, rms)
+    }
+
+    /// p2m targets: the mean of the (pruned) cloud points whose nearest vertex is each vertex.
+    /// Returns the targets and the RMS (m) of all point-to-vertex distances before pruning.
+    pub fn p2m(&self, vertices: &[[f64; 3]], normals: &[[f64; 3]], pruning: &Pruning) -> Result<(Targets, f64), String> {
+        let tree = build_tree(vertices)?;
+        let nn = nearest_batch(&tree, &self.points);
+        let rms = rms_of(nn.iter().map(|r| r.1));
+        let mut d2: Vec<f64> = nn.iter().map(|r| r.1).collect();
+        let lim2 = pruning.limit2(&mut d2);
+        let n = vertices.len();
+        // Accumulate count, sum, and the scatter about the vertex (for the patch normal).
+        #[derive(Clone, Copy)]
+        struct Acc {
+            n: u32,
+            s: [f64; 3],
+            ss: [f64; 6],
+            np: [f64; 3],
+        }
+        let zero = Acc { n: 0, s: [0.0; 3], ss: [0.0; 6], np: [0.0; 3] };
+        let given = self.given_normals.as_deref();
+        let chunk = 16384;
+        let accs = nn
+            .par_chunks(chunk)
+            .enumerate()
+            .fold(
+                || vec![zero; n],
+                |mut acc, (c, part)| {
+                    for (k, &(v, dd)) in part.iter().enumerate() {
+                        if dd > lim2 {
+                            continue;
+                        }
+                        let idx = c * chunk + k;
+                        let d = sub(self.points[idx], vertices[v as usize]);
+                        let a = &mut acc[v as usize];
+                        a.n += 1;
+                        if let Some(g) = given {
+                            let pr = project(g[idx], d);
+                            for x in 0..3 {
+                                a.np[x] += pr[x];
+                            }
+                        }
+                        for x in 0..3 {
+                            a.s[x] += d[x];
+                        }
+                        a.ss[0] += d[0] * d[0];
+                        a.ss[1] += d[0] * d[1];
+                        a.ss[2] += d[0] * d[2];
+                        a.ss[3] += d[1] * d[1];
+                        a.ss[4] += d[1] * d[2];
+                        a.ss[5] += d[2] * d[2];
+                    }
+                    acc
+                },
+            )
+            .reduce(
+                || vec![zero; n],
+                |mut a, b| {
+                    for (x, y) in a.iter_mut().zip(b) {
+                        x.n += y.n;
+                        for k in 0..3 {
+                            x.s[k] += y.s[k];
+                        }
+                        for k in 0..6 {
+                            x.ss[k] += y.ss[k];
+                        }
+                        for k in 0..3 {
+                            x.np[k] += y.np[k];
+                        }
+                    }
+                    a
+                },
+            );
+        let use_normals = pruning.min_cos > -1.0;
+        let targets = accs
+            .par_iter()
+            .enumerate()
+            .map(|(v, a)| {
+                if a.n == 0 {
+                    return None;
+                }
+                let m = a.n as f64;
+                let mean = a.s.map(|x| x / m);
+                let patch_normal = if a.n >= 3 && (use_normals || given.is_none()) {
+                    let s = &a.ss;
+                    let c = Matrix3::new(s[0], s[1], s[2], s[1], s[3], s[4], s[2], s[4], s[5])
+                        - Vector3::from(mean) * Vector3::from(mean).transpose() * m;
+                    pca_normal(&c)
+                } else {
+                    None
+                };
+                if let (true, Some(pn)) = (use_normals, patch_normal) {
+                    if !Self::normal_ok(normals[v], pn, false, pruning.min_cos) {
+                        return None;
+                    }
+                }
+                let normal_part = if given.is_some() {
+                    a.np.map(|x| x / m)
+                } else {
+                    project(patch_normal.unwrap_or(normals[v]), mean)
+                };
+                Some(Residual { offset: mean, normal_part })
+            })
+            .collect();
+        Ok((targets, rms))
+    }
+
+    /// RMS (m) of the distances from each cloud point to its nearest vertex.
+    pub fn rms_points_to_mesh(&self, vertices: &[[f64; 3]]) -> Result<f64, String> {
+        let tree = build_tree(vertices)?;
+        Ok(rms_of(nearest_batch(&tree, &self.points).iter().map(|r| r.1)))
+    }
+}
+
+/// Root of the mean of squared distances.
+fn rms_of(d2: impl Iterator<Item = f64>) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for v in d2 {
+        s += v;
+        n += 1;
+    }
+    if n == 0 {
+        0.0
+    } else {
+        (s / n as f64).sqrt()
+    }
+}

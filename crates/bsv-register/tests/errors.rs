@@ -1,0 +1,90 @@
+//! Bad input gives typed errors, never a panic.
+
+mod common;
+use bsv_core::shapes::{cuboid, icosphere};
+use bsv_core::PointCloud;
+use bsv_register::{register, IterationLog, LabelSource, RegisterError, RegisterParams, Schedule};
+use common::*;
+
+fn try_register(t: &bsv_core::TriMesh, c: &PointCloud, p: &RegisterParams) -> Result<(), RegisterError> {
+    let mut sink = |_: &IterationLog| {};
+    register(t, c, p, &mut sink).map(|_| ())
+}
+
+#[test]
+fn bad_inputs_are_typed_errors() {
+    let template = icosphere(0.2, 3);
+    let good = cloud_of(&template, 5_000, 1);
+    let p = RegisterParams::default();
+
+    let e = try_register(&template, &PointCloud::default(), &p).unwrap_err();
+    assert!(matches!(e, RegisterError::EmptyCloud { .. }), "{e}");
+
+    let nan = PointCloud::new(vec![[f64::NAN; 3]; 1000]);
+    let e = try_register(&template, &nan, &p).unwrap_err();
+    assert!(matches!(e, RegisterError::NonFinitePoint { index: 0, .. }), "{e}");
+
+    let mut one_bad = good.clone();
+    one_bad.points[17][1] = f64::INFINITY;
+    let e = try_register(&template, &one_bad, &p).unwrap_err();
+    assert!(matches!(e, RegisterError::NonFinitePoint { index: 17, .. }), "{e}");
+
+    let mut mm = good.clone();
+    for q in &mut mm.points {
+        *q = q.map(|v| v * 1000.0);
+    }
+    let e = try_register(&template, &mm, &p).unwrap_err();
+    assert!(matches!(e, RegisterError::CloudLooksLikeMillimetres { .. }), "{e}");
+    assert!(e.to_string().contains("millimetres"));
+
+    let tiny = PointCloud::new(good.points.iter().map(|q| q.map(|v| v * 1e-3)).collect());
+    assert!(matches!(try_register(&template, &tiny, &p).unwrap_err(), RegisterError::CloudTooSmall { .. }));
+
+    let few = PointCloud::new(good.points[..10].to_vec());
+    assert!(matches!(try_register(&template, &few, &p).unwrap_err(), RegisterError::TooFewPoints { n: 10, .. }));
+
+    // Non-manifold: a box with one face missing (open), and one with a duplicated face.
+    let mut open = cuboid([0.3, 0.3, 0.3]);
+    open.triangles.pop();
+    let e = try_register(&open, &good, &p).unwrap_err();
+    assert!(matches!(e, RegisterError::NonManifoldTemplate { faces: 1, .. }), "{e}");
+    let mut dup = cuboid([0.3, 0.3, 0.3]);
+    dup.triangles.push(dup.triangles[0]);
+    let e = try_register(&dup, &good, &p).unwrap_err();
+    assert!(matches!(e, RegisterError::NonManifoldTemplate { faces: 3, .. }), "{e}");
+
+    let mut degenerate = template.clone();
+    let [a, b, _] = degenerate.triangles[0];
+    degenerate.vertices[b as usize] = degenerate.vertices[a as usize];
+    assert!(matches!(try_register(&degenerate, &good, &p).unwrap_err(), RegisterError::DegenerateTemplate { .. }));
+
+    let labels = RegisterParams { labels: LabelSource::Template, ..Default::default() };
+    assert_eq!(try_register(&template, &good, &labels).unwrap_err(), RegisterError::TemplateWithoutLabels);
+
+    assert!(matches!(Schedule::parse("m2p:5,p2x:3").unwrap_err(), RegisterError::BadSchedule { .. }));
+    assert!(matches!(Schedule::parse("m2p5").unwrap_err(), RegisterError::BadSchedule { .. }));
+    assert!(matches!(Schedule::parse("m2p:-1").unwrap_err(), RegisterError::BadSchedule { .. }));
+    assert!(matches!(Schedule::parse("").unwrap_err(), RegisterError::BadSchedule { .. }));
+    assert_eq!(Schedule::parse(" M2P:5, p2m:5 ,m2p:10").unwrap(), Schedule::default());
+
+    let neg = RegisterParams { alpha: -1.0, ..Default::default() };
+    assert!(matches!(try_register(&template, &good, &neg).unwrap_err(), RegisterError::BadParameter { name: "alpha", .. }));
+}
+
+#[test]
+fn labels_come_from_the_cloud_or_the_template() {
+    let mut template = icosphere(0.2, 3);
+    template.vertex_labels = Some(template.vertices.iter().map(|p| if p[1] > 0.0 { 2 } else { 9 }).collect());
+    let mut cloud = cloud_of(&icosphere(0.2, 5), 20_000, 3);
+    cloud.labels = Some(cloud.points.iter().map(|p| if p[0] > 0.0 { 3 } else { 4 }).collect());
+    let reg = run(&template, &cloud, &RegisterParams::default());
+    let l = reg.mesh.vertex_labels.as_ref().unwrap();
+    for (p, &lab) in reg.mesh.vertices.iter().zip(l) {
+        if p[0].abs() > 0.01 {
+            assert_eq!(lab, if p[0] > 0.0 { 3 } else { 4 });
+        }
+    }
+    assert!(reg.mesh.face_labels.is_none());
+    let reg = run(&template, &cloud, &RegisterParams { labels: LabelSource::Template, ..Default::default() });
+    assert_eq!(reg.mesh.vertex_labels, template.vertex_labels);
+}

@@ -1,0 +1,127 @@
+"""Shared pieces of the benchmarks: errors, the RVE metric, cloud preparation, templates, registration
+with either method (BSV's ARAP or the trimesh peer), and the per-run record."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Mapping, Optional
+
+import numpy as np
+
+from ..types import SEGMENT_IDS, Mesh, PointCloud
+
+#: Segment ids a lab's cloud keeps (DESIGN.md data flow step 4 drops head, hands and feet).
+KEEP_IDS: tuple[int, ...] = tuple(SEGMENT_IDS[n] for n in (
+    "torso", "upper_arm_l", "upper_arm_r", "forearm_l", "forearm_r", "thigh_l", "thigh_r", "shin_l", "shin_r"))
+
+
+class BenchError(RuntimeError):
+    """A benchmark could not run as asked (bad option, missing data or dependency); says what to do."""
+
+
+def rve(estimated: float, true: float) -> float:
+    """Relative volume error |V_est - V_gt| / V_gt in percent."""
+    return abs(signed_error(estimated, true))
+
+
+def signed_error(estimated: float, true: float) -> float:
+    """Signed relative volume error (V_est - V_gt) / V_gt in percent (negative = shrinks)."""
+    if not true > 0:
+        raise BenchError(f"true volume {true} L: must be > 0 to compute a relative error")
+    return (estimated - true) / true * 100.0
+
+
+def keep_trunk_limbs(cloud: PointCloud) -> PointCloud:
+    """The cloud without head, hand, foot and unlabelled points (what a lab registers)."""
+    if cloud.labels is None:
+        raise BenchError("the scanned cloud has no labels: oracle segmentation needs the scanner's labels")
+    keep = np.isin(cloud.labels, KEEP_IDS)
+    return PointCloud(
+        cloud.points[keep],
+        None if cloud.normals is None else cloud.normals[keep],
+        None if cloud.colors is None else cloud.colors[keep],
+        cloud.labels[keep],
+    )
+
+
+def load_template(name: str) -> Mesh:
+    """``default`` (9 segments, 4,177 vertices), ``fine`` (its midpoint subdivision) or a mesh file path."""
+    from .. import default_template, read_mesh
+
+    if name == "default":
+        return default_template()
+    if name == "fine":
+        from ..bodies.template import subdivide_midpoint
+
+        t = default_template()
+        if t.face_labels is None:
+            raise BenchError("the embedded template has no face labels; cannot subdivide it with labels")
+        return subdivide_midpoint(t)
+    p = Path(name)
+    if not p.is_file():
+        raise BenchError(f"template {name!r}: use 'default', 'fine' or the path of a labelled PLY/OBJ mesh")
+    return read_mesh(p)
+
+
+@dataclass
+class Fit:
+    """One registration: the fitted labelled mesh, its volumes (litres), wall time and diagnostics."""
+
+    method: str
+    mesh: Mesh
+    volumes_l: dict[str, float]
+    seconds: float
+    info: dict[str, Any] = field(default_factory=dict)
+
+
+def register_bsv(cloud: PointCloud, template: Mesh, params: Optional[Mapping[str, Any]] = None) -> Fit:
+    """BSV's regularized ARAP registration (:func:`bsv.register`) of ``template`` to the labelled cloud."""
+    from .. import register
+
+    t0 = time.perf_counter()
+    reg = register(cloud.points, cloud.labels, template, **dict(params or {}))
+    wall = time.perf_counter() - t0
+    summary = dict(reg.volumes.get("registration", {}) or {})
+    info = {k: summary[k] for k in ("rms_mesh_to_points_mm", "rms_points_to_mesh_mm", "iterations", "prealign")
+            if k in summary}
+    return Fit("bsv", reg.mesh, dict(reg.volumes["volumes_l"]), wall, info)
+
+
+def register_method(method: str, cloud: PointCloud, template: Mesh,
+                    params: Optional[Mapping[str, Any]] = None) -> Fit:
+    """Dispatch: ``bsv`` or ``trimesh`` (the peer, :mod:`bsv.bench.peer`)."""
+    if method == "bsv":
+        return register_bsv(cloud, template, params)
+    if method == "trimesh":
+        from .peer import register_trimesh
+
+        return register_trimesh(cloud, template, params)
+    raise BenchError(f"unknown registration method {method!r}: use bsv or trimesh")
+
+
+@dataclass
+class Run:
+    """One registration of one subject (or box) in one condition, with everything the tables need."""
+
+    subject: str
+    condition: str
+    method: str
+    ok: bool
+    truth_l: dict[str, float] = field(default_factory=dict)
+    estimated_l: dict[str, float] = field(default_factory=dict)
+    floor_l: dict[str, float] = field(default_factory=dict)
+    seconds: float = 0.0
+    n_points: int = 0
+    error: str = ""
+    info: dict[str, Any] = field(default_factory=dict)
+
+    def to_json(self) -> dict[str, Any]:
+        """A JSON-ready dict."""
+        return asdict(self)
+
+    @staticmethod
+    def from_json(doc: Mapping[str, Any]) -> "Run":
+        """The inverse of :meth:`to_json`."""
+        return Run(**{k: doc[k] for k in Run.__dataclass_fields__ if k in doc})

@@ -1,0 +1,126 @@
+"""``bsv bench synth|boxes|faust``: command-line entry point of the benchmarks (see benchmarks/BENCH.md)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any, Optional, Sequence
+
+from .common import BenchError
+from .reference import CONDITIONS
+
+
+def _conditions(text: str) -> tuple[str, ...]:
+    items = tuple(c.strip().lower() for c in text.split(",") if c.strip())
+    bad = [c for c in items if c not in CONDITIONS]
+    if bad or not items:
+        raise argparse.ArgumentTypeError(f"{text!r}: use a comma list of {','.join(CONDITIONS)}")
+    return items
+
+
+def _ints(text: str) -> tuple[int, ...]:
+    try:
+        return tuple(int(x) for x in text.split(",") if x.strip())
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(f"{text!r}: use a comma list of integers, e.g. 0,10,20") from exc
+
+
+def _param(text: str) -> tuple[str, Any]:
+    if "=" not in text:
+        raise argparse.ArgumentTypeError(f"{text!r}: use KEY=VALUE (VALUE as JSON, or a plain string)")
+    k, v = text.split("=", 1)
+    try:
+        return k.strip(), json.loads(v)
+    except json.JSONDecodeError:
+        return k.strip(), v
+
+
+def parser() -> argparse.ArgumentParser:
+    """The argument parser of ``bsv bench``."""
+    ap = argparse.ArgumentParser(prog="bsv bench", description=(
+        "Validation benchmarks. Volumes in litres, RVE = |V_est - V_true| / V_true in %. "
+        "Outputs: results.json, results.csv, report.md and PNG figures in --out."))
+    sub = ap.add_subparsers(dest="command", required=True)
+
+    def common(p: argparse.ArgumentParser, out: str) -> None:
+        p.add_argument("--out", default=out, help=f"output folder (default {out}); files in it are replaced")
+        p.add_argument("--peer", choices=["trimesh"], help="also run trimesh.registration.nricp_amberg (pip install 'bsv[peer]')")
+        p.add_argument("--param", action="append", type=_param, default=[], metavar="KEY=VALUE",
+                       help="registration parameter passed to bsv.register (repeatable), e.g. --param alpha=1e6")
+        p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+    s = sub.add_parser("synth", help="synthetic cohort x error conditions (the paper's protocol without FAUST)")
+    s.add_argument("--n", type=int, default=10, help="cohort size (half female; default 10)")
+    s.add_argument("--seed", type=int, default=0, help="cohort seed (default 0)")
+    s.add_argument("--conditions", type=_conditions, default=CONDITIONS, help="comma list of noer,l515,cali,l5ca")
+    s.add_argument("--jobs", type=int, default=1, help="worker processes over subjects (default 1)")
+    s.add_argument("--segmentation", choices=["oracle", "camera"], default="oracle",
+                   help="oracle: scanner's true labels; camera: MediaPipe on the colour renders (needs bsv.frontend.segment)")
+    s.add_argument("--template", default="default", help="default, fine or a labelled mesh path")
+    s.add_argument("--no-local", action="store_true", help="cohort without MakeHuman local modifiers")
+    common(s, "bench_synth")
+
+    b = sub.add_parser("boxes", help="the paper's two boxes at 45 deg, noer and l5ca")
+    b.add_argument("--seeds", type=int, default=3, help="scan seeds per box and condition (default 3)")
+    b.add_argument("--conditions", type=_conditions, default=("noer", "l5ca"), help="default noer,l5ca")
+    common(b, "bench_boxes")
+
+    f = sub.add_parser("faust", help="MPI-FAUST training scans (not bundled: point --root at your copy)")
+    f.add_argument("--root", required=True, help="MPI-FAUST folder holding training/scans and training/registrations")
+    f.add_argument("--scans", type=_ints, default=None, help="scan numbers (default: one A-pose-like scan per subject)")
+    f.add_argument("--conditions", type=_conditions, default=CONDITIONS, help="comma list of noer,l515,cali,l5ca")
+    f.add_argument("--seed", type=int, default=0, help="scan seed (default 0)")
+    common(f, "bench_faust")
+    return ap
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Runs ``bsv bench ...``; returns the process exit code (0 ok, 1 some run failed, 2 bad usage)."""
+    args = parser().parse_args(list(sys.argv[1:] if argv is None else argv))
+    params = dict(args.param)
+    methods = ("bsv",) + ((args.peer,) if args.peer else ())
+    try:
+        if args.command == "synth":
+            from .output import write_outputs
+            from .synth import SynthConfig, run_synth
+
+            cfg = SynthConfig(n=args.n, seed=args.seed, conditions=args.conditions, segmentation=args.segmentation,
+                              template=args.template, methods=methods, params=params, local=not args.no_local)
+            cfg.validate()
+            infos, runs, wall = run_synth(cfg, jobs=max(1, args.jobs), progress=not args.quiet)
+            config = {"n": cfg.n, "seed": cfg.seed, "conditions": ",".join(cfg.conditions),
+                      "segmentation": cfg.segmentation, "template": cfg.template, "methods": ",".join(methods),
+                      "params": params, "local_modifiers": cfg.local, "jobs": args.jobs}
+            summary = write_outputs(args.out, "BSV synthetic benchmark", config, infos, runs, wall)
+        elif args.command == "boxes":
+            from .boxes import run_boxes
+
+            runs, summary = run_boxes(args.out, seeds=args.seeds, conditions=args.conditions, methods=methods,
+                                      params=params, progress=not args.quiet)
+        else:
+            from .faust import run_faust
+
+            runs, summary = run_faust(args.root, args.out, scans=args.scans, conditions=args.conditions,
+                                      seed=args.seed, methods=methods, params=params, progress=not args.quiet)
+    except BenchError as exc:
+        print(f"bsv bench {args.command}: {exc}", file=sys.stderr)
+        return 2
+    _print_summary(summary)
+    print(f"wrote {args.out}/report.md, results.json, results.csv")
+    return 0 if all(r.ok for r in runs) else 1
+
+
+def _print_summary(summary: dict) -> None:
+    for m, conds in summary.items():
+        for c, segs in conds.items():
+            tl = segs.get("trunk_limbs")
+            if tl is None:
+                continue
+            extra = f"  floor {tl['floor_rve_mean']:.2f} %" if "floor_rve_mean" in tl else ""
+            print(f"{m:8s} {c:5s} trunk_limbs RVE {tl['rve_mean']:.2f} ± {tl['rve_std']:.2f} %  "
+                  f"signed {tl['signed_mean']:+.2f} %{extra}")
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

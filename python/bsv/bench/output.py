@@ -1,0 +1,64 @@
+"""Writes a benchmark's output folder: results.json, results.csv, report.md and the PNG figures."""
+
+from __future__ import annotations
+
+import platform
+import time
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+from .common import Run
+from .figures import rve_bars, trunk_limbs_histogram
+from .tables import (bias_table, p2pv_table, paper_table, rows, summarise, target_check, targets_md,
+                     timing_table, write_csv, write_json)
+
+
+def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos: Sequence[Mapping[str, Any]],
+                  runs: Sequence[Run], wall_seconds: float, notes: Sequence[str] = ()) -> dict[str, Any]:
+    """Writes every output file into ``out`` (created) and returns the summary."""
+    d = Path(out)
+    d.mkdir(parents=True, exist_ok=True)
+    table = rows(runs)
+    summary = summarise(table)
+    failures = [{"subject": r.subject, "condition": r.condition, "method": r.method, "error": r.error}
+                for r in runs if not r.ok]
+    checks = target_check(summary) if "bsv" in summary else []
+    from .. import __version__
+
+    write_json(d / "results.json", {
+        "bsv_version": __version__, "benchmark": title, "config": dict(config),
+        "created": time.strftime("%Y-%m-%d %H:%M:%S"), "machine": platform.platform(),
+        "wall_seconds": wall_seconds, "subjects": list(infos), "runs": [r.to_json() for r in runs],
+        "summary": summary, "failures": failures,
+        "targets": [{"target": n, "met": ok, "measured": ev} for n, ok, ev in checks],
+    })
+    write_csv(d / "results.csv", table)
+    figs = []
+    if table:
+        figs.append(rve_bars(summary, d / "rve_per_segment.png").name)
+        for m in summary:
+            figs.append(trunk_limbs_histogram(table, d / f"trunk_limbs_hist_{m}.png", m).name)
+    n_ok = sum(r.ok for r in runs)
+    md = [f"# {title}", "",
+          f"bsv {__version__}; {len(infos)} subjects, {n_ok}/{len(runs)} registrations succeeded; "
+          f"wall time {wall_seconds:.1f} s ({platform.machine()}, {platform.python_version()}).", ""]
+    md += [f"- {k}: `{v}`" for k, v in config.items()]
+    md += [""] + [f"{n}" for n in notes]
+    md += ["", "## Relative volume error (%), mean ± std over subjects", "",
+           "Each cell: ours (the paper's FAUST value) ✓ better / ✗ worse. The paper reports NoEr and L5Ca; "
+           "noer, l515 and cali are compared with its NoEr column, l5ca with its L5Ca column. For cali and l5ca, "
+           "`floor` is the mean RVE of a perfect registration of that cloud (bsv.bench.floor) and `excess` the "
+           "mean of (RVE - floor RVE) per subject.", "", paper_table(summary), "",
+           "## Point2PartVolume-style accuracy (100 - mean RVE, %)", "",
+           "✓ = better than both P2PV numbers (BUFF, PDT13).", "", p2pv_table(summary), "",
+           "## Signed error of trunk_limbs (%, mean ± std; negative = the fit shrinks the body)", "",
+           bias_table(summary), "", "## Registration time per subject (s)", "", timing_table(runs), ""]
+    if checks:
+        md += ["## Targets (bsv)", "", targets_md(checks), ""]
+    if failures:
+        md += ["## Failures", ""] + [f"- {f['subject']} {f['condition']} {f['method']}: {f['error']}" for f in failures]
+        md.append("")
+    if figs:
+        md += ["## Figures", ""] + [f"![{f}]({f})" for f in figs] + [""]
+    (d / "report.md").write_text("\n".join(md))
+    return summary

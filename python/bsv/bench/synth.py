@@ -1,0 +1,194 @@
+"""``bench synth``: the synthetic cohort x the four error conditions of the virtual rig.
+
+For each subject of :func:`bsv.bodies.cohort` (even indices women, odd men) and each condition, the
+virtual two-camera rig scans the labelled body (:func:`bsv.scan`; the scan seed is the same for every
+condition of a subject, so cali and l5ca share their calibration error and l515 and l5ca their depth
+noise), the head, hand and foot points are dropped, the template is registered and its segment volumes
+are compared with the body's ground truth. For cali and l5ca the error floor (:mod:`bsv.bench.floor`)
+is measured from the capture's per-camera true and estimated extrinsics.
+
+Segmentation: ``oracle`` labels every point with the scanner's true face label (isolating registration
+and volume error); ``camera`` would run the MediaPipe front-end on the rendered colour images and needs
+``bsv.frontend.segment`` (it fails with that message until the front-end is installed).
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+import traceback
+from dataclasses import dataclass, field
+from typing import Any, Callable, Iterable, Optional
+
+from ..types import Mesh, PointCloud
+from .common import BenchError, Run, keep_trunk_limbs, load_template, register_method
+from .reference import CALIBRATED, CONDITIONS
+
+SEGMENTATIONS: tuple[str, ...] = ("oracle", "camera")
+
+
+@dataclass
+class SynthConfig:
+    """Everything one synthetic run depends on (picklable: sent to worker processes)."""
+
+    n: int = 10
+    seed: int = 0
+    conditions: tuple[str, ...] = CONDITIONS
+    segmentation: str = "oracle"
+    template: str = "default"
+    methods: tuple[str, ...] = ("bsv",)
+    params: dict[str, Any] = field(default_factory=dict)
+    local: bool = True
+
+    def validate(self) -> None:
+        """Raise BenchError on an unknown condition, segmentation or method, or a bad count."""
+        if self.n < 1:
+            raise BenchError(f"--n {self.n}: need at least one subject")
+        bad = [c for c in self.conditions if c not in CONDITIONS]
+        if bad or not self.conditions:
+            raise BenchError(f"--conditions {','.join(self.conditions)}: use a comma list of {','.join(CONDITIONS)}")
+        if self.segmentation not in SEGMENTATIONS:
+            raise BenchError(f"--segmentation {self.segmentation}: use oracle or camera")
+        if self.segmentation == "camera":
+            camera_segmenter()
+        for m in self.methods:
+            if m not in ("bsv", "trimesh"):
+                raise BenchError(f"method {m!r}: use bsv (and --peer trimesh)")
+
+
+def camera_segmenter() -> Callable[..., Any]:
+    """The front-end's capture segmenter, or BenchError while ``bsv.frontend.segment`` does not exist.
+
+    Contract expected from the front-end: ``bsv.frontend.segment.label_capture(capture_dir) ->
+    bsv.PointCloud``, the merged cloud of a capture folder labelled by segmenting its colour images.
+    """
+    try:
+        from ..frontend import segment  # type: ignore[attr-defined]
+    except ImportError as exc:
+        raise BenchError(
+            "camera segmentation needs bsv.frontend.segment (the MediaPipe front-end), which is not available "
+            f"in this installation ({exc}); use --segmentation oracle") from exc
+    fn = getattr(segment, "label_capture", None)
+    if not callable(fn):
+        raise BenchError("camera segmentation needs bsv.frontend.segment.label_capture(capture_dir) -> "
+                         "PointCloud, which this version of the front-end does not provide; use --segmentation oracle")
+    return fn
+
+
+def scan_seed(seed: int, index: int) -> int:
+    """The scanner seed of subject ``index`` in the cohort of ``seed`` (shared by its conditions)."""
+    return int(seed) * 1_000_003 + int(index)
+
+
+def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition: str, seed: int,
+                      template: Mesh, methods: Iterable[str], segmentation: str = "oracle",
+                      params: Optional[dict[str, Any]] = None) -> list[Run]:
+    """Scan ``mesh`` in one condition, compute the floor if calibrated, register with every method.
+
+    Never raises for a failed registration: the Run carries ``ok=False`` and the error text."""
+    from .. import scan
+    from .floor import floor_volumes, read_camera_poses
+
+    runs: list[Run] = []
+    floor: dict[str, float] = {}
+    need_files = condition in CALIBRATED or segmentation == "camera"
+    with tempfile.TemporaryDirectory(prefix="bsv-bench-") as tmp:
+        raw = scan(mesh, condition, seed, images=tmp if need_files else None, overwrite=True)
+        if condition in CALIBRATED:
+            floor = floor_volumes(mesh, read_camera_poses(tmp))
+        if segmentation == "camera":
+            raw = camera_segmenter()(tmp)
+    cloud: PointCloud = keep_trunk_limbs(raw)
+    for method in methods:
+        run = Run(name, condition, method, False, truth_l=dict(truth), floor_l=dict(floor), n_points=len(cloud))
+        try:
+            fit = register_method(method, cloud, template, params)
+            run.estimated_l, run.seconds, run.info, run.ok = fit.volumes_l, fit.seconds, fit.info, True
+        except Exception as exc:  # noqa: BLE001 - a failed registration is reported, the run goes on
+            run.error = f"{type(exc).__name__}: {exc}"
+            run.info = {"traceback": traceback.format_exc(limit=3)}
+        runs.append(run)
+    return runs
+
+
+def subject_name(index: int) -> str:
+    """Report name of cohort subject ``index``."""
+    return f"subject_{index:03d}"
+
+
+def run_subject(cfg: SynthConfig, index: int, on_condition: Optional[Callable[[], None]] = None) -> tuple[dict, list[Run]]:
+    """Every condition and method for cohort subject ``index``; failures are recorded, never raised."""
+    from ..bodies import subject
+
+    name = subject_name(index)
+    t0 = time.perf_counter()
+    try:
+        s = subject(index, cfg.seed, local=cfg.local)
+    except Exception as exc:  # noqa: BLE001
+        err = f"subject generation failed: {type(exc).__name__}: {exc}"
+        runs = [Run(name, c, m, False, error=err) for c in cfg.conditions for m in cfg.methods]
+        for _ in cfg.conditions:
+            if on_condition:
+                on_condition()
+        return {"subject": name, "index": index, "error": err}, runs
+    info = {"subject": name, **s.info()}
+    info["body_seconds"] = time.perf_counter() - t0
+    truth = {k: float(v) for k, v in s.volumes_l().items()}
+    template = load_template(cfg.template)
+    mesh = s.body.mesh()
+    runs: list[Run] = []
+    for cond in cfg.conditions:
+        try:
+            runs += measure_condition(name, mesh, truth, cond, scan_seed(cfg.seed, index), template,
+                                      cfg.methods, cfg.segmentation, cfg.params)
+        except Exception as exc:  # noqa: BLE001 - a failed scan/floor is reported, the run goes on
+            runs += [Run(name, cond, m, False, truth_l=truth, error=f"{type(exc).__name__}: {exc}")
+                     for m in cfg.methods]
+        if on_condition:
+            on_condition()
+    info["seconds"] = time.perf_counter() - t0
+    return info, runs
+
+
+def _worker(args: tuple[SynthConfig, int]) -> tuple[dict, list[dict]]:
+    cfg, index = args
+    info, runs = run_subject(cfg, index)
+    return info, [r.to_json() for r in runs]
+
+
+def run_synth(cfg: SynthConfig, jobs: int = 1, progress: bool = True) -> tuple[list[dict], list[Run], float]:
+    """The whole cohort: (subject infos, runs, wall seconds). ``jobs`` > 1 uses worker processes."""
+    from tqdm import tqdm
+
+    cfg.validate()
+    t0 = time.perf_counter()
+    infos: list[dict] = []
+    runs: list[Run] = []
+    total = cfg.n * len(cfg.conditions)
+    with tqdm(total=total, desc="bench synth", unit="scan", disable=not progress) as bar:
+        if jobs <= 1:
+            for i in range(cfg.n):
+                info, rs = run_subject(cfg, i, on_condition=lambda: bar.update(1))
+                infos.append(info)
+                runs += rs
+                _report_failures(rs, bar)
+        else:
+            import multiprocessing as mp
+
+            # spawn: the parent already runs rayon threads; forking them is unsafe
+            with mp.get_context("spawn").Pool(jobs) as pool:
+                for info, rs_json in pool.imap_unordered(_worker, [(cfg, i) for i in range(cfg.n)]):
+                    rs = [Run.from_json(r) for r in rs_json]
+                    infos.append(info)
+                    runs += rs
+                    bar.update(len(cfg.conditions))
+                    _report_failures(rs, bar)
+    infos.sort(key=lambda d: d["subject"])
+    runs.sort(key=lambda r: (r.subject, CONDITIONS.index(r.condition), r.method))
+    return infos, runs, time.perf_counter() - t0
+
+
+def _report_failures(runs: list[Run], bar: Any) -> None:
+    for r in runs:
+        if not r.ok:
+            bar.write(f"FAILED {r.subject} {r.condition} {r.method}: {r.error}")

@@ -8,8 +8,9 @@ are compared with the body's ground truth. For cali and l5ca the error floor (:m
 is measured from the capture's per-camera true and estimated extrinsics.
 
 Segmentation: ``oracle`` labels every point with the scanner's true face label (isolating registration
-and volume error); ``camera`` would run the MediaPipe front-end on the rendered colour images and needs
-``bsv.frontend.segment`` (it fails with that message until the front-end is installed).
+and volume error); ``camera`` runs the MediaPipe front-end on the rendered colour images and builds the cloud from the
+depth images as a lab would (:mod:`bsv.bench.camera`; it needs ``bsv.frontend.segment`` and fails with
+that message without it).
 """
 
 from __future__ import annotations
@@ -50,29 +51,12 @@ class SynthConfig:
         if self.segmentation not in SEGMENTATIONS:
             raise BenchError(f"--segmentation {self.segmentation}: use oracle or camera")
         if self.segmentation == "camera":
-            camera_segmenter()
+            from .camera import check_available
+
+            check_available()
         for m in self.methods:
             if m not in ("bsv", "trimesh"):
                 raise BenchError(f"method {m!r}: use bsv (and --peer trimesh)")
-
-
-def camera_segmenter() -> Callable[..., Any]:
-    """The front-end's capture segmenter, or BenchError while ``bsv.frontend.segment`` does not exist.
-
-    Contract expected from the front-end: ``bsv.frontend.segment.label_capture(capture_dir) ->
-    bsv.PointCloud``, the merged cloud of a capture folder labelled by segmenting its colour images.
-    """
-    try:
-        from ..frontend import segment  # type: ignore[attr-defined]
-    except ImportError as exc:
-        raise BenchError(
-            "camera segmentation needs bsv.frontend.segment (the MediaPipe front-end), which is not available "
-            f"in this installation ({exc}); use --segmentation oracle") from exc
-    fn = getattr(segment, "label_capture", None)
-    if not callable(fn):
-        raise BenchError("camera segmentation needs bsv.frontend.segment.label_capture(capture_dir) -> "
-                         "PointCloud, which this version of the front-end does not provide; use --segmentation oracle")
-    return fn
 
 
 def scan_seed(seed: int, index: int) -> int:
@@ -82,9 +66,10 @@ def scan_seed(seed: int, index: int) -> int:
 
 def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition: str, seed: int,
                       template: Mesh, methods: Iterable[str], segmentation: str = "oracle",
-                      params: Optional[dict[str, Any]] = None) -> list[Run]:
+                      params: Optional[dict[str, Any]] = None, truth_mesh: Optional[Mesh] = None) -> list[Run]:
     """Scan ``mesh`` in one condition, compute the floor if calibrated, register with every method.
 
+    The floor moves ``truth_mesh`` (default ``mesh``: it must be closed and labelled like the truth).
     Never raises for a failed registration: the Run carries ``ok=False`` and the error text."""
     from .. import scan
     from .floor import floor_volumes, read_camera_poses
@@ -95,9 +80,11 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
     with tempfile.TemporaryDirectory(prefix="bsv-bench-") as tmp:
         raw = scan(mesh, condition, seed, images=tmp if need_files else None, overwrite=True)
         if condition in CALIBRATED:
-            floor = floor_volumes(mesh, read_camera_poses(tmp))
+            floor = floor_volumes(mesh if truth_mesh is None else truth_mesh, read_camera_poses(tmp))
         if segmentation == "camera":
-            raw = camera_segmenter()(tmp)
+            from .camera import capture_cloud
+
+            raw = capture_cloud(tmp)
     cloud: PointCloud = keep_trunk_limbs(raw)
     for method in methods:
         run = Run(name, condition, method, False, truth_l=dict(truth), floor_l=dict(floor), n_points=len(cloud))

@@ -1,0 +1,357 @@
+"""bsv.bench: metric, tables and writers, the calibration floor, the cube template, the peer's
+pre-alignment, the FAUST loader and command, and a reduced synthetic run as an accuracy regression guard."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import bsv
+from bsv.bench import main as bench_main
+from bsv.bench.boxes import BOXES, box_mesh, cube_template, load_cube_template
+from bsv.bench.common import BenchError, Run, keep_trunk_limbs, rve, signed_error
+from bsv.bench.faust import choose_scans, list_scans, nearest_index, sample_surface
+from bsv.bench.floor import CameraPose, camera_weights, floor_mesh, floor_volumes, read_camera_poses, vertex_normals
+from bsv.bench.peer import prealign, robust_box
+from bsv.bench.reference import PAPER, P2PV_BUFF
+from bsv.bench.tables import (CSV_COLUMNS, bias_table, p2pv_table, paper_table, read_csv, rows, summarise,
+                              target_check, write_csv, write_json)
+
+HAS_REGISTER = hasattr(bsv._bsv, "register")
+needs_register = pytest.mark.skipif(not HAS_REGISTER, reason="bsv._bsv.register not built yet")
+
+
+# ---------------------------------------------------------------- metric and tables
+
+def test_rve_and_signed_error() -> None:
+    assert rve(9.0, 10.0) == pytest.approx(10.0)
+    assert signed_error(9.0, 10.0) == pytest.approx(-10.0)
+    assert signed_error(10.5, 10.0) == pytest.approx(5.0)
+    with pytest.raises(BenchError):
+        rve(1.0, 0.0)
+
+
+def _runs() -> list[Run]:
+    """Two subjects, noer and l5ca; estimates at known relative errors."""
+    out = []
+    truth = {"torso": 30.0, "upper_arm_l": 1.5, "trunk_limbs": 50.0, "arm_l": 2.5}
+    for i, (e_noer, e_cal) in enumerate([(0.01, -0.02), (-0.03, 0.04)]):
+        s = f"subject_{i:03d}"
+        out.append(Run(s, "noer", "bsv", True, truth, {k: v * (1 + e_noer) for k, v in truth.items()}, seconds=1.0 + i))
+        floor = {k: v * (1 + e_cal / 2) for k, v in truth.items()}
+        out.append(Run(s, "l5ca", "bsv", True, truth, {k: v * (1 + e_cal) for k, v in truth.items()}, floor, 2.0))
+    out.append(Run("subject_002", "noer", "bsv", False, error="RegistrationError: boom"))
+    return out
+
+
+def test_rows_and_summary_statistics() -> None:
+    table = rows(_runs())
+    # failed run dropped; 2 subjects x 2 conditions x 4 segments present
+    assert len(table) == 16
+    s = summarise(table)
+    tl = s["bsv"]["noer"]["trunk_limbs"]
+    assert tl["rve_mean"] == pytest.approx(2.0)
+    assert tl["rve_std"] == pytest.approx(np.std([1.0, 3.0], ddof=1))
+    assert tl["signed_mean"] == pytest.approx(-1.0)
+    assert "floor_rve_mean" not in tl
+    cal = s["bsv"]["l5ca"]["torso"]
+    assert cal["rve_mean"] == pytest.approx(3.0)
+    assert cal["floor_rve_mean"] == pytest.approx(1.5)
+    assert cal["excess_mean"] == pytest.approx(1.5)
+    assert cal["floor_signed_mean"] == pytest.approx(0.5)
+
+
+def test_markdown_tables_show_paper_values_and_marks() -> None:
+    s = summarise(rows(_runs()))
+    md = paper_table(s)
+    lines = {ln.split("|")[1].strip(): ln for ln in md.splitlines()[2:]}
+    assert "2.00 ± 1.41 (1.23) ✗" in lines["trunk_limbs"]          # worse than the paper's 1.23
+    assert "2.00 ± 1.41 (5.07) ✓" in lines["torso"]                # better than 5.07
+    assert f"({PAPER['torso'][1]:.2f})" in lines["torso"]           # l5ca column uses L5Ca
+    assert "floor 1.50, excess +1.50" in lines["torso"]
+    assert lines["thigh_l"].count("–") == 2                        # absent segment
+    p2 = p2pv_table(s)
+    arm = next(ln for ln in p2.splitlines() if ln.startswith("| arm_l"))
+    assert "98.00 ✓" in arm and f"{P2PV_BUFF['arm_l']:.2f}" in arm
+    assert "+1.00 ± 4.24" in bias_table(s)                          # l5ca signed: +4 and -2 -> mean +1
+    checks = {name: ok for name, ok, _ in target_check(s)}
+    assert checks["noer: trunk_limbs mean RVE <= 0.6 %"] is False
+    assert checks["l5ca: trunk_limbs excess over floor <= 0.5 %"] is False
+
+
+def test_csv_and_json_writers_round_trip(tmp_path: Path) -> None:
+    table = rows(_runs())
+    write_csv(tmp_path / "r.csv", table)
+    back = read_csv(tmp_path / "r.csv")
+    assert list(back[0]) == list(CSV_COLUMNS)
+    assert len(back) == len(table)
+    for a, b in zip(table, back):
+        assert a["segment"] == b["segment"] and a["rve_pct"] == pytest.approx(b["rve_pct"], abs=1e-6)
+        assert (a["floor_l"] is None) == (b["floor_l"] is None)
+    write_json(tmp_path / "r.json", {"x": math.nan, "y": np.float64(2.5), "z": [np.int64(3)], "r": _runs()[0].to_json()})
+    doc = json.loads((tmp_path / "r.json").read_text())
+    assert doc["x"] is None and doc["y"] == 2.5 and doc["z"] == [3]
+    assert Run.from_json(doc["r"]) == _runs()[0]
+
+
+# ---------------------------------------------------------------- floor
+
+def _pose(name: str, r_true: np.ndarray, t_true: np.ndarray, r_err: np.ndarray, t_err: np.ndarray) -> CameraPose:
+    """A camera whose estimated extrinsics are the true ones followed by a world-frame error (r_err, t_err)."""
+    return CameraPose(name, r_true, t_true, r_err @ r_true, r_err @ t_true + t_err)
+
+
+def _rig(r_front: np.ndarray, t_front: np.ndarray, r_back: np.ndarray, t_back: np.ndarray) -> list[CameraPose]:
+    front = _pose("front", np.diag([1.0, -1.0, -1.0]), np.array([0.0, 1.0, 2.0]), r_front, t_front)
+    back = _pose("back", np.diag([-1.0, -1.0, 1.0]), np.array([0.0, 1.0, -2.0]), r_back, t_back)
+    return [front, back]
+
+
+def _rot_y(deg: float) -> np.ndarray:
+    t = math.radians(deg)
+    return np.array([[math.cos(t), 0, math.sin(t)], [0, 1, 0], [-math.sin(t), 0, math.cos(t)]])
+
+
+@pytest.fixture(scope="module")
+def body() -> bsv.Mesh:
+    from bsv.bodies import subject
+
+    return subject(1).body.mesh()
+
+
+def test_floor_without_error_is_the_truth(body: bsv.Mesh) -> None:
+    cams = _rig(np.eye(3), np.zeros(3), np.eye(3), np.zeros(3))
+    fv = floor_volumes(body, cams)
+    truth = bsv.volumes(body)["volumes_l"]
+    for k in truth:
+        assert fv[k] == pytest.approx(truth[k], rel=1e-12)
+
+
+def test_floor_of_a_common_rigid_error_keeps_every_volume(body: bsv.Mesh) -> None:
+    r, t = _rot_y(2.0), np.array([0.01, -0.02, 0.005])
+    fm = floor_mesh(body, _rig(r, t, r, t))
+    np.testing.assert_allclose(fm.vertices, body.vertices @ r.T + t, atol=1e-12)
+    fv = floor_volumes(body, _rig(r, t, r, t))
+    truth = bsv.volumes(body)["volumes_l"]
+    for k in truth:
+        assert fv[k] == pytest.approx(truth[k], rel=1e-9)
+
+
+def test_floor_of_opposite_depth_shifts_thickens_the_body(body: bsv.Mesh) -> None:
+    # front surface pushed 5 mm toward the front camera, back surface 5 mm toward the back camera:
+    # the body gets ~1 cm thicker front to back; the torso's volume grows by about its frontal area x 1 cm
+    d = 0.005
+    cams = _rig(np.eye(3), np.array([0, 0, d]), np.eye(3), np.array([0, 0, -d]))
+    fv, truth = floor_volumes(body, cams), bsv.volumes(body)["volumes_l"]
+    fm = floor_mesh(body, cams)
+    n = vertex_normals(body.vertices, body.faces)
+    front = n[:, 2] > 0.5
+    np.testing.assert_allclose(fm.vertices[front] - body.vertices[front], [[0, 0, d]] * int(front.sum()), atol=1e-12)
+    torso = body.vertices[body.vertex_labels == 2]
+    frontal_area = (np.ptp(torso[:, 0]) * np.ptp(torso[:, 1]))  # bounding rectangle: an upper bound
+    grow = (fv["torso"] - truth["torso"]) * 1e-3
+    assert 0.4 * frontal_area * 2 * d < grow < frontal_area * 2 * d
+    assert all(fv[k] > truth[k] for k in ("torso", "thigh_l", "thigh_r", "trunk_limbs"))
+
+
+def test_camera_weights_blend_across_the_lateral_band() -> None:
+    cams = _rig(np.eye(3), np.zeros(3), np.eye(3), np.zeros(3))
+    nz = np.linspace(-1, 1, 41)
+    n = np.stack([np.sqrt(1 - nz ** 2), np.zeros_like(nz), nz], axis=1)
+    w = camera_weights(n, cams)
+    np.testing.assert_allclose(w.sum(axis=1), 1.0)
+    assert np.all(np.diff(w[:, 0]) >= 0)                       # front weight grows with n_z
+    assert w[-1, 0] == 1.0 and w[0, 1] == 1.0 and w[20, 0] == pytest.approx(0.5)
+
+
+def test_floor_reads_a_virtual_capture_and_matches_its_cloud(body: bsv.Mesh, tmp_path: Path) -> None:
+    cloud = bsv.scan(body, "cali", seed=2, images=tmp_path)
+    cams = read_camera_poses(tmp_path)
+    assert {c.name for c in cams} == {"front", "back"}
+    # the true mesh moved by each camera's error coincides with that camera's points: the offset along
+    # the normal from camera-facing vertices to their 8 nearest cloud points, before and after the move
+    spatial = pytest.importorskip("scipy.spatial")
+    tree = spatial.cKDTree(cloud.points)
+    n = vertex_normals(body.vertices, body.faces)
+    facing = np.abs(n[:, 2]) > 0.8
+
+    def offset(v: np.ndarray) -> float:
+        _, idx = tree.query(v[facing], k=8)
+        d = np.einsum("ikj,ij->ik", cloud.points[idx] - v[facing][:, None, :], n[facing]).mean(axis=1)
+        return float(np.median(np.abs(d)))
+
+    before, after = offset(body.vertices), offset(floor_mesh(body, cams).vertices)
+    assert after < 0.4e-3 and after < 0.5 * before, (before, after)
+    with pytest.raises(Exception, match="camera.json"):
+        read_camera_poses(tmp_path / "front")
+
+
+# ---------------------------------------------------------------- boxes, peer, helpers
+
+def test_cube_template_and_boxes() -> None:
+    c = cube_template(4)
+    chk = bsv.check_mesh(c)
+    assert chk["is_watertight"] and chk["is_consistently_oriented"]
+    assert bsv.volumes(c)["volumes_l"]["whole"] == pytest.approx(1000.0)
+    shipped = load_cube_template()
+    assert bsv.volumes(shipped)["volumes_l"]["whole"] == pytest.approx(1000.0)
+    assert set(np.unique(shipped.vertex_labels)) == {2}
+    for b in BOXES:
+        m = box_mesh(b)
+        assert bsv.volumes(m)["volumes_l"]["whole"] == pytest.approx(b.volume_l, rel=1e-9)
+        assert m.vertices[:, 1].min() == pytest.approx(0.0, abs=1e-12)
+    with pytest.raises(BenchError):
+        cube_template(0)
+
+
+def test_peer_prealign_matches_the_boxes() -> None:
+    rng = np.random.default_rng(0)
+    pts = rng.uniform([-1, 0, -0.2], [1, 0.5, 0.2], size=(20000, 3))
+    c = cube_template(2)
+    moved, mode = prealign(c.vertices, pts, "per_axis")
+    lo, hi = robust_box(pts)
+    assert mode == "peraxis"
+    np.testing.assert_allclose(moved.min(axis=0), lo, atol=1e-12)
+    np.testing.assert_allclose(moved.max(axis=0), hi, atol=1e-12)
+    iso, mode = prealign(c.vertices, pts, "isotropic")
+    ext = iso.max(axis=0) - iso.min(axis=0)
+    assert mode == "isotropic" and np.ptp(ext) < 1e-12
+    assert np.linalg.norm(ext) == pytest.approx(np.linalg.norm(hi - lo))
+    assert prealign(c.vertices, pts, "auto")[1] == "peraxis"     # 2 x 0.5 x 0.4 box is far from a cube
+    with pytest.raises(BenchError):
+        prealign(c.vertices, pts, "sideways")
+
+
+def test_keep_trunk_limbs_drops_head_hands_feet() -> None:
+    lab = np.arange(15, dtype=np.uint8)
+    pc = bsv.PointCloud(np.zeros((15, 3)) + lab[:, None], labels=lab)
+    kept = keep_trunk_limbs(pc)
+    assert sorted(kept.labels.tolist()) == [2, 3, 4, 5, 6, 9, 10, 11, 12]
+    np.testing.assert_array_equal(kept.points[:, 0], kept.labels)
+    with pytest.raises(BenchError):
+        keep_trunk_limbs(bsv.PointCloud(np.zeros((3, 3))))
+
+
+def test_nearest_index_and_surface_samples() -> None:
+    rng = np.random.default_rng(1)
+    src = rng.normal(size=(500, 3))
+    q = src[[3, 77, 499]] + 1e-6
+    np.testing.assert_array_equal(nearest_index(src, q), [3, 77, 499])
+    c = cube_template(2)
+    s = sample_surface(c, 2000)
+    assert np.allclose(np.abs(s).max(axis=1), 0.5)                # every sample on a cube face
+
+
+def test_camera_segmentation_fails_clearly_without_the_front_end(tmp_path: Path, capsys, monkeypatch) -> None:
+    import sys
+
+    monkeypatch.setitem(sys.modules, "bsv.frontend.segment", None)    # makes the import fail
+    code = bench_main(["synth", "--n", "1", "--segmentation", "camera", "--out", str(tmp_path), "--quiet"])
+    assert code == 2
+    assert "camera segmentation needs bsv.frontend.segment" in capsys.readouterr().err
+    assert not (tmp_path / "results.json").exists()
+
+
+def test_capture_cloud_with_the_true_label_images_is_the_scanner_cloud(body: bsv.Mesh, tmp_path: Path) -> None:
+    from PIL import Image
+
+    from bsv.bench.camera import capture_cloud
+
+    cloud = bsv.scan(body, "cali", seed=1, images=tmp_path)
+    labels = {c: np.asarray(Image.open(tmp_path / c / "labels.png")) for c in ("front", "back")}
+    rebuilt = capture_cloud(tmp_path, labels)
+    assert len(rebuilt) == len(cloud)
+    spatial = pytest.importorskip("scipy.spatial")
+    d, i = spatial.cKDTree(cloud.points).query(rebuilt.points)
+    assert d.max() < 0.3e-3                                         # 16-bit depth quantisation (0.25 mm)
+    assert np.mean(cloud.labels[i] == rebuilt.labels) > 0.999
+
+
+def test_bad_options_are_usage_errors(tmp_path: Path) -> None:
+    with pytest.raises(SystemExit):
+        bench_main(["synth", "--conditions", "noer,foggy"])
+    assert bench_main(["faust", "--root", str(tmp_path), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+
+
+# ---------------------------------------------------------------- FAUST
+
+def _faust_folder(root: Path, poses: dict[int, bsv.Mesh]) -> None:
+    (root / "training" / "scans").mkdir(parents=True)
+    (root / "training" / "registrations").mkdir(parents=True)
+    for n, m in poses.items():
+        plain = bsv.Mesh(m.vertices, m.faces)
+        bsv.write_mesh(root / "training" / "registrations" / f"tr_reg_{n:03d}.ply", plain)
+        # the raw scan: the same surface with holes (a strip of faces removed) and no labels
+        keep = np.ones(len(m.faces), bool)
+        keep[:: 50] = False
+        bsv.write_mesh(root / "training" / "scans" / f"tr_scan_{n:03d}.ply", bsv.Mesh(m.vertices, m.faces[keep]))
+
+
+def test_faust_loader_and_scan_choice(tmp_path: Path, body: bsv.Mesh) -> None:
+    crouch = bsv.Mesh(body.vertices * [1.0, 0.9, 1.0], body.faces)             # not upright
+    narrow = bsv.Mesh(body.vertices * [0.6, 1.0, 1.0], body.faces)             # arms closer than an A-pose
+    _faust_folder(tmp_path, {0: narrow, 1: body, 2: crouch, 10: body})
+    (tmp_path / "training" / "scans" / "tr_scan_011.ply").write_text("no registration")
+    items = list_scans(tmp_path)
+    assert [it.number for it in items] == [0, 1, 2, 10]
+    assert [(it.subject, it.pose) for it in items] == [(0, 0), (0, 1), (0, 2), (1, 0)]
+    assert [it.number for it in choose_scans(items)] == [1, 10]
+    assert [it.number for it in choose_scans(items, [2])] == [2]
+    with pytest.raises(BenchError, match="--scans 42"):
+        choose_scans(items, [42])
+    with pytest.raises(BenchError, match="MPI-FAUST"):
+        list_scans(tmp_path / "training")
+
+
+@needs_register
+@pytest.mark.slow
+def test_faust_command_on_synthetic_bodies(tmp_path: Path) -> None:
+    from bsv.bodies import subject
+
+    subs = [subject(0), subject(1)]
+    _faust_folder(tmp_path / "faust", {0: subs[0].body.mesh(), 10: subs[1].body.mesh()})
+    out = tmp_path / "out"
+    code = bench_main(["faust", "--root", str(tmp_path / "faust"), "--conditions", "noer", "--out", str(out), "--quiet"])
+    assert code == 0
+    doc = json.loads((out / "results.json").read_text())
+    assert [r["subject"] for r in doc["runs"]] == ["tr_scan_000", "tr_scan_010"]
+    for r, s in zip(doc["runs"], subs):
+        truth = s.volumes_l()
+        # the template-labelled ground truth agrees with the bodies' own labels on the aggregate
+        assert r["truth_l"]["trunk_limbs"] == pytest.approx(truth["trunk_limbs"], rel=0.04)
+        assert r["truth_l"]["whole"] == pytest.approx(truth["whole"], rel=1e-6)
+        assert rve(r["estimated_l"]["trunk_limbs"], r["truth_l"]["trunk_limbs"]) < 3.0
+    assert (out / "report.md").read_text().count("tr_scan_0") >= 2
+
+
+# ---------------------------------------------------------------- regression guard (reduced synth run)
+
+#: Bounds of the reduced run (2 subjects x noer, l5ca), set with margin over the measured values.
+BOUND_TRUNK_LIMBS_NOER = 1.5
+BOUND_SEGMENT_NOER = 6.0
+BOUND_EXCESS_TRUNK_LIMBS_L5CA = 1.5
+BOUND_EXCESS_SEGMENT_L5CA = 6.0
+
+
+@needs_register
+@pytest.mark.slow
+def test_reduced_synth_run_regression_guard(tmp_path: Path) -> None:
+    code = bench_main(["synth", "--n", "2", "--conditions", "noer,l5ca", "--out", str(tmp_path), "--quiet"])
+    assert code == 0
+    for f in ("results.json", "results.csv", "report.md", "rve_per_segment.png", "trunk_limbs_hist_bsv.png"):
+        assert (tmp_path / f).stat().st_size > 0
+    doc = json.loads((tmp_path / "results.json").read_text())
+    assert len(doc["runs"]) == 4 and not doc["failures"]
+    s = doc["summary"]["bsv"]
+    assert s["noer"]["trunk_limbs"]["rve_mean"] < BOUND_TRUNK_LIMBS_NOER
+    segs = [k for k in PAPER if k != "trunk_limbs"]
+    assert max(s["noer"][k]["rve_mean"] for k in segs) < BOUND_SEGMENT_NOER
+    assert s["l5ca"]["trunk_limbs"]["excess_mean"] < BOUND_EXCESS_TRUNK_LIMBS_L5CA
+    assert max(s["l5ca"][k]["excess_mean"] for k in segs) < BOUND_EXCESS_SEGMENT_L5CA
+    table = read_csv(tmp_path / "results.csv")
+    assert len(table) == 4 * 14
+    assert {r["condition"] for r in table if r["floor_l"] is not None} == {"l5ca"}

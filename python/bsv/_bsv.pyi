@@ -55,3 +55,10 @@ def scan(
     seed: int,
     images_dir: Optional[str],
 ) -> CloudTuple: ...
+def build_cloud(
+    views: list[dict], params_json: str
+) -> tuple[F64, Optional[F64], Optional[U8], Optional[U8], str]:
+    """Merged labelled world cloud from per-camera dicts {name, intrinsics (dict), camera_to_world
+    {rotation, translation}, depth (H, W) uint16 + depth_scale or float32 metres, labels (H, W) uint8,
+    colors (H, W, 3) uint8 optional}: (points, normals, colors, labels, report_json)."""
+    ...

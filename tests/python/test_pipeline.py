@@ -1,0 +1,234 @@
+"""The front-end chain: the cloud-building binding against the virtual scanner's own cloud, `bsv demo` end to
+end (trunk_limbs RVE < 3 %, report files), overwrite protection and the clear errors of `bsv process`."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import bsv
+from bsv import pipeline
+from bsv.frontend.capture import read_capture
+from bsv.frontend.errors import CalibrationFileError, CaptureError, MarkerNotFoundError, PersonNotFoundError, SegmentationError
+from bsv.types import Registration
+
+HAS_REGISTER = hasattr(bsv._bsv, "register")
+needs_register = pytest.mark.skipif(not HAS_REGISTER, reason="the registration engine is not in this build of bsv._bsv")
+
+
+def _has_mediapipe() -> bool:
+    try:
+        import mediapipe  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+@pytest.fixture(scope="module")
+def subject():
+    return bsv.bodies.subject(0, 0)
+
+
+@pytest.fixture(scope="module")
+def capture(tmp_path_factory, subject):
+    """A virtual L515 capture of subject 0 and the scanner's own merged cloud."""
+    d = tmp_path_factory.mktemp("capture")
+    cloud = bsv.scan(subject.body.mesh(), "l515", 0, images=d, overwrite=True)
+    return d, cloud
+
+
+def _views(cap: Path, labels_from: str = "labels.png") -> list[dict]:
+    import cv2
+
+    cal = json.loads((cap / "calibration.json").read_text())["cameras"]
+    views = []
+    for cam in ("front", "back"):
+        meta = json.loads((cap / cam / "camera.json").read_text())
+        depth = cv2.imread(str(cap / cam / "depth.png"), cv2.IMREAD_UNCHANGED)
+        labels = cv2.imread(str(cap / cam / labels_from), cv2.IMREAD_UNCHANGED)
+        views.append({"name": cam, "intrinsics": meta["intrinsics"], "camera_to_world": cal[cam]["camera_to_world"],
+                      "depth": depth, "depth_scale": meta["depth_scale"], "labels": labels})
+    return views
+
+
+def test_binding_rebuilds_the_scanner_cloud(capture):
+    cap, scanned = capture
+    params = json.dumps({"sor": False, "drop_labels": [], "normals": False})
+    pts, normals, colors, labels, report = bsv._bsv.build_cloud(_views(cap), params)
+    assert normals is None and colors is not None
+    assert pts.shape == scanned.points.shape
+    np.testing.assert_array_equal(labels, scanned.labels)
+    # 16-bit depth at 0.25 mm: half a unit along rays at most ~1.25x longer than their depth.
+    assert np.abs(np.linalg.norm(pts - scanned.points, axis=1)).max() <= 0.5 * 0.00025 * 1.25
+    rep = json.loads(report)
+    assert rep["points"] == len(pts) and [v["name"] for v in rep["views"]] == ["front", "back"]
+
+
+def test_default_cloud_drops_extremities_and_outliers(capture):
+    cap, scanned = capture
+    cloud, rep = pipeline.build_cloud(_views(cap))
+    assert not np.isin(cloud.labels, pipeline.EXTREMITY_IDS).any()
+    assert cloud.normals is not None and np.allclose(np.linalg.norm(cloud.normals, axis=1), 1.0)
+    kept_scanned = int((~np.isin(scanned.labels, pipeline.EXTREMITY_IDS)).sum())
+    assert 0.5 * kept_scanned < len(cloud) < kept_scanned
+    assert all(v["sor_removed"] > 0 and v["dropped"]["head"] > 0 for v in rep["views"])
+
+
+def test_binding_errors_are_input_errors(capture):
+    cap, _ = capture
+    v = _views(cap)
+    bad = [dict(v[0], labels=np.ascontiguousarray(v[0]["labels"].T)), v[1]]
+    with pytest.raises(bsv.InputError, match="shape"):
+        bsv._bsv.build_cloud(bad, "{}")
+    with pytest.raises(bsv.InputError, match="depth_scale"):
+        bsv._bsv.build_cloud([{k: x for k, x in v[0].items() if k != "depth_scale"}], "{}")
+    with pytest.raises(bsv.InputError, match="no person"):
+        bsv._bsv.build_cloud([dict(v[0], labels=np.zeros_like(v[0]["labels"]))], "{}")
+    with pytest.raises(bsv.InputError, match="depth scale"):
+        bsv._bsv.build_cloud([dict(v[0], depth_scale=0.0)], "{}")
+    with pytest.raises(bsv.InputError, match="camera_to_world"):
+        bsv._bsv.build_cloud([dict(v[0], camera_to_world={"rotation": [[1, 0], [0, 1]], "translation": [0, 0, 0]})], "{}")
+    with pytest.raises(bsv.InputError, match="unknown field"):
+        bsv._bsv.build_cloud(v, '{"sor_kk": 3}')
+
+
+# ----------------------------------------------------------------------------------------------------
+# process: errors come before any heavy work
+
+
+def test_missing_calibration_is_a_clear_error(capture, tmp_path):
+    cap, _ = capture
+    with pytest.raises(CalibrationFileError, match="calibration"):
+        pipeline.process(cap, None, tmp_path / "out", segmentation="oracle", progress=False)
+    with pytest.raises(CalibrationFileError, match="does not exist"):
+        pipeline.process(cap, tmp_path / "nope.json", tmp_path / "out", segmentation="oracle", progress=False)
+    assert pipeline.main_process([str(cap), "-o", str(tmp_path / "out2"), "--segmentation", "oracle", "--quiet"]) == 1
+
+
+def test_empty_or_missing_capture_is_a_clear_error(tmp_path):
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(CaptureError, match="no 'front' camera capture"):
+        pipeline.process(tmp_path / "empty", tmp_path / "c.json", tmp_path / "out", progress=False)
+    with pytest.raises(CaptureError, match="does not exist"):
+        pipeline.process(tmp_path / "missing", tmp_path / "c.json", tmp_path / "out", progress=False)
+
+
+def test_oracle_without_label_images_is_a_clear_error(capture, tmp_path):
+    cap, _ = capture
+    copy = tmp_path / "cap"
+    shutil.copytree(cap, copy)
+    (copy / "front" / "labels.png").unlink()
+    with pytest.raises(SegmentationError, match="labels.png"):
+        pipeline.process(copy, copy / "calibration.json", tmp_path / "out", segmentation="oracle", progress=False)
+
+
+def test_marker_not_found_in_calibration_images(capture, tmp_path):
+    import cv2
+
+    cap, _ = capture
+    for cam in ("front", "back"):
+        (tmp_path / "marker" / cam).mkdir(parents=True)
+        cv2.imwrite(str(tmp_path / "marker" / cam / "0.png"), np.full((1024, 768, 3), 128, np.uint8))
+    with pytest.raises(MarkerNotFoundError):
+        pipeline.process(cap, tmp_path / "marker", tmp_path / "out", segmentation="oracle", progress=False)
+
+
+@pytest.mark.skipif(not _has_mediapipe(), reason="mediapipe is not installed")
+def test_no_person_found_is_a_clear_error(capture, tmp_path):
+    import cv2
+
+    cap, _ = capture
+    copy = tmp_path / "cap"
+    shutil.copytree(cap, copy)
+    cv2.imwrite(str(copy / "front" / "color.png"), np.full((1024, 768, 3), 128, np.uint8))
+    with pytest.raises(PersonNotFoundError, match="no person"):
+        pipeline.process(copy, copy / "calibration.json", tmp_path / "out", segmentation="camera", progress=False)
+
+
+def test_existing_outputs_are_not_overwritten(capture, tmp_path):
+    cap, _ = capture
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "volumes.json").write_text("{}")
+    with pytest.raises(FileExistsError, match="overwrite"):
+        pipeline.process(cap, cap / "calibration.json", out, segmentation="oracle", progress=False)
+    with pytest.raises(FileExistsError, match="overwrite"):
+        pipeline.demo(out, segmentation="oracle", progress=False)
+    assert (out / "volumes.json").read_text() == "{}"
+
+
+# ----------------------------------------------------------------------------------------------------
+# The report on a known labelled mesh (the subject's own body as the "fitted" mesh)
+
+
+def test_report_files_from_a_known_mesh(capture, subject, tmp_path):
+    from bsv.report import FIGURES, write_report
+
+    cap, _ = capture
+    cloud, rep = pipeline.build_cloud(_views(cap))
+    mesh = subject.body.mesh()
+    vols = bsv.volumes(mesh)
+    reg = Registration(mesh=mesh, volumes=vols)
+    res = pipeline.ProcessResult(tmp_path, cloud, reg, vols, rep, {"front": {"source": "oracle"}}, {"cloud": 1.0},
+                                 truth=subject.volumes_l())
+    files = write_report(res, tmp_path, title="known mesh")
+    for f in FIGURES:
+        assert (tmp_path / f).stat().st_size > 5000, f
+    html = files["report"].read_text()
+    assert "Estimated mass" in html and "asymmetry" in html.lower() and "upper_arm_l" in html
+    assert f"{vols['mass_kg']:.1f} kg" in html
+    with pytest.raises(FileExistsError):
+        write_report(res, tmp_path)
+
+
+# ----------------------------------------------------------------------------------------------------
+# The demo chain end to end
+
+
+@pytest.fixture(scope="module")
+def demo_oracle(tmp_path_factory):
+    out = tmp_path_factory.mktemp("demo_oracle")
+    return pipeline.demo(out, seed=0, condition="l515", segmentation="oracle", progress=False)
+
+
+def _rve(res: pipeline.ProcessResult, name: str) -> float:
+    row = next(r for r in res.comparison if r["segment"] == name)
+    return abs(row["error_pct"])
+
+
+@needs_register
+def test_demo_oracle_trunk_limbs_within_3_percent(demo_oracle):
+    assert _rve(demo_oracle, "trunk_limbs") < 3.0, pipeline.comparison_table(demo_oracle.comparison)
+
+
+@needs_register
+def test_demo_writes_every_output(demo_oracle):
+    from bsv.report import FIGURES
+
+    out = demo_oracle.out_dir
+    for f in (*pipeline.OUTPUTS, *FIGURES, "demo.json"):
+        assert (out / f).is_file(), f
+    vols = json.loads((out / "volumes.json").read_text())
+    assert vols["units"] == {"length": "m", "volume": "L"}
+    assert "registration" in vols and "trunk_limbs" in vols["volumes_l"]
+    cloud = bsv.read_point_cloud(out / "cloud.ply")
+    assert len(cloud) == len(demo_oracle.cloud) and not np.isin(cloud.labels, pipeline.EXTREMITY_IDS).any()
+    fitted = bsv.read_mesh(out / "fitted.ply")
+    assert fitted.vertex_labels is not None
+    with pytest.raises(FileExistsError):
+        pipeline.demo(out, segmentation="oracle", progress=False)
+
+
+@needs_register
+@pytest.mark.skipif(not _has_mediapipe(), reason="mediapipe is not installed")
+def test_demo_camera_segmentation_trunk_limbs_within_3_percent(tmp_path, capsys):
+    assert pipeline.main_demo(["-o", str(tmp_path / "demo"), "--quiet"]) == 0
+    table = capsys.readouterr().out
+    assert "trunk_limbs" in table
+    doc = json.loads((tmp_path / "demo" / "demo.json").read_text())
+    row = next(r for r in doc["comparison"] if r["segment"] == "trunk_limbs")
+    assert abs(row["error_pct"]) < 3.0, table

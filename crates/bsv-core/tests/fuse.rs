@@ -275,7 +275,7 @@ fn bad_inputs_give_typed_errors() {
     v.depth = DepthImage::Metres(vec![0.0; good.labels.len()]);
     assert!(matches!(build_cloud(&[v], &p), Err(FuseError::NoValidDepth { .. })));
     let too_near = FuseParams { max_depth: Some(0.5), ..FuseParams::default() };
-    assert!(matches!(build_cloud(&[good.clone()], &too_near), Err(FuseError::NoValidDepth { .. })));
+    assert!(matches!(build_cloud(std::slice::from_ref(&good), &too_near), Err(FuseError::NoValidDepth { .. })));
 
     let mut v = good.clone();
     v.intrinsics.fx = -1.0;
@@ -285,12 +285,12 @@ fn bad_inputs_give_typed_errors() {
     assert!(matches!(build_cloud(&[v], &p), Err(FuseError::Camera { .. })));
 
     let image = FuseParams { colors: ColorMode::Image, ..FuseParams::default() };
-    assert!(matches!(build_cloud(&[good.clone()], &image), Err(FuseError::MissingColour { .. })));
+    assert!(matches!(build_cloud(std::slice::from_ref(&good), &image), Err(FuseError::MissingColour { .. })));
 
     let bad_k = FuseParams { sor_k: 0, ..FuseParams::default() };
-    assert!(matches!(build_cloud(&[good.clone()], &bad_k), Err(FuseError::BadParam { param: "sor_k", .. })));
+    assert!(matches!(build_cloud(std::slice::from_ref(&good), &bad_k), Err(FuseError::BadParam { param: "sor_k", .. })));
     let bad_drop = FuseParams { drop_labels: vec![15], ..FuseParams::default() };
-    assert!(matches!(build_cloud(&[good.clone()], &bad_drop), Err(FuseError::BadParam { param: "drop_labels", .. })));
+    assert!(matches!(build_cloud(std::slice::from_ref(&good), &bad_drop), Err(FuseError::BadParam { param: "drop_labels", .. })));
 
     let mut v = good.clone();
     v.labels.iter_mut().filter(|l| **l != 0).for_each(|l| *l = 1);

@@ -1,16 +1,187 @@
-//! `bsv-cli register`: fit the template to a cloud and report volumes (wired when bsv-register lands).
+//! `bsv-cli register`: fit the template to a cloud, write the fitted mesh, report volumes.
 
-use crate::output::CliError;
+use crate::output::{check_writable, write_json, CliError};
+use bsv_core::clean::drop_segments;
+use bsv_core::io;
+use bsv_core::template::{template, TemplateKind};
+use bsv_core::EXTREMITIES;
+use bsv_register::{register, IterationLog, LabelSource, PrealignMode, RegisterParams, Schedule};
+use bsv_volume::{report_with, IslandOptions, SegmentOptions};
 use std::path::PathBuf;
 
 /// Arguments of `register`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The labelled point cloud (PLY), metres.
+    /// The point cloud (PLY, metres, world frame), ideally labelled (`label` = segment id).
     cloud: PathBuf,
+    /// Template mesh (PLY/OBJ, closed, labelled). Default: the embedded template (see --template-kind).
+    template: Option<PathBuf>,
+    /// Embedded template used when TEMPLATE is not given: default, fine or full.
+    #[arg(long, default_value = "default", value_parser = ["default", "fine", "full"])]
+    template_kind: String,
+    /// Write the fitted mesh here (PLY with labels and palette colours, or OBJ with segment groups).
+    #[arg(short, long, value_name = "FITTED")]
+    output: Option<PathBuf>,
+    /// Write the volumes JSON (with a "registration" section) here.
+    #[arg(long, value_name = "OUT")]
+    json: Option<PathBuf>,
+    /// Correspondence schedule: comma-separated kind:iterations, kind = m2p (mesh to points) or p2m.
+    #[arg(long, default_value = bsv_register::DEFAULT_SCHEDULE)]
+    schedule: String,
+    /// Regularization strength: how much a cell may leave its nearest rotation (0 = free affine cells).
+    #[arg(long)]
+    alpha: Option<f64>,
+    /// Labels of the fitted mesh: from the nearest cloud point (paper) or the template's own.
+    #[arg(long, value_parser = ["cloud", "template"])]
+    labels: Option<String>,
+    /// Pre-alignment scaling: isotropic (paper), per_axis, or auto.
+    #[arg(long, value_parser = ["isotropic", "per_axis", "auto"])]
+    prealign: Option<String>,
+    /// Units of the cloud file: m (default) or mm (divided by 1000 on reading).
+    #[arg(long, default_value = "m", value_parser = ["m", "mm"])]
+    units: String,
+    /// Keep head, hand and foot points (by default they are dropped, as in the paper).
+    #[arg(long)]
+    keep_extremities: bool,
+    /// Worker threads (0 = all cores).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Body density for the mass estimate, kg/m^3.
+    #[arg(long, default_value_t = bsv_volume::DEFAULT_DENSITY_KG_M3)]
+    density: f64,
+    /// Print the time breakdown (setup, per iteration: correspondences, local step, solve).
+    #[arg(long)]
+    timings: bool,
+    /// Do not print one line per iteration.
+    #[arg(short, long)]
+    quiet: bool,
+    /// Overwrite outputs that exist.
+    #[arg(long)]
+    force: bool,
+}
+
+fn params_from(a: &Args, cloud_labelled: bool) -> Result<RegisterParams, CliError> {
+    let mut p = RegisterParams { schedule: a.schedule.parse::<Schedule>()?, threads: a.threads, ..Default::default() };
+    if let Some(alpha) = a.alpha {
+        p.alpha = alpha;
+    }
+    p.labels = match a.labels.as_deref() {
+        Some("template") => LabelSource::Template,
+        Some(_) => LabelSource::Cloud,
+        None if cloud_labelled => LabelSource::Cloud,
+        None => LabelSource::Template,
+    };
+    if let Some(mode) = a.prealign.as_deref() {
+        p.prealign = match mode {
+            "isotropic" => PrealignMode::Isotropic,
+            "per_axis" => PrealignMode::PerAxis,
+            _ => PrealignMode::Auto,
+        };
+    }
+    Ok(p)
+}
+
+fn print_iteration(it: &IterationLog, timings: bool) {
+    let p2m = it.rms_points_to_mesh_mm.map_or_else(String::new, |v| format!("  p->m {v:6.2} mm"));
+    print!(
+        "  [{}:{:<3} {:>2}] m->p {:6.2} mm{p2m}  E {:.4e}  corr {:>6}",
+        it.stage,
+        format!("{:?}", it.kind).to_lowercase(),
+        it.iteration,
+        it.rms_mesh_to_points_mm,
+        it.energy.total,
+        it.n_correspondences
+    );
+    if timings {
+        let t = &it.timings;
+        print!("  ({:.1} + {:.1} + {:.1} ms)", t.correspond * 1e3, t.local * 1e3, t.solve * 1e3);
+    }
+    println!();
 }
 
 /// Runs `register`.
 pub fn run(a: Args) -> Result<(), CliError> {
-    Err(format!("register {}: not built yet", a.cloud.display()).into())
+    for out in a.output.iter().chain(a.json.iter()) {
+        check_writable(out, a.force)?;
+    }
+    let mut cloud = io::read_point_cloud(&a.cloud)?;
+    if a.units == "mm" {
+        cloud.points.iter_mut().for_each(|p| *p = p.map(|v| v / 1000.0));
+    }
+    if !a.keep_extremities {
+        let dropped = drop_segments(&mut cloud, &EXTREMITIES);
+        if dropped > 0 {
+            println!("dropped {dropped} head/hand/foot points (labels 1, 7, 8, 13, 14); --keep-extremities keeps them");
+        }
+    }
+    let labelled = cloud.labels.as_ref().is_some_and(|l| l.iter().any(|&v| v != 0));
+    if !labelled {
+        println!("the cloud has no segment labels: volumes come from the template's labels");
+        cloud.labels = None;
+    }
+    let (tmpl, tmpl_name) = match &a.template {
+        Some(p) => (io::read_mesh(p)?, p.display().to_string()),
+        None => {
+            let kind = TemplateKind::parse(&a.template_kind).unwrap_or_default();
+            (template(kind)?, format!("embedded {kind:?} template"))
+        }
+    };
+    let params = params_from(&a, labelled)?;
+    println!(
+        "registering {} ({} points) with {tmpl_name} ({} vertices), schedule {}",
+        a.cloud.display(),
+        cloud.len(),
+        tmpl.n_vertices(),
+        params.schedule
+    );
+    let quiet = a.quiet;
+    let timings = a.timings;
+    let reg = register(&tmpl, &cloud, &params, &mut |it| {
+        if !quiet {
+            print_iteration(it, timings);
+        }
+    })
+    .map_err(|e| format!("{}: {e}", a.cloud.display()))?;
+    let iter_secs: f64 = reg.log.iter().map(|l| l.timings.correspond + l.timings.local + l.timings.solve).sum();
+    println!(
+        "done in {:.3} s (setup {:.0} ms, {} iterations, {:.1} ms/iteration): RMS mesh->points {:.2} mm, points->mesh {:.2} mm",
+        reg.total_seconds,
+        reg.setup_seconds * 1e3,
+        reg.log.len(),
+        iter_secs * 1e3 / reg.log.len().max(1) as f64,
+        reg.rms_mesh_to_points_mm,
+        reg.rms_points_to_mesh_mm
+    );
+    if timings {
+        let sum = |f: fn(&IterationLog) -> f64| reg.log.iter().map(f).sum::<f64>() * 1e3;
+        println!(
+            "time split: setup {:.1} ms, correspondences {:.1} ms, local {:.1} ms, solve {:.1} ms",
+            reg.setup_seconds * 1e3,
+            sum(|l| l.timings.correspond),
+            sum(|l| l.timings.local),
+            sum(|l| l.timings.solve)
+        );
+    }
+    let opts = SegmentOptions { close_holes: false, islands: Some(IslandOptions::default()) };
+    let mut report = report_with(&reg.mesh, a.density, &opts)?;
+    let mut summary = serde_json::to_value(&reg)?;
+    if let Some(obj) = summary.as_object_mut() {
+        obj.insert("iterations".into(), reg.log.len().into());
+        obj.insert("seconds".into(), reg.total_seconds.into());
+        obj.insert("template".into(), tmpl_name.into());
+        obj.insert("cloud".into(), a.cloud.display().to_string().into());
+        obj.insert("params".into(), serde_json::to_value(&params)?);
+    }
+    report.registration = Some(summary);
+    println!();
+    print!("{report}");
+    if let Some(out) = &a.output {
+        io::write_mesh(out, &reg.mesh)?;
+        println!("fitted mesh written to {}", out.display());
+    }
+    if let Some(out) = &a.json {
+        write_json(out, &serde_json::to_value(&report)?, true)?;
+        println!("volumes written to {}", out.display());
+    }
+    Ok(())
 }

@@ -1,7 +1,7 @@
 //! The functions of `bsv._bsv` (see `python/bsv/_bsv.pyi`): conversion, one library call, conversion.
 
 use crate::convert::{cloud_from, cloud_to, mesh_from, mesh_to};
-use crate::errors::{format_err, input_err, mesh_err, scan_err, volume_err, write_err};
+use crate::errors::{format_err, input_err, mesh_err, register_err, scan_err, volume_err, write_err};
 use bsv_core::io::{self, PlyEncoding};
 use bsv_core::scanner::{self, Condition, Rig};
 use bsv_core::template::{template, TemplateKind};
@@ -132,5 +132,59 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(volumes, m)?)?;
     m.add_function(wrap_pyfunction!(default_template, m)?)?;
     m.add_function(wrap_pyfunction!(scan, m)?)?;
+    m.add_function(wrap_pyfunction!(register_template, m)?)?;
     Ok(())
+}
+
+/// Registers a template onto a cloud: `(fitted vertices, vertex labels, result JSON {"summary", "log"})`.
+/// Head/hand/foot points are dropped first (as `bsv-cli register`). The GIL is released while the
+/// solver runs; `progress` (if given) receives each iteration's log as JSON.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(name = "register", signature = (template_vertices, template_faces, template_vertex_labels, template_face_labels, points, normals, labels, params_json, progress=None))]
+fn register_template<'py>(
+    py: Python<'py>,
+    template_vertices: PyReadonlyArray2<'_, f64>,
+    template_faces: PyReadonlyArray2<'_, i64>,
+    template_vertex_labels: Option<PyReadonlyArray1<'_, u8>>,
+    template_face_labels: Option<PyReadonlyArray1<'_, u8>>,
+    points: PyReadonlyArray2<'_, f64>,
+    normals: Option<PyReadonlyArray2<'_, f64>>,
+    labels: Option<PyReadonlyArray1<'_, u8>>,
+    params_json: &str,
+    progress: Option<Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let tmpl = mesh_from(template_vertices, template_faces, template_vertex_labels, template_face_labels)?;
+    let mut cloud = cloud_from(points, normals, None, labels)?;
+    let params: bsv_register::RegisterParams = serde_json::from_str(params_json).map_err(input_err)?;
+    bsv_core::clean::drop_segments(&mut cloud, &bsv_core::EXTREMITIES);
+    let callback = progress.map(|p| p.unbind());
+    let mut py_error: Option<PyErr> = None;
+    let reg = py
+        .detach(|| {
+            bsv_register::register(&tmpl, &cloud, &params, &mut |it| {
+                if let (Some(cb), None) = (&callback, &py_error) {
+                    let line = serde_json::to_string(it).unwrap_or_default();
+                    Python::attach(|py| {
+                        if let Err(e) = cb.call1(py, (line,)) {
+                            py_error = Some(e);
+                        }
+                    });
+                }
+            })
+        })
+        .map_err(register_err)?;
+    if let Some(e) = py_error {
+        return Err(e);
+    }
+    let mut summary = serde_json::to_value(&reg).map_err(input_err)?;
+    let log = summary.as_object_mut().and_then(|o| o.remove("log")).unwrap_or_default();
+    if let Some(o) = summary.as_object_mut() {
+        o.insert("iterations".into(), reg.log.len().into());
+        o.insert("seconds".into(), reg.total_seconds.into());
+        o.insert("params".into(), serde_json::to_value(&params).map_err(input_err)?);
+    }
+    let result = serde_json::json!({ "summary": summary, "log": log }).to_string();
+    let vl = reg.mesh.vertex_labels.as_deref().map(|l| crate::convert::labels_to(py, l));
+    (crate::convert::points_to(py, &reg.mesh.vertices), vl, result).into_pyobject(py)
 }

@@ -128,7 +128,7 @@ impl std::str::FromStr for Schedule {
 
 /// How the template is scaled onto the cloud before the non-rigid fit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
+#[serde(rename_all = "snake_case")]
 pub enum PrealignMode {
     /// The paper: one scale, the ratio of the bounding-box diagonals.
     Isotropic,
@@ -152,7 +152,7 @@ pub enum LabelSource {
 
 /// Every knob of a registration, with the defaults documented on each field.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct RegisterParams {
     /// Regularization strength (dimensionless, see the module docs). Default 1e6 (the paper's number):
     /// leaving the nearest rotation costs as much as the ARAP stiffness of an average cell.

@@ -1,16 +1,18 @@
-"""``--segmentation camera``: the lab's path from a (virtual) capture folder to a labelled cloud.
+"""The lab's path from a (virtual) capture folder to a labelled cloud, used by ``--cloud lab`` (default)
+and ``--segmentation camera``.
 
 Each camera folder (colour + depth PNGs + camera.json, written by :func:`bsv.scan` with ``images``) is
-segmented by the MediaPipe front-end (:func:`bsv.frontend.segment.segment_capture`), and every depth
-pixel inside a segment is deprojected with the intrinsics and moved to the world with the camera's
-calibrated (estimated) extrinsics; front and back are merged. No outlier removal is applied (the
-virtual rig's depth has no outliers besides L515 flying pixels, which registration pruning handles).
+labelled either by the scanner's own label image (``oracle``) or by the MediaPipe front-end
+(``camera``: :func:`bsv.frontend.segment.segment_image` on the colour render), and the cloud is built
+exactly as ``bsv process`` builds it (:func:`bsv.pipeline.build_cloud`: masked deprojection with the
+calibrated extrinsics, per-camera statistical outlier removal k = 600 / std ratio 0.05, merge, head,
+hands and feet dropped).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Mapping, Optional
+from typing import Any, Mapping, Optional
 
 import numpy as np
 
@@ -22,12 +24,12 @@ CAMERAS: tuple[str, ...] = ("front", "back")
 
 def _segmenter():  # type: ignore[no-untyped-def]
     try:
-        from ..frontend.segment import segment_capture
+        from ..frontend.segment import segment_image
     except ImportError as exc:
         raise BenchError(
             "camera segmentation needs bsv.frontend.segment (the MediaPipe front-end), which is not available "
             f"in this installation ({exc}); use --segmentation oracle") from exc
-    return segment_capture
+    return segment_image
 
 
 def check_available() -> None:
@@ -35,32 +37,40 @@ def check_available() -> None:
     _segmenter()
 
 
-def capture_cloud(capture_dir: str | Path, labels: Optional[Mapping[str, np.ndarray]] = None) -> PointCloud:
-    """Merged world-frame cloud of a capture folder, each point labelled from its camera's label image.
+def capture_cloud(capture_dir: str | Path, segmentation: str = "oracle",
+                  labels: Optional[Mapping[str, np.ndarray]] = None, sor: bool = True) -> tuple[PointCloud, dict[str, Any]]:
+    """Merged, cleaned, labelled world cloud of a capture folder and the cloud builder's report.
 
-    ``labels``: per camera a (height, width) uint8 segment-id image; default: the front-end's segmentation
-    of the colour images (``--segmentation camera``). Pass the scanner's ``labels.png`` to get the oracle."""
+    ``segmentation``: ``oracle`` (each camera's ``labels.png``) or ``camera`` (MediaPipe); ``labels``
+    overrides both with per-camera (height, width) uint8 segment-id images."""
+    from PIL import Image
+
     from ..frontend.capture import read_capture
+    from ..pipeline import build_cloud
 
     d = Path(capture_dir)
-    if labels is None:
-        seg = _segmenter()(d, cameras=CAMERAS, write=False)
-        labels = {c: np.asarray(s.labels, dtype=np.uint8) for c, s in seg.items()}
-    pts, labs = [], []
+    views = []
     for cam in CAMERAS:
         cap = read_capture(d / cam)
-        depth = np.asarray(cap["depth_m"], dtype=np.float64)
-        intr = cap["intrinsics"]
-        if any(abs(float(k)) > 0 for k in intr.coeffs):
-            raise BenchError(f"{d / cam}: distorted intrinsics are not supported by the benchmark's deprojection")
-        lab = labels.get(cam)
-        if lab is None or lab.shape != depth.shape:
-            raise BenchError(f"{d / cam}: need a label image of shape {depth.shape} for camera {cam}")
-        v, u = np.nonzero((depth > 0) & (lab > 0))
-        z = depth[v, u]
-        p_cam = np.stack([(u - intr.cx) * z / intr.fx, (v - intr.cy) * z / intr.fy, z], axis=1)
-        e = cap["meta"]["camera_to_world"]
-        r, t = np.asarray(e["rotation"], dtype=np.float64), np.asarray(e["translation"], dtype=np.float64)
-        pts.append(p_cam @ r.T + t)
-        labs.append(lab[v, u])
-    return PointCloud(np.concatenate(pts), labels=np.concatenate(labs).astype(np.uint8))
+        depth = np.asarray(cap["depth_m"])
+        if labels is not None and cam in labels:
+            lab = np.asarray(labels[cam], dtype=np.uint8)
+        elif segmentation == "oracle":
+            try:
+                lab = np.asarray(Image.open(d / cam / cap["meta"].get("labels", "labels.png")), dtype=np.uint8)
+            except OSError as exc:
+                raise BenchError(f"{d / cam}: no readable label image for oracle segmentation ({exc})") from exc
+        elif segmentation == "camera":
+            lab = np.asarray(_segmenter()(cap["colour"], view=cam, depth=depth).labels, dtype=np.uint8)
+        else:
+            raise BenchError(f"segmentation {segmentation!r}: use oracle or camera")
+        if lab.shape != depth.shape:
+            raise BenchError(f"{d / cam}: label image {lab.shape} and depth {depth.shape} differ in size")
+        views.append({"name": cam, "intrinsics": cap["intrinsics"].to_json(),
+                      "camera_to_world": cap["meta"]["camera_to_world"],
+                      "depth": np.ascontiguousarray(depth, dtype=np.float32), "labels": lab,
+                      "colors": np.ascontiguousarray(cap["colour"], dtype=np.uint8)})
+    try:
+        return build_cloud(views, sor=sor)
+    except Exception as exc:  # noqa: BLE001 - typed bsv errors carry the reason
+        raise BenchError(f"{d}: building the cloud failed: {exc}") from exc

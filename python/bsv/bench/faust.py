@@ -149,7 +149,8 @@ def label_registration(reg: Mesh, params: Optional[dict[str, Any]] = None, sampl
 
     tmpl = default_template(full=True)
     pts = sample_surface(reg, samples)
-    fit = register(pts, None, tmpl, labels="template", **dict(params or {}))
+    # an unlabelled cloud: bsv.register keeps the template's labels (its params["labels"] = "template")
+    fit = register(pts, None, tmpl, **dict(params or {}))
     if fit.mesh.vertex_labels is None:
         raise BenchError("the full template registration returned no labels")
     vl = fit.mesh.vertex_labels[nearest_index(fit.mesh.vertices, reg.vertices)]

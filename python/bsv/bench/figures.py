@@ -37,7 +37,8 @@ def rve_bars(summary: Mapping[str, Any], path: str | Path) -> Path:
         mean = [np.nan if cl is None else cl["rve_mean"] for cl in cells]
         std = [0.0 if cl is None else cl["rve_std"] for cl in cells]
         xs = x + (k - nbars / 2 + 0.5) * width
-        ax.bar(xs, mean, width, yerr=std, capsize=2, label=label, color=cmap(k % 10))
+        low = [min(s, m) if not np.isnan(m) else 0.0 for s, m in zip(std, mean)]  # RVE >= 0: clip the bar
+        ax.bar(xs, mean, width, yerr=[low, std], capsize=2, label=label, color=cmap(k % 10))
         floors = [np.nan if cl is None else cl.get("floor_rve_mean", np.nan) for cl in cells]
         if not np.all(np.isnan(floors)):
             ax.scatter(xs, floors, marker="_", s=120, color="black", zorder=3,

@@ -57,6 +57,8 @@ def parser() -> argparse.ArgumentParser:
     s.add_argument("--jobs", type=int, default=1, help="worker processes over subjects (default 1)")
     s.add_argument("--segmentation", choices=["oracle", "camera"], default="oracle",
                    help="oracle: scanner's true labels; camera: MediaPipe on the colour renders (needs bsv.frontend.segment)")
+    s.add_argument("--cloud", choices=["raw", "lab"], default="raw",
+                   help="raw: the scanner's cloud; lab: rebuilt from the capture images like bsv process (SOR; slower)")
     s.add_argument("--template", default="default", help="default, fine or a labelled mesh path")
     s.add_argument("--no-local", action="store_true", help="cohort without MakeHuman local modifiers")
     common(s, "bench_synth")
@@ -86,11 +88,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             from .synth import SynthConfig, run_synth
 
             cfg = SynthConfig(n=args.n, seed=args.seed, conditions=args.conditions, segmentation=args.segmentation,
-                              template=args.template, methods=methods, params=params, local=not args.no_local)
+                              template=args.template, methods=methods, params=params, local=not args.no_local,
+                              cloud=args.cloud)
             cfg.validate()
             infos, runs, wall = run_synth(cfg, jobs=max(1, args.jobs), progress=not args.quiet)
             config = {"n": cfg.n, "seed": cfg.seed, "conditions": ",".join(cfg.conditions),
-                      "segmentation": cfg.segmentation, "template": cfg.template, "methods": ",".join(methods),
+                      "segmentation": cfg.segmentation, "cloud": cfg.cloud, "template": cfg.template, "methods": ",".join(methods),
                       "params": params, "local_modifiers": cfg.local, "jobs": args.jobs}
             summary = write_outputs(args.out, "BSV synthetic benchmark", config, infos, runs, wall)
         elif args.command == "boxes":

@@ -40,6 +40,7 @@ class SynthConfig:
     methods: tuple[str, ...] = ("bsv",)
     params: dict[str, Any] = field(default_factory=dict)
     local: bool = True
+    cloud: str = "raw"
 
     def validate(self) -> None:
         """Raise BenchError on an unknown condition, segmentation or method, or a bad count."""
@@ -50,6 +51,8 @@ class SynthConfig:
             raise BenchError(f"--conditions {','.join(self.conditions)}: use a comma list of {','.join(CONDITIONS)}")
         if self.segmentation not in SEGMENTATIONS:
             raise BenchError(f"--segmentation {self.segmentation}: use oracle or camera")
+        if self.cloud not in ("raw", "lab"):
+            raise BenchError(f"--cloud {self.cloud}: use raw (the scanner's cloud) or lab (bsv process's cloud building)")
         if self.segmentation == "camera":
             from .camera import check_available
 
@@ -66,9 +69,12 @@ def scan_seed(seed: int, index: int) -> int:
 
 def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition: str, seed: int,
                       template: Mesh, methods: Iterable[str], segmentation: str = "oracle",
-                      params: Optional[dict[str, Any]] = None, truth_mesh: Optional[Mesh] = None) -> list[Run]:
+                      params: Optional[dict[str, Any]] = None, truth_mesh: Optional[Mesh] = None,
+                      cloud_mode: str = "raw") -> list[Run]:
     """Scan ``mesh`` in one condition, compute the floor if calibrated, register with every method.
 
+    ``cloud_mode``: ``raw`` registers the scanner's cloud; ``lab`` (forced by camera segmentation) rebuilds
+    it from the capture images like ``bsv process`` (statistical outlier removal included).
     The floor moves ``truth_mesh`` (default ``mesh``: it must be closed and labelled like the truth).
     Never raises for a failed registration: the Run carries ``ok=False`` and the error text."""
     from .. import scan
@@ -76,15 +82,16 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
 
     runs: list[Run] = []
     floor: dict[str, float] = {}
-    need_files = condition in CALIBRATED or segmentation == "camera"
+    lab = cloud_mode == "lab" or segmentation == "camera"
+    need_files = condition in CALIBRATED or lab
     with tempfile.TemporaryDirectory(prefix="bsv-bench-") as tmp:
         raw = scan(mesh, condition, seed, images=tmp if need_files else None, overwrite=True)
         if condition in CALIBRATED:
             floor = floor_volumes(mesh if truth_mesh is None else truth_mesh, read_camera_poses(tmp))
-        if segmentation == "camera":
+        if lab:
             from .camera import capture_cloud
 
-            raw = capture_cloud(tmp)
+            raw = capture_cloud(tmp, segmentation)[0]
     cloud: PointCloud = keep_trunk_limbs(raw)
     for method in methods:
         run = Run(name, condition, method, False, truth_l=dict(truth), floor_l=dict(floor), n_points=len(cloud))
@@ -127,7 +134,7 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Optional[Callable[[]
     for cond in cfg.conditions:
         try:
             runs += measure_condition(name, mesh, truth, cond, scan_seed(cfg.seed, index), template,
-                                      cfg.methods, cfg.segmentation, cfg.params)
+                                      cfg.methods, cfg.segmentation, cfg.params, cloud_mode=cfg.cloud)
         except Exception as exc:  # noqa: BLE001 - a failed scan/floor is reported, the run goes on
             runs += [Run(name, cond, m, False, truth_l=truth, error=f"{type(exc).__name__}: {exc}")
                      for m in cfg.methods]

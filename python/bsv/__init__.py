@@ -144,6 +144,7 @@ def register(
     *,
     progress: Union[bool, Callable[[dict[str, Any]], None]] = False,
     density: float = 1000.0,
+    label_source: Optional[str] = None,
     **params: Any,
 ) -> Registration:
     """Fits the template to a point cloud by regularized ARAP and measures the segment volumes.
@@ -151,8 +152,10 @@ def register(
     ``points``: (N, 3) metres, a bsv.PointCloud, or a trimesh/Open3D cloud; ``labels``: per-point
     segment ids (optional: without them the template's labels are used); ``template``: a mesh (default:
     the embedded template). ``params``: alpha, cell_weight, data_weight, schedule (e.g.
-    "m2p:5,p2m:5,m2p:10"), prealign ("isotropic", "per_axis", "auto"), labels ("cloud" or "template"),
-    threads, ... The GIL is released while the solver runs.
+    "m2p:5,p2m:5,m2p:10"), prealign ("isotropic", "per_axis", "auto"), threads, ... (see
+    ``bsv-cli register --help``). ``label_source``: "cloud" (each fitted vertex takes its nearest cloud
+    point's label, the paper; default for labelled clouds) or "template" (the template's own labels).
+    The GIL is released while the solver runs.
     """
     cloud = as_cloud(points, labels=labels)
     tmpl = default_template() if template is None else as_mesh(template)
@@ -163,8 +166,9 @@ def register(
         callback = progress
     else:
         callback = None
-    if cloud.labels is None and "labels" not in params:
-        params["labels"] = "template"
+    if label_source is None:
+        label_source = "cloud" if cloud.labels is not None else "template"
+    params["labels"] = label_source
     wrapped = None if callback is None else (lambda s: callback(json.loads(s)))
     v, vl, result_json = _bsv.register(
         tmpl.vertices,

@@ -96,6 +96,10 @@ fn main() {
     let (t, res) = time(5, || statistical_outliers(&points, SorParams { k: 30, std_ratio: 1.0 }).expect("sor"));
     let kept = res.keep.iter().filter(|&&k| k).count();
     println!("| SOR k=30 std 1.0 | {} pts (kept {kept}) | {t:.3} |", points.len());
+    for k in [1usize, 100, 300] {
+        let (t, _) = time(3, || mean_knn_distances(&points, k).expect("knn"));
+        println!("| k-NN mean distances k={k} | {} pts | {t:.3} |", points.len());
+    }
     if args.iter().any(|a| a == "--naive") {
         let (t2, naive) = time(1, || mean_knn_distances_naive(&points, 600).expect("naive"));
         let fast = mean_knn_distances(&points, 600).expect("fast");

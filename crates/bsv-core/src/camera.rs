@@ -15,7 +15,7 @@ pub enum CameraError {
     /// A parameter that must be a finite number is NaN or infinite.
     #[error("camera parameter `{param}` is {value}, not a finite number: give a finite value (check the calibration/intrinsics file)")]
     NonFinite {
-        /// Parameter name (e.g. "fx", "rotation[1][2]").
+        /// Parameter name (e.g. `fx`, `rotation[1][2]`).
         param: String,
         /// The offending value.
         value: f64,

@@ -87,6 +87,14 @@ fn main() {
             }
         }
     }
+    if !sor_only {
+        let s = scan(&mesh, &rig, Condition::L515, 1).expect("scan");
+        let v = &s.views[0];
+        let pts = &s.cloud.points[v.cloud_range.clone()];
+        let (t, res) = time(5, || statistical_outliers(pts, SorParams::default()).expect("sor"));
+        let kept = res.keep.iter().filter(|&&k| k).count();
+        println!("| SOR k=600 std 0.05 on the l515 front view | {} pts (kept {kept}) | {t:.3} |", pts.len());
+    }
     let mut ell = shapes::ellipsoid([0.2, 0.85, 0.14], 6);
     shapes::translate(&mut ell, [0.0, 0.9, 0.0]);
     let (points, _) = shapes::sample_surface(&ell, 300_000, 1);

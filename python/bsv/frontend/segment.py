@@ -1,0 +1,601 @@
+"""Body segmentation of a colour image into the 14 segments of DESIGN.md, from MediaPipe Holistic.
+
+MediaPipe Holistic (the 0.10.21 solution API, whose models ship in the wheel and run offline) gives the 33
+pose landmarks, 21 landmarks per hand and a person mask. No offline model segments body PARTS, so the part
+labels are derived geometrically (all vectorised over the mask pixels):
+
+1. every mask pixel goes to the nearest limb "bone" (shoulder-elbow-wrist, the hand skeleton,
+   hip-knee-ankle, ankle-heel-toe), unless the torso polygon is nearer (scaled by ``torso_weight``): the
+   shoulders, the outer hips and the crotch (the top of the gap between the legs in the mask);
+2. the paper's correction: the medial line (through the mid-hips, along the body axis) decides left
+   against right for every paired segment, and lines across the limbs decide the level: the transverse
+   line through the knees (thigh/shin, never mixed), lines at each ankle (shin/foot), elbow and wrist;
+3. torso pixels beyond the neck line (between the shoulders' midpoint and the ears) and near the head
+   axis are the head.
+
+The joint lines and polygon corners carry small offsets (:class:`SegmentParams`) fitted per view to the
+scanner's ground truth, the MakeHuman template's segmentation that the registration uses.
+
+Left and right are the SUBJECT's own. The front camera sees the subject's left on the image right, the
+back camera on the image left. MediaPipe's own left/right guess is not trusted (on the scanner's back
+renders it recognises the back view most of the time, not always): each left/right landmark pair is ordered
+by its image side for the given ``view`` (the A-pose of the protocol keeps every pair apart). The back view
+can also be segmented on the horizontally flipped image (``flip_back``, mapped back); measured on the
+scanner's renders, the unflipped image gives better back-view labels (mean accuracy 0.944 against 0.937 on
+8 held-out subjects), so it is off by default.
+
+Landmarks: the 33 pose landmarks without the four pose knuckles (17-20, left/right pinky and index), which
+the hand model gives more precisely (pinky_mcp, index_finger_mcp), then 21 per hand: 29 + 42 = 71 rows of
+(x, y, visibility) in pixels of the input image (NaN and visibility 0 where a hand was not found).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Optional, Sequence, Union
+
+import numpy as np
+
+from .errors import LandmarkMissingError, PersonNotFoundError, SegmentationError
+
+PathLike = Union[str, Path]
+
+#: Segment ids of DESIGN.md (0 = unlabelled).
+SEGMENT_IDS: dict[str, int] = {
+    "head": 1, "torso": 2, "upper_arm_l": 3, "upper_arm_r": 4, "forearm_l": 5, "forearm_r": 6,
+    "hand_l": 7, "hand_r": 8, "thigh_l": 9, "thigh_r": 10, "shin_l": 11, "shin_r": 12, "foot_l": 13,
+    "foot_r": 14,
+}
+#: Segment names by id (index 0 = "unlabelled").
+SEGMENT_NAMES: tuple[str, ...] = ("unlabelled",) + tuple(SEGMENT_IDS)
+
+#: MediaPipe's 33 pose landmark names (index = MediaPipe's index).
+POSE_NAMES: tuple[str, ...] = (
+    "nose", "left_eye_inner", "left_eye", "left_eye_outer", "right_eye_inner", "right_eye", "right_eye_outer",
+    "left_ear", "right_ear", "mouth_left", "mouth_right", "left_shoulder", "right_shoulder", "left_elbow",
+    "right_elbow", "left_wrist", "right_wrist", "left_pinky", "right_pinky", "left_index", "right_index",
+    "left_thumb", "right_thumb", "left_hip", "right_hip", "left_knee", "right_knee", "left_ankle",
+    "right_ankle", "left_heel", "right_heel", "left_foot_index", "right_foot_index",
+)
+#: MediaPipe's 21 hand landmark names.
+HAND_NAMES: tuple[str, ...] = (
+    "wrist", "thumb_cmc", "thumb_mcp", "thumb_ip", "thumb_tip", "index_finger_mcp", "index_finger_pip",
+    "index_finger_dip", "index_finger_tip", "middle_finger_mcp", "middle_finger_pip", "middle_finger_dip",
+    "middle_finger_tip", "ring_finger_mcp", "ring_finger_pip", "ring_finger_dip", "ring_finger_tip",
+    "pinky_mcp", "pinky_pip", "pinky_dip", "pinky_tip",
+)
+#: Pose landmarks dropped from the 71 because the hand model duplicates them (pinky and index knuckles).
+DUPLICATE_POSE = (17, 18, 19, 20)
+_POSE_KEPT = tuple(i for i in range(33) if i not in DUPLICATE_POSE)
+#: The 71 landmark names of :attr:`Segmentation.landmarks`, in row order.
+LANDMARK_NAMES: tuple[str, ...] = (
+    tuple(POSE_NAMES[i] for i in _POSE_KEPT)
+    + tuple(f"left_hand_{n}" for n in HAND_NAMES)
+    + tuple(f"right_hand_{n}" for n in HAND_NAMES)
+)
+#: Landmarks without which the segmentation is refused (LandmarkMissingError names the first missing).
+REQUIRED_LANDMARKS: tuple[str, ...] = (
+    "left_shoulder", "right_shoulder", "left_elbow", "right_elbow", "left_wrist", "right_wrist",
+    "left_hip", "right_hip", "left_knee", "right_knee", "left_ankle", "right_ankle",
+)
+#: The hand skeleton (MediaPipe's HAND_CONNECTIONS), whose bones make the hand segment.
+HAND_BONES: tuple[tuple[int, int], ...] = (
+    (0, 1), (1, 2), (2, 3), (3, 4), (0, 5), (5, 6), (6, 7), (7, 8), (5, 9), (9, 10), (10, 11), (11, 12),
+    (9, 13), (13, 14), (14, 15), (15, 16), (13, 17), (0, 17), (17, 18), (18, 19), (19, 20),
+)
+_POSE_MODELS = {0: "pose_landmark_lite.tflite", 1: "pose_landmark_full.tflite", 2: "pose_landmark_heavy.tflite"}
+VIEWS = ("front", "back")
+
+
+@dataclass(frozen=True)
+class SegmentParams:
+    """Tunable numbers of :func:`segment_image` (distances are fractions of the body's own lengths)."""
+
+    #: MediaPipe pose model: 1 (full) is the one the 0.10.21 wheel ships; 0 and 2 are downloaded.
+    model_complexity: int = 1
+    #: Person detection confidence of MediaPipe.
+    min_detection_confidence: float = 0.75
+    #: Visibility below which a required landmark (ankle, wrist, ...) counts as missing.
+    min_visibility: float = 0.75
+    #: Threshold of MediaPipe's soft person mask (0.35 gives the best mask IoU on the scanner's renders).
+    mask_threshold: float = 0.35
+    #: Segment the back view on the horizontally flipped image (and map the result back).
+    flip_back: bool = False
+    #: Neck line: this fraction of the way from the shoulders' midpoint to the ears' midpoint.
+    neck_fraction: float = 0.35
+    #: Head half-width around the head axis, as a fraction of the shoulder width.
+    head_half_width: float = 0.35
+    #: Torso polygon: shoulder corners moved toward the midline by this fraction of the shoulder width.
+    shoulder_inset: float = 0.1
+    #: Torso polygon: outer hip corners at this multiple of the half hip distance from the mid-hip.
+    hip_widen: float = 1.4
+    #: Torso polygon: outer hip corners above the crotch by this fraction of the hip-knee length.
+    hip_raise: float = 0.2
+    #: Torso polygon: crotch point below the mid-hip by this fraction of the hip-knee length (used when
+    #: the mask shows no gap between the legs; otherwise the top of that gap plus ``crotch_offset``).
+    crotch_drop: float = 0.1
+    #: Torso polygon: find the crotch as the top of the gap between the legs in the mask.
+    crotch_from_mask: bool = False
+    #: Torso polygon: the crotch point below the top of the gap between the legs, fraction of hip-knee.
+    crotch_offset: float = 0.0
+    #: Torso distance multiplier against the limb bones (above 1 favours the limbs outside the polygon).
+    torso_weight: float = 1.0
+    #: Upper arm / forearm line: past the elbow by this fraction of the forearm length.
+    elbow_shift: float = 0.0
+    #: Forearm / hand line: past the wrist by this fraction of the forearm length.
+    wrist_shift: float = 0.03
+    #: Transverse (thigh/shin) line through the knees, moved down by this fraction of the shin length.
+    knee_shift: float = 0.11
+    #: Shin / foot line through each ankle, moved down by this fraction of the shin length.
+    ankle_shift: float = 0.03
+    #: Foot bones extend past the toe landmark by this fraction of their length.
+    toe_extend: float = 0.3
+    #: Depth refinement: keep pixels whose depth is within this many metres of the person's median depth.
+    depth_band: float = 0.6
+    #: Depth refinement: the mask may grow by this many pixels where the depth says "person".
+    depth_grow_px: int = 6
+
+    def __post_init__(self) -> None:
+        if self.model_complexity not in _POSE_MODELS:
+            raise SegmentationError(f"model_complexity must be 0, 1 or 2, got {self.model_complexity!r}")
+        for name in ("min_detection_confidence", "min_visibility", "mask_threshold"):
+            v = getattr(self, name)
+            if not (0.0 <= v <= 1.0):
+                raise SegmentationError(f"segmentation parameter {name} must lie in [0, 1], got {v!r}")
+        if self.depth_band <= 0 or self.depth_grow_px < 0 or self.torso_weight <= 0:
+            raise SegmentationError("depth_band and torso_weight must be positive and depth_grow_px >= 0")
+
+
+#: Defaults per view, fitted (coordinate search on pixel accuracy) to the virtual scanner's renders of
+#: cohort(6, seed=1) and the default body against their ground-truth labels of the MakeHuman template. The
+#: back camera sees the head/torso cut higher on the neck, the torso/thigh cut nearly horizontal (the
+#: gluteal fold) and the shin/foot cut below the ankle landmark (the heel).
+DEFAULT_PARAMS: dict[str, SegmentParams] = {
+    "front": SegmentParams(),
+    "back": SegmentParams(neck_fraction=0.5, shoulder_inset=0.0, hip_widen=1.2, hip_raise=0.15, crotch_drop=0.2,
+                          elbow_shift=0.03, wrist_shift=0.06, knee_shift=0.05, ankle_shift=0.09),
+}
+
+
+@dataclass
+class Segmentation:
+    """Result of :func:`segment_image`: per-pixel segment ids, the person mask and the 71 landmarks."""
+
+    #: (H, W) uint8 segment ids of DESIGN.md, 0 outside the person.
+    labels: np.ndarray
+    #: (H, W) bool person mask (after the optional depth refinement).
+    mask: np.ndarray
+    #: (71, 3) float64: x, y in pixels of the input image, visibility (0..1); NaN x, y where not found.
+    landmarks: np.ndarray
+    #: The 71 landmark names (subject's left/right), see :data:`LANDMARK_NAMES`.
+    names: tuple[str, ...] = LANDMARK_NAMES
+    #: "front" or "back".
+    view: str = "front"
+    #: Whether the hand model found the subject's (left, right) hand.
+    hands_found: tuple[bool, bool] = (False, False)
+    #: Left/right landmark pairs whose MediaPipe names were swapped to match the view.
+    swapped: tuple[str, ...] = field(default_factory=tuple)
+
+    def landmark(self, name: str) -> np.ndarray:
+        """(x, y, visibility) of one landmark by name (KeyError naming it if unknown)."""
+        try:
+            return self.landmarks[self.names.index(name)]
+        except ValueError:
+            raise KeyError(f"unknown landmark {name!r}; see bsv.frontend.segment.LANDMARK_NAMES") from None
+
+    def counts(self) -> dict[str, int]:
+        """Pixel count of every segment present in :attr:`labels`."""
+        ids, n = np.unique(self.labels, return_counts=True)
+        return {SEGMENT_NAMES[i]: int(c) for i, c in zip(ids, n) if i != 0}
+
+
+# ----------------------------------------------------------------------------------------------------
+# MediaPipe
+
+
+def _mediapipe_holistic():  # noqa: ANN202 - module
+    try:
+        from mediapipe.python.solutions import holistic
+    except ImportError as e:  # pragma: no cover - depends on the machine
+        raise SegmentationError(
+            f"mediapipe is not installed: pip install -r requirements-frontend.txt ({e})"
+        ) from e
+    return holistic
+
+
+def _check_model(holistic: Any, complexity: int) -> None:
+    """The pose model file must be present: 0.10.21 ships only the full model, the others are downloaded."""
+    base = Path(holistic.__file__).resolve().parents[2] / "modules" / "pose_landmark"
+    if not (base / _POSE_MODELS[complexity]).is_file():
+        try:
+            holistic._download_oss_pose_landmark_model(complexity)  # noqa: SLF001 - what Holistic() does
+        except Exception as e:  # noqa: BLE001 - network errors of any kind
+            raise SegmentationError(
+                f"model_complexity={complexity} needs {base / _POSE_MODELS[complexity]}, which the mediapipe "
+                f"wheel does not ship and which could not be downloaded ({e}); use model_complexity=1"
+            ) from e
+
+
+def run_holistic(rgb: np.ndarray, params: SegmentParams = SegmentParams()) -> dict[str, Any]:
+    """MediaPipe Holistic on one RGB uint8 image: ``{"pose": (33, 3) x, y (pixels), visibility or None,
+    "hands": [left (21, 2) or None, right], "mask": (H, W) float32 or None}`` with MediaPipe's own
+    left/right naming; pixel coordinates with the centre of the top-left pixel at (0, 0)."""
+    holistic = _mediapipe_holistic()
+    _check_model(holistic, params.model_complexity)
+    img = np.ascontiguousarray(rgb, dtype=np.uint8)
+    h, w = img.shape[:2]
+    with holistic.Holistic(static_image_mode=True, model_complexity=params.model_complexity,
+                           enable_segmentation=True, refine_face_landmarks=False,
+                           min_detection_confidence=params.min_detection_confidence) as model:
+        res = model.process(img)
+    out: dict[str, Any] = {"pose": None, "hands": [None, None], "mask": None}
+    if res.pose_landmarks is not None:
+        out["pose"] = np.array([[p.x * w - 0.5, p.y * h - 0.5, p.visibility] for p in res.pose_landmarks.landmark])
+    for k, hl in enumerate((res.left_hand_landmarks, res.right_hand_landmarks)):
+        if hl is not None:
+            out["hands"][k] = np.array([[p.x * w - 0.5, p.y * h - 0.5] for p in hl.landmark])
+    if res.segmentation_mask is not None:
+        out["mask"] = np.asarray(res.segmentation_mask, dtype=np.float32)
+    return out
+
+
+# ----------------------------------------------------------------------------------------------------
+# Landmarks: view, left/right, completeness
+
+_PAIRS = [(i, i + 1) for i in range(11, 33, 2)] + [(1, 4), (2, 5), (3, 6), (7, 8), (9, 10)]
+
+
+def _orient(pose: np.ndarray, hands: list, view: str) -> tuple[np.ndarray, list, tuple[str, ...]]:
+    """Pose and hands renamed so that "left" is the subject's left for the view: the front camera sees it
+    on the image right (larger x), the back camera on the image left. Each pair is ordered on its own."""
+    pose = pose.copy()
+    hands = list(hands)
+    sign = 1.0 if view == "front" else -1.0
+    swapped = []
+    for li, ri in _PAIRS:
+        if sign * (pose[li, 0] - pose[ri, 0]) < 0:
+            pose[[li, ri]] = pose[[ri, li]]
+            swapped.append(POSE_NAMES[li].replace("left_", ""))
+    # each hand belongs to the side whose (re-ordered) pose wrist is nearest its own wrist landmark
+    found = [hd for hd in hands if hd is not None]
+    new = [None, None]
+    for hd in found:
+        d = [np.hypot(*(hd[0] - pose[15 + s, :2])) for s in (0, 1)]
+        s = int(np.argmin(d))
+        if new[s] is None or d[s] < np.hypot(*(new[s][0] - pose[15 + s, :2])):
+            new[s] = hd
+    return pose, new, tuple(swapped)
+
+
+def _check_landmarks(pose: np.ndarray, shape: tuple[int, int], min_vis: float, view: str) -> None:
+    """LandmarkMissingError naming every required landmark that is outside the image or not visible enough
+    (its ``missing`` attribute lists them)."""
+    h, w = shape
+    missing = []
+    for name in REQUIRED_LANDMARKS:
+        x, y, v = pose[POSE_NAMES.index(name)]
+        finite = bool(np.isfinite(x) and np.isfinite(y))
+        inside = finite and -0.02 * w <= x <= 1.02 * w and -0.02 * h <= y <= 1.02 * h
+        if not inside:
+            missing.append((name, "outside the image"))
+        elif not v >= min_vis:
+            missing.append((name, f"visibility {v:.2f} < {min_vis:.2f}"))
+    if missing:
+        what = ", ".join(f"{n} ({why})" for n, why in missing)
+        err = LandmarkMissingError(
+            f"{view} image: landmark{'s' if len(missing) > 1 else ''} of the subject not found confidently: {what}; "
+            "the whole body, feet and hands included, must be in view and unoccluded"
+        )
+        err.missing = [n for n, _ in missing]  # type: ignore[attr-defined]
+        raise err
+
+
+def _landmarks71(pose: np.ndarray, hands: list) -> np.ndarray:
+    out = np.full((len(LANDMARK_NAMES), 3), np.nan)
+    out[: len(_POSE_KEPT)] = pose[list(_POSE_KEPT)]
+    for k, hd in enumerate(hands):
+        rows = slice(len(_POSE_KEPT) + 21 * k, len(_POSE_KEPT) + 21 * (k + 1))
+        if hd is None:
+            out[rows, 2] = 0.0
+        else:
+            out[rows, :2] = hd
+            out[rows, 2] = 1.0
+    return out
+
+
+# ----------------------------------------------------------------------------------------------------
+# Geometry
+
+
+def _seg_dist(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance of points p (N, 2) to the line segment a-b."""
+    ab = b - a
+    den = float(ab @ ab)
+    t = np.zeros(len(p)) if den <= 1e-12 else np.clip((p - a) @ ab / den, 0.0, 1.0)
+    q = a + t[:, None] * ab
+    return np.hypot(p[:, 0] - q[:, 0], p[:, 1] - q[:, 1])
+
+
+def _bones_dist(p: np.ndarray, bones: Sequence[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    d = np.full(len(p), np.inf)
+    for a, b in bones:
+        np.minimum(d, _seg_dist(p, a, b), out=d)
+    return d
+
+
+def _polygon_dist(p: np.ndarray, poly: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """Distance of pixel centres p (N, 2 integer x, y) to a filled polygon (0 inside)."""
+    import cv2
+
+    inside = np.zeros(shape, dtype=np.uint8)
+    cv2.fillPoly(inside, [np.round(poly).astype(np.int32).reshape(-1, 1, 2)], 1)
+    d = _bones_dist(p.astype(np.float64), [(poly[i], poly[(i + 1) % len(poly)]) for i in range(len(poly))])
+    d[inside[p[:, 1], p[:, 0]] > 0] = 0.0
+    return d
+
+
+def _crotch(mask: np.ndarray, h_mid: np.ndarray, k_mid: np.ndarray) -> Optional[np.ndarray]:
+    """Top of the gap between the legs: the first pixel off the mask walking from the mid-hip to the
+    mid-knee (None if the legs touch all the way)."""
+    n = int(np.ceil(np.hypot(*(k_mid - h_mid)))) + 1
+    t = np.linspace(0.0, 1.0, max(n, 2))
+    pts = h_mid[None] + t[:, None] * (k_mid - h_mid)[None]
+    xi = np.clip(np.round(pts[:, 0]).astype(int), 0, mask.shape[1] - 1)
+    yi = np.clip(np.round(pts[:, 1]).astype(int), 0, mask.shape[0] - 1)
+    off = np.nonzero(~mask[yi, xi])[0]
+    return None if off.size == 0 else pts[off[0]]
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    n = float(np.hypot(*v))
+    return v / n if n > 1e-9 else np.array([0.0, 1.0])
+
+
+def label_pixels(mask: np.ndarray, pose: np.ndarray, hands: list, params: SegmentParams = SegmentParams()) -> np.ndarray:
+    """(H, W) uint8 segment ids of the mask pixels from subject-oriented pose landmarks (33, >=2 pixels)
+    and hands (left, right: (21, 2) or None). See the module notes for the rules."""
+    h, w = mask.shape
+    ys, xs = np.nonzero(mask)
+    labels = np.zeros((h, w), dtype=np.uint8)
+    if xs.size == 0:
+        return labels
+    pix = np.column_stack([xs, ys])
+    p = pix.astype(np.float64)
+    P = {n: pose[i, :2].astype(np.float64) for i, n in enumerate(POSE_NAMES)}
+
+    s_mid = (P["left_shoulder"] + P["right_shoulder"]) / 2
+    h_mid = (P["left_hip"] + P["right_hip"]) / 2
+    k_mid = (P["left_knee"] + P["right_knee"]) / 2
+    down = _unit(h_mid - s_mid)  # body axis, head to feet
+    lat = np.array([-down[1], down[0]])  # perpendicular
+    if (P["left_hip"] - P["right_hip"]) @ lat < 0:
+        lat = -lat  # lat points to the subject's left (in the image)
+    sw = float(np.hypot(*(P["left_shoulder"] - P["right_shoulder"])))
+    thigh_len = 0.5 * sum(float(np.hypot(*(P[f"{s}_knee"] - P[f"{s}_hip"]))) for s in ("left", "right"))
+    shin_len = 0.5 * sum(float(np.hypot(*(P[f"{s}_ankle"] - P[f"{s}_knee"]))) for s in ("left", "right"))
+
+    # --- 1. nearest limb bone or torso polygon, regardless of side
+    bones: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {k: [] for k in ("arm", "hand", "leg", "foot")}
+    for k, side in enumerate(("left", "right")):
+        bones["arm"] += [(P[f"{side}_shoulder"], P[f"{side}_elbow"]), (P[f"{side}_elbow"], P[f"{side}_wrist"])]
+        wr = P[f"{side}_wrist"]
+        hd = hands[k]
+        if hd is not None:
+            pts = hd.astype(np.float64)
+            bones["hand"] += [(wr, pts[1])] + [(pts[a], pts[b]) for a, b in HAND_BONES[1:]]
+        else:  # pose's coarse hand: wrist to pinky, index and thumb knuckles, extended to the fingertips
+            bones["hand"] += [(wr, wr + 1.8 * (P[f"{side}_{f}"] - wr)) for f in ("pinky", "index", "thumb")]
+        bones["leg"] += [(P[f"{side}_hip"], P[f"{side}_knee"]), (P[f"{side}_knee"], P[f"{side}_ankle"])]
+        ank, heel, toe = P[f"{side}_ankle"], P[f"{side}_heel"], P[f"{side}_foot_index"]
+        toe_x = toe + params.toe_extend * (toe - heel)
+        bones["foot"] += [(ank, heel), (heel, toe_x), (ank, toe_x)]
+    inset = params.shoulder_inset * sw
+    half_hip = (P["left_hip"] - P["right_hip"]) / 2
+    crotch = _crotch(mask, h_mid, k_mid) if params.crotch_from_mask else None
+    crotch = (h_mid + down * params.crotch_drop * thigh_len if crotch is None
+              else crotch + down * params.crotch_offset * thigh_len)
+    hip_level = crotch - down * params.hip_raise * thigh_len - h_mid  # the outer hips, relative to the mid-hip
+    hip_level = down * float(hip_level @ down)
+    poly = np.array([
+        P["right_shoulder"] + lat * inset, P["left_shoulder"] - lat * inset,
+        h_mid + params.hip_widen * half_hip + hip_level, crotch, h_mid - params.hip_widen * half_hip + hip_level,
+    ])
+    groups = ["torso", "arm", "hand", "leg", "foot"]
+    dist = np.stack([params.torso_weight * _polygon_dist(pix, poly, (h, w))]
+                    + [_bones_dist(p, bones[g]) for g in groups[1:]])
+    group = np.argmin(dist, axis=0)  # index into groups
+    out = np.full(len(p), SEGMENT_IDS["torso"], dtype=np.uint8)
+
+    # --- 2. the paper's medial line: the side of every paired segment
+    left = (p - h_mid) @ lat > 0
+
+    # --- 3. levels along the limbs: joint lines at the elbows and wrists, the knees (the paper's
+    #        transverse line) and the ankles
+    for k, side, sfx in ((0, "left", "_l"), (1, "right", "_r")):
+        on = left if k == 0 else ~left
+        sh, el, wr = P[f"{side}_shoulder"], P[f"{side}_elbow"], P[f"{side}_wrist"]
+        fore = float(np.hypot(*(wr - el)))
+        n_el = _unit(_unit(el - sh) + _unit(wr - el))
+        n_wr = _unit(wr - el)
+        past_el = (p - (el + params.elbow_shift * fore * n_el)) @ n_el > 0
+        past_wr = (p - (wr + params.wrist_shift * fore * n_wr)) @ n_wr > 0
+        arm = on & ((group == 1) | (group == 2))
+        out[arm] = np.where(past_wr[arm], SEGMENT_IDS["hand" + sfx],
+                            np.where(past_el[arm], SEGMENT_IDS["forearm" + sfx], SEGMENT_IDS["upper_arm" + sfx]))
+        knee_c = k_mid + down * params.knee_shift * shin_len
+        ank_c = P[f"{side}_ankle"] + down * params.ankle_shift * shin_len
+        below_knee = (p - knee_c) @ down > 0
+        below_ankle = (p - ank_c) @ down > 0
+        leg = on & ((group == 3) | (group == 4))
+        out[leg] = np.where(below_ankle[leg], SEGMENT_IDS["foot" + sfx],
+                            np.where(below_knee[leg], SEGMENT_IDS["shin" + sfx], SEGMENT_IDS["thigh" + sfx]))
+
+    # --- 4. head: beyond the neck line and near the head axis
+    ears = (P["left_ear"] + P["right_ear"]) / 2
+    neck = s_mid + params.neck_fraction * (ears - s_mid)
+    up = _unit(ears - neck)
+    rel = p - neck
+    head = (rel @ up > 0) & (np.abs(rel @ np.array([-up[1], up[0]])) < params.head_half_width * sw)
+    out[head & (group == 0)] = SEGMENT_IDS["head"]
+    labels[ys, xs] = out
+    return labels
+
+
+# ----------------------------------------------------------------------------------------------------
+# Mask
+
+
+def _clean_mask(mask: np.ndarray) -> np.ndarray:
+    """Largest connected component of the mask and any component at least a tenth its size."""
+    import cv2
+
+    n, comp, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
+    if n <= 1:
+        return mask.astype(bool)
+    areas = stats[1:, cv2.CC_STAT_AREA]
+    keep = np.zeros(n, dtype=bool)
+    keep[1:] = areas >= 0.1 * areas.max()
+    return keep[comp]
+
+
+def refine_mask_with_depth(mask: np.ndarray, depth_m: np.ndarray, band_m: float = 0.6, grow_px: int = 6) -> np.ndarray:
+    """The person mask refined by an aligned depth image (metres, 0 = none): pixels within ``grow_px`` of
+    the mask that have depth within ``band_m`` of the mask's median depth; mask pixels without depth or
+    outside that band are dropped."""
+    import cv2
+
+    d = np.asarray(depth_m, dtype=np.float64)
+    if d.shape != mask.shape:
+        raise SegmentationError(f"depth image {d.shape} is not aligned to the colour image {mask.shape}; "
+                                "align the depth to the colour stream first")
+    valid = (d > 0) & np.isfinite(d)
+    inside = mask & valid
+    if not inside.any():
+        raise SegmentationError("no depth inside the person mask: is the depth image aligned and in metres?")
+    med = float(np.median(d[inside]))
+    near = valid & (np.abs(d - med) < band_m)
+    if grow_px > 0:
+        k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * grow_px + 1, 2 * grow_px + 1))
+        zone = cv2.dilate(mask.astype(np.uint8), k) > 0
+    else:
+        zone = mask
+    return _clean_mask(zone & near)
+
+
+# ----------------------------------------------------------------------------------------------------
+# Public API
+
+
+def segment_image(colour_rgb: np.ndarray, view: str = "front", depth: Optional[np.ndarray] = None,
+                  params: Optional[SegmentParams] = None, **overrides: Any) -> Segmentation:
+    """Segments one RGB uint8 (H, W, 3) image of a standing subject seen from the ``view`` ("front" or
+    "back") camera. ``depth`` (metres, aligned to the colour image, 0 = none) refines the person mask.
+    ``params`` defaults to :data:`DEFAULT_PARAMS` of the view; keyword overrides set fields of
+    :class:`SegmentParams` on top. Raises PersonNotFoundError when no person is
+    found and LandmarkMissingError naming a required landmark that is missing or not visible enough."""
+    if view not in VIEWS:
+        raise SegmentationError(f"view must be 'front' or 'back', got {view!r}")
+    try:
+        base = params if params is not None else DEFAULT_PARAMS[view]
+        prm = dataclasses.replace(base, **overrides)
+    except TypeError as e:
+        raise SegmentationError(f"unknown segmentation parameter ({e}); see SegmentParams") from e
+    img = np.asarray(colour_rgb)
+    if img.ndim != 3 or img.shape[2] != 3 or img.dtype != np.uint8:
+        raise SegmentationError(f"colour image must be RGB uint8 (H, W, 3), got {img.dtype} {img.shape}")
+    h, w = img.shape[:2]
+    flip = view == "back" and prm.flip_back
+    res = run_holistic(img[:, ::-1] if flip else img, prm)
+    if res["pose"] is None:
+        raise PersonNotFoundError(f"no person found in the {view} image ({w} x {h}): the subject must stand in "
+                                  "full view of the camera, lit, against a plain background")
+    pose = res["pose"]
+    hands = res["hands"]
+    mask_soft = res["mask"]
+    if flip:  # back to the input image's pixels
+        pose = pose.copy()
+        pose[:, 0] = w - 1 - pose[:, 0]
+        hands = [None if hd is None else np.column_stack([w - 1 - hd[:, 0], hd[:, 1]]) for hd in hands]
+        mask_soft = None if mask_soft is None else mask_soft[:, ::-1]
+    pose, hands, swapped = _orient(pose, hands, view)
+    _check_landmarks(pose, (h, w), prm.min_visibility, view)
+    if mask_soft is None:
+        raise PersonNotFoundError(f"MediaPipe returned no person mask for the {view} image")
+    mask = _clean_mask(mask_soft > prm.mask_threshold)
+    if depth is not None:
+        mask = refine_mask_with_depth(mask, depth, prm.depth_band, prm.depth_grow_px)
+    if mask.sum() < 100:
+        raise PersonNotFoundError(f"the person mask of the {view} image is (nearly) empty ({int(mask.sum())} px)")
+    labels = label_pixels(mask, pose, hands, prm)
+    return Segmentation(labels=labels, mask=mask, landmarks=_landmarks71(pose, hands), view=view,
+                        hands_found=(hands[0] is not None, hands[1] is not None), swapped=swapped)
+
+
+def segment_capture(folder: PathLike, cameras: Sequence[str] = ("front", "back"), use_depth: bool = True,
+                    write: bool = True, **params: Any) -> dict[str, Segmentation]:
+    """Segments every camera folder of a capture (or a virtual scan): ``FOLDER/<camera>/`` with the colour
+    and depth PNGs and camera.json (see :func:`bsv.frontend.capture.read_capture`). The camera name is the
+    view. With ``write``, saves ``segmentation.png`` (uint8 segment ids), ``mask.png`` and
+    ``landmarks.json`` into each camera folder."""
+    from .capture import read_capture
+
+    root = Path(folder)
+    out: dict[str, Segmentation] = {}
+    for cam in cameras:
+        if cam not in VIEWS:
+            raise SegmentationError(f"camera {cam!r} in {root}: the view must be 'front' or 'back'")
+        data = read_capture(root / cam)
+        seg = segment_image(data["colour"], view=cam, depth=data["depth_m"] if use_depth else None, **params)
+        if write:
+            write_segmentation(seg, root / cam)
+        out[cam] = seg
+    return out
+
+
+def write_segmentation(seg: Segmentation, folder: PathLike) -> None:
+    """Writes ``segmentation.png`` (uint8 ids), ``mask.png`` (0/255) and ``landmarks.json`` into ``folder``."""
+    import cv2
+
+    d = Path(folder)
+    ok = cv2.imwrite(str(d / "segmentation.png"), seg.labels) and cv2.imwrite(str(d / "mask.png"),
+                                                                               seg.mask.astype(np.uint8) * 255)
+    if not ok:
+        raise SegmentationError(f"cannot write segmentation.png / mask.png into {d}: is it a writable folder?")
+    lm = {n: (None if not np.isfinite(r[0]) else [float(r[0]), float(r[1]), float(r[2])])
+          for n, r in zip(seg.names, seg.landmarks)}
+    meta = {"view": seg.view, "segments": {n: i for n, i in SEGMENT_IDS.items()}, "hands_found": list(seg.hands_found),
+            "swapped_pairs": list(seg.swapped), "counts": seg.counts(), "landmarks_px": lm}
+    (d / "landmarks.json").write_text(json.dumps(meta, indent=1))
+
+
+def label_accuracy(pred: np.ndarray, truth: np.ndarray) -> dict[str, Any]:
+    """Compares two label images: ``accuracy`` over the pixels labelled in both, ``mask_iou`` of the
+    labelled regions, ``iou`` per segment (over the pixels labelled in both, so mask errors do not count
+    twice; NaN for a segment absent from both) and ``n_pixels`` compared."""
+    a = np.asarray(pred)
+    b = np.asarray(truth)
+    if a.shape != b.shape:
+        raise SegmentationError(f"label images differ in shape: {a.shape} vs {b.shape}")
+    both = (a > 0) & (b > 0)
+    union = (a > 0) | (b > 0)
+    n = int(both.sum())
+    acc = float((a[both] == b[both]).mean()) if n else math.nan
+    iou = {}
+    pa, pb = a[both], b[both]
+    for name, i in SEGMENT_IDS.items():
+        inter = int(np.sum((pa == i) & (pb == i)))
+        uni = int(np.sum((pa == i) | (pb == i)))
+        iou[name] = inter / uni if uni else math.nan
+    return {"accuracy": acc, "mask_iou": float(both.sum() / union.sum()) if union.any() else math.nan,
+            "iou": iou, "n_pixels": n}
+
+
+__all__ = [
+    "SEGMENT_IDS", "SEGMENT_NAMES", "POSE_NAMES", "HAND_NAMES", "LANDMARK_NAMES", "REQUIRED_LANDMARKS",
+    "SegmentParams", "DEFAULT_PARAMS", "Segmentation", "run_holistic", "label_pixels", "refine_mask_with_depth", "segment_image",
+    "segment_capture", "write_segmentation", "label_accuracy",
+]

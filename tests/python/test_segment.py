@@ -1,0 +1,156 @@
+"""MediaPipe body segmentation on the virtual scanner's colour renders (front and back cameras) of a few
+synthetic bodies, scored against the scanner's ground-truth label images; clear errors for an empty
+image and for a subject whose legs are out of the frame."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+cv2 = pytest.importorskip("cv2")
+pytest.importorskip("mediapipe", reason="mediapipe not installed (pip install -r requirements-frontend.txt)")
+bsv = pytest.importorskip("bsv")
+if not hasattr(bsv, "scan"):
+    pytest.skip("the bsv extension (virtual scanner) is not built", allow_module_level=True)
+
+from bsv.frontend import errors  # noqa: E402
+from bsv.frontend import segment as seg  # noqa: E402
+from bsv.frontend.capture import read_capture  # noqa: E402
+
+VIEWS = ("front", "back")
+COHORT_SEED = 3  # not the cohort the defaults were tuned on (seed 1)
+
+
+@pytest.fixture(scope="module")
+def scans(tmp_path_factory):
+    """Scanner folders of the default body and two cohort subjects, segmented once (colour only)."""
+    root = tmp_path_factory.mktemp("segment")
+    bodies = [("default", bsv.bodies.make_body())]
+    bodies += [(f"cohort{s.index}", s.body) for s in bsv.bodies.cohort(2, COHORT_SEED)]
+    out = {}
+    for name, body in bodies:
+        folder = root / name
+        bsv.scan(body.mesh(), "noer", 0, images=str(folder))
+        result = seg.segment_capture(folder, use_depth=False)
+        for view in VIEWS:
+            truth = cv2.imread(str(folder / view / "labels.png"), cv2.IMREAD_UNCHANGED)
+            out[(name, view)] = (folder, result[view], truth)
+    return out
+
+
+def test_landmarks_found_and_sides_match_the_truth(scans):
+    for (name, view), (_, s, truth) in scans.items():
+        assert s.landmarks.shape == (71, 3) and len(s.names) == 71 and len(set(s.names)) == 71
+        assert s.hands_found == (True, True), f"{name} {view}: hands {s.hands_found}"
+        assert np.isfinite(s.landmarks[:, :2]).all()
+        h, w = truth.shape
+        for lm in seg.REQUIRED_LANDMARKS:
+            x, y, vis = s.landmark(lm)
+            assert vis >= 0.75 and 0 <= x < w and 0 <= y < h, f"{name} {view}: {lm} at {x, y} visibility {vis}"
+        # the subject's left is on the image right from the front and on the image left from the back
+        dx = s.landmark("left_shoulder")[0] - s.landmark("right_shoulder")[0]
+        assert dx > 0 if view == "front" else dx < 0
+        # each knee and wrist landmark lies on (or next to) its own side's segments in the truth
+        for lm, ids in (("left_knee", (9, 11)), ("right_knee", (10, 12)), ("left_wrist", (5, 7)), ("right_wrist", (6, 8)),
+                        ("left_elbow", (3, 5)), ("right_elbow", (4, 6))):
+            x, y = (int(round(c)) for c in s.landmark(lm)[:2])
+            window = truth[max(y - 6, 0):y + 7, max(x - 6, 0):x + 7]
+            assert np.isin(window, ids).any(), f"{name} {view}: {lm} not on {ids}: {np.unique(window)}"
+
+
+def test_label_accuracy_against_rendered_truth(scans):
+    accs = {v: [] for v in VIEWS}
+    for (name, view), (_, s, truth) in scans.items():
+        r = seg.label_accuracy(s.labels, truth)
+        accs[view].append(r["accuracy"])
+        ious = " ".join(f"{k}={v:.2f}" for k, v in r["iou"].items())
+        print(f"{name:8s} {view:5s} accuracy {r['accuracy']:.3f} mask IoU {r['mask_iou']:.3f} | {ious}")
+        assert r["accuracy"] >= 0.90, f"{name} {view}: accuracy {r['accuracy']:.3f}"
+        assert r["mask_iou"] >= 0.90, f"{name} {view}: mask IoU {r['mask_iou']:.3f}"
+        assert all(v >= 0.5 for v in r["iou"].values()), f"{name} {view}: a segment is badly placed: {r['iou']}"
+        assert set(np.unique(s.labels)) == set(range(15))
+    for v in VIEWS:
+        print(f"mean accuracy {v}: {np.mean(accs[v]):.3f}")
+
+
+def test_medial_and_transverse_corrections(scans):
+    """Left leg labels only on the subject's left of the medial line (through the mid-hips along the body
+    axis), thighs only above the knee line."""
+    for (name, view), (_, s, _) in scans.items():
+        mid = lambda a: (s.landmark(f"left_{a}")[:2] + s.landmark(f"right_{a}")[:2]) / 2  # noqa: E731
+        h_mid, axis = mid("hip"), mid("hip") - mid("shoulder")
+        knee_y = mid("knee")[1]
+        ys, xs = np.nonzero(s.labels)
+        lab = s.labels[ys, xs]
+        across = (xs - h_mid[0]) * axis[1] - (ys - h_mid[1]) * axis[0]  # > 0: image right of the medial line
+        left_side = across > 0 if view == "front" else across < 0
+        legs_l, legs_r = np.isin(lab, (9, 11, 13)), np.isin(lab, (10, 12, 14))
+        assert left_side[legs_l].all() and not left_side[legs_r].any(), f"{name} {view}"
+        assert (ys[np.isin(lab, (9, 10))] < knee_y + 0.2 * (ys.max() - knee_y)).all()
+        assert (ys[np.isin(lab, (11, 12))] > knee_y - 5).all()
+
+
+def test_segment_capture_writes_files(scans):
+    folder, s, _ = scans[("default", "front")]
+    written = cv2.imread(str(folder / "front" / "segmentation.png"), cv2.IMREAD_UNCHANGED)
+    assert written.dtype == np.uint8 and np.array_equal(written, s.labels)
+    meta = json.loads((folder / "front" / "landmarks.json").read_text())
+    assert meta["view"] == "front" and len(meta["landmarks_px"]) == 71
+    assert meta["segments"]["foot_r"] == 14 and sum(meta["counts"].values()) == int(s.mask.sum())
+    assert (cv2.imread(str(folder / "front" / "mask.png"), cv2.IMREAD_UNCHANGED) > 0).sum() == s.mask.sum()
+
+
+def test_depth_refines_the_mask(scans):
+    folder, s, truth = scans[("cohort0", "back")]
+    data = read_capture(folder / "back")
+    refined = seg.refine_mask_with_depth(s.mask, data["depth_m"])
+    iou = lambda m: ((m & (truth > 0)).sum() / (m | (truth > 0)).sum())  # noqa: E731
+    print(f"mask IoU colour only {iou(s.mask):.4f}, refined with depth {iou(refined):.4f}")
+    assert iou(refined) > 0.99 > iou(s.mask)  # the scanner's background has no depth
+
+
+def test_blank_image_has_no_person():
+    with pytest.raises(errors.PersonNotFoundError, match="no person"):
+        seg.segment_image(np.full((1024, 768, 3), 128, np.uint8), "front")
+
+
+def test_legs_cropped_names_the_ankles(scans):
+    folder, _, truth = scans[("default", "front")]
+    colour = read_capture(folder / "front")["colour"]
+    rows = np.nonzero((truth == 11) | (truth == 12))[0]
+    cut = int(rows.min() + 0.6 * (rows.max() - rows.min()))  # through the shins: the ankles are out of frame
+    with pytest.raises(errors.LandmarkMissingError, match="ankle") as e:
+        seg.segment_image(np.ascontiguousarray(colour[:cut]), "front")
+    assert "left_ankle" in e.value.missing and "right_ankle" in e.value.missing
+    assert not any("wrist" in m for m in e.value.missing)
+
+
+def test_bad_arguments_are_clear_errors():
+    img = np.zeros((64, 48, 3), np.uint8)
+    with pytest.raises(errors.SegmentationError, match="view"):
+        seg.segment_image(img, "side")
+    with pytest.raises(errors.SegmentationError, match="RGB uint8"):
+        seg.segment_image(img.astype(np.float32), "front")
+    with pytest.raises(errors.SegmentationError, match="model_complexity"):
+        seg.segment_image(img, "front", model_complexity=5)
+    with pytest.raises(errors.SegmentationError, match="unknown segmentation parameter"):
+        seg.segment_image(img, "front", no_such_knob=1)
+
+
+def test_label_accuracy_counts():
+    truth = np.zeros((4, 6), np.uint8)
+    truth[:, :3] = 2
+    truth[:, 3:] = 9
+    pred = truth.copy()
+    pred[0, :] = 0  # 6 pixels outside the predicted mask
+    pred[1, 3] = 10  # one wrong pixel
+    r = seg.label_accuracy(pred, truth)
+    assert r["n_pixels"] == 18 and r["accuracy"] == pytest.approx(17 / 18)
+    assert r["mask_iou"] == pytest.approx(18 / 24)
+    assert r["iou"]["torso"] == 1.0 and r["iou"]["thigh_l"] == pytest.approx(8 / 9) and r["iou"]["thigh_r"] == 0.0
+    assert math.isnan(r["iou"]["head"])
+    with pytest.raises(errors.SegmentationError, match="shape"):
+        seg.label_accuracy(pred, truth[:3])

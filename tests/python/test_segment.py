@@ -154,3 +154,16 @@ def test_label_accuracy_counts():
     assert math.isnan(r["iou"]["head"])
     with pytest.raises(errors.SegmentationError, match="shape"):
         seg.label_accuracy(pred, truth[:3])
+
+
+def test_coarse_hands_when_the_hand_model_misses(scans):
+    """Without the hand model's landmarks, the pose's wrist-knuckle-thumb points still give the hands (the
+    hand/forearm cut is the wrist line either way; the hand bones only decide which limb a pixel is on)."""
+    for key in (("default", "front"), ("cohort0", "back")):
+        _, s, truth = scans[key]
+        full = seg.label_accuracy(s.labels, truth)
+        coarse = seg.label_accuracy(seg.label_pixels(s.mask, s.pose, [None, None], seg.DEFAULT_PARAMS[key[1]]), truth)
+        print(f"{key}: hand IoU with hand landmarks {full['iou']['hand_l']:.2f}/{full['iou']['hand_r']:.2f}, "
+              f"pose only {coarse['iou']['hand_l']:.2f}/{coarse['iou']['hand_r']:.2f}")
+        assert coarse["accuracy"] > full["accuracy"] - 0.02
+        assert min(coarse["iou"]["hand_l"], coarse["iou"]["hand_r"]) > 0.7

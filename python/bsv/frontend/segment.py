@@ -179,6 +179,8 @@ class Segmentation:
     hands_found: tuple[bool, bool] = (False, False)
     #: Left/right landmark pairs whose MediaPipe names were swapped to match the view.
     swapped: tuple[str, ...] = field(default_factory=tuple)
+    #: The 33 pose landmarks (x, y, visibility; subject's left/right), as :func:`label_pixels` takes them.
+    pose: Optional[np.ndarray] = None
 
     def landmark(self, name: str) -> np.ndarray:
         """(x, y, visibility) of one landmark by name (KeyError naming it if unknown)."""
@@ -259,7 +261,7 @@ def _orient(pose: np.ndarray, hands: list, view: str) -> tuple[np.ndarray, list,
     for li, ri in _PAIRS:
         if sign * (pose[li, 0] - pose[ri, 0]) < 0:
             pose[[li, ri]] = pose[[ri, li]]
-            swapped.append(POSE_NAMES[li].replace("left_", ""))
+            swapped.append(POSE_NAMES[li].replace("left_", "").replace("mouth_left", "mouth"))
     # each hand belongs to the side whose (re-ordered) pose wrist is nearest its own wrist landmark
     found = [hd for hd in hands if hd is not None]
     new = [None, None]
@@ -532,7 +534,7 @@ def segment_image(colour_rgb: np.ndarray, view: str = "front", depth: Optional[n
         raise PersonNotFoundError(f"the person mask of the {view} image is (nearly) empty ({int(mask.sum())} px)")
     labels = label_pixels(mask, pose, hands, prm)
     return Segmentation(labels=labels, mask=mask, landmarks=_landmarks71(pose, hands), view=view,
-                        hands_found=(hands[0] is not None, hands[1] is not None), swapped=swapped)
+                        hands_found=(hands[0] is not None, hands[1] is not None), swapped=swapped, pose=pose)
 
 
 def segment_capture(folder: PathLike, cameras: Sequence[str] = ("front", "back"), use_depth: bool = True,

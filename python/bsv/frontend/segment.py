@@ -31,12 +31,15 @@ the hand model gives more precisely (pinky_mcp, index_finger_mcp), then 21 per h
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
 import dataclasses
 import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Optional, Sequence, Union
+from typing import Any, Iterator, Optional, Sequence, Union
 
 import numpy as np
 
@@ -200,6 +203,9 @@ class Segmentation:
 
 
 def _mediapipe_holistic():  # noqa: ANN202 - module
+    # MediaPipe's C++ logging (glog/absl, TFLite) prints several lines per image: keep warnings out.
+    os.environ.setdefault("GLOG_minloglevel", "2")
+    os.environ.setdefault("TF_CPP_MIN_LOG_LEVEL", "2")
     try:
         from mediapipe.python.solutions import holistic
     except ImportError as e:  # pragma: no cover - depends on the machine
@@ -222,6 +228,24 @@ def _check_model(holistic: Any, complexity: int) -> None:
             ) from e
 
 
+@contextlib.contextmanager
+def _native_stderr_silenced() -> Iterator[None]:
+    """Sends file descriptor 2 to /dev/null while MediaPipe's C++ code runs: absl/TFLite print
+    informational lines there before any logging setup can stop them. Python exceptions still
+    propagate with their messages."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 2)
+            try:
+                yield
+            finally:
+                os.dup2(saved, 2)
+    finally:
+        os.close(saved)
+
+
 def run_holistic(rgb: np.ndarray, params: SegmentParams = SegmentParams()) -> dict[str, Any]:
     """MediaPipe Holistic on one RGB uint8 image: ``{"pose": (33, 3) x, y (pixels), visibility or None,
     "hands": [left (21, 2) or None, right], "mask": (H, W) float32 or None}`` with MediaPipe's own
@@ -230,9 +254,10 @@ def run_holistic(rgb: np.ndarray, params: SegmentParams = SegmentParams()) -> di
     _check_model(holistic, params.model_complexity)
     img = np.ascontiguousarray(rgb, dtype=np.uint8)
     h, w = img.shape[:2]
-    with holistic.Holistic(static_image_mode=True, model_complexity=params.model_complexity,
-                           enable_segmentation=True, refine_face_landmarks=False,
-                           min_detection_confidence=params.min_detection_confidence) as model:
+    with _native_stderr_silenced(), holistic.Holistic(
+        static_image_mode=True, model_complexity=params.model_complexity, enable_segmentation=True,
+        refine_face_landmarks=False, min_detection_confidence=params.min_detection_confidence,
+    ) as model:
         res = model.process(img)
     out: dict[str, Any] = {"pose": None, "hands": [None, None], "mask": None}
     if res.pose_landmarks is not None:

@@ -6,6 +6,14 @@
 //!   vertices, rebuilt every iteration); a vertex's target is the mean of its points; a vertex with
 //!   no point gets no data term.
 //!
+//! Label-aware matching (when the cloud and the template both carry segment labels, see
+//! [`CloudIndex::with_labels`]): m2p matches a template vertex of segment L only to cloud points of
+//! segment L (one tree per segment, built once), p2m sends a cloud point of segment L only to the
+//! current template vertices of segment L (one tree per segment, rebuilt every iteration). A label
+//! present on one side only falls back to unrestricted matching. This keeps a limb that the pose
+//! puts near another surface (a forearm hanging beside the hip, an upper arm against the chest)
+//! from being pulled onto it.
+//!
 //! Pruning (per iteration): a correspondence longer than `factor x median` of the iteration's
 //! correspondence lengths (but never below `floor`) is dropped. Normal pruning compares the
 //! current vertex normal with the cloud normal: the given (oriented) normals, or, when the cloud has
@@ -74,6 +82,10 @@ impl Pruning {
 pub struct CloudIndex {
     points: Vec<[f64; 3]>,
     tree: ImmutableKdTree<f64, 3>,
+    /// Per segment label: the tree over that segment's points and their global indices.
+    by_label: Vec<Option<LabelTree>>,
+    /// Segment label of every point (label-aware mode only).
+    labels: Option<Vec<u8>>,
     given_normals: Option<Vec<[f64; 3]>>,
     estimated: Vec<OnceLock<[f64; 3]>>,
     k_normals: usize,
@@ -84,6 +96,24 @@ impl std::fmt::Debug for CloudIndex {
         f.debug_struct("CloudIndex").field("points", &self.points.len()).finish()
     }
 }
+
+/// A k-d tree over a subset of points and the subset's indices in the full set.
+struct LabelTree {
+    tree: ImmutableKdTree<f64, 3>,
+    index: Vec<u32>,
+}
+
+/// Groups `0..labels.len()` by label: `groups[l]` lists the items with label `l`.
+fn group_by_label(labels: &[u8]) -> Vec<Vec<u32>> {
+    let mut groups = vec![Vec::new(); 256];
+    for (i, &l) in labels.iter().enumerate() {
+        groups[l as usize].push(i as u32);
+    }
+    groups
+}
+
+/// Fewest items a per-label tree needs (smaller groups match unrestricted).
+const MIN_LABEL_ITEMS: usize = 4;
 
 /// Nearest item of every query in a tree (parallel batch query): (index, squared distance).
 pub fn nearest_batch(tree: &ImmutableKdTree<f64, 3>, queries: &[[f64; 3]]) -> Vec<(u32, f64)> {
@@ -134,10 +164,106 @@ impl CloudIndex {
         Ok(CloudIndex {
             points: points.to_vec(),
             tree,
+            by_label: Vec::new(),
+            labels: None,
             given_normals: normals.map(|n| n.iter().map(|&v| normalize(v)).collect()),
             estimated,
             k_normals,
         })
+    }
+
+    /// Enables label-aware matching: `labels` (one per point) are the cloud's segment labels and
+    /// `vertex_labels` the template's; one tree is built per label present on both sides (with at
+    /// least 4 points and 4 vertices). Returns the number of labels matched that way.
+    pub fn with_labels(&mut self, labels: &[u8], vertex_labels: &[u8]) -> Result<usize, String> {
+        if labels.len() != self.points.len() {
+            return Err(format!("{} cloud labels for {} points", labels.len(), self.points.len()));
+        }
+        let groups = group_by_label(labels);
+        let vgroups = group_by_label(vertex_labels);
+        let built: Vec<Option<LabelTree>> = groups
+            .into_par_iter()
+            .zip(vgroups.par_iter())
+            .map(|(g, vg)| {
+                if g.len() < MIN_LABEL_ITEMS || vg.len() < MIN_LABEL_ITEMS {
+                    return Ok(None);
+                }
+                let pts: Vec<[f64; 3]> = g.iter().map(|&i| self.points[i as usize]).collect();
+                Ok(Some(LabelTree { tree: build_tree(&pts)?, index: g }))
+            })
+            .collect::<Result<_, String>>()?;
+        let count = built.iter().filter(|b| b.is_some()).count();
+        self.by_label = built;
+        self.labels = Some(labels.to_vec());
+        Ok(count)
+    }
+
+    /// Nearest cloud point of each vertex, restricted to the vertex's segment when label-aware
+    /// matching is on and `vertex_labels` is given: (global point index, squared distance).
+    pub fn nearest_labelled(&self, vertices: &[[f64; 3]], vertex_labels: Option<&[u8]>) -> Vec<(u32, f64)> {
+        let Some(vl) = vertex_labels.filter(|_| !self.by_label.is_empty()) else {
+            return self.nearest(vertices);
+        };
+        let groups = group_by_label(vl);
+        let mut out = vec![(0u32, f64::INFINITY); vertices.len()];
+        let mut rest: Vec<u32> = Vec::new();
+        for (l, g) in groups.iter().enumerate() {
+            if g.is_empty() {
+                continue;
+            }
+            match &self.by_label[l] {
+                Some(lt) => {
+                    let q: Vec<[f64; 3]> = g.iter().map(|&v| vertices[v as usize]).collect();
+                    for (&v, (i, d)) in g.iter().zip(nearest_batch(&lt.tree, &q)) {
+                        out[v as usize] = (lt.index[i as usize], d);
+                    }
+                }
+                None => rest.extend_from_slice(g),
+            }
+        }
+        if !rest.is_empty() {
+            let q: Vec<[f64; 3]> = rest.iter().map(|&v| vertices[v as usize]).collect();
+            for (&v, r) in rest.iter().zip(self.nearest(&q)) {
+                out[v as usize] = r;
+            }
+        }
+        out
+    }
+
+    /// Nearest vertex of every cloud point, restricted to the vertices of the point's segment when
+    /// label-aware matching is on and `vertex_labels` is given: (vertex index, squared distance).
+    fn points_to_vertices(&self, vertices: &[[f64; 3]], vertex_labels: Option<&[u8]>) -> Result<Vec<(u32, f64)>, String> {
+        let (Some(vl), Some(labels)) = (vertex_labels.filter(|_| !self.by_label.is_empty()), &self.labels) else {
+            let tree = build_tree(vertices)?;
+            return Ok(nearest_batch(&tree, &self.points));
+        };
+        let vgroups = group_by_label(vl);
+        let mut out = vec![(0u32, f64::INFINITY); self.points.len()];
+        let mut rest: Vec<u32> = Vec::new();
+        for (l, lt) in self.by_label.iter().enumerate() {
+            if let Some(lt) = lt {
+                let vg = &vgroups[l];
+                let vpts: Vec<[f64; 3]> = vg.iter().map(|&v| vertices[v as usize]).collect();
+                let tree = build_tree(&vpts)?;
+                let q: Vec<[f64; 3]> = lt.index.iter().map(|&i| self.points[i as usize]).collect();
+                for (&i, (v, d)) in lt.index.iter().zip(nearest_batch(&tree, &q)) {
+                    out[i as usize] = (vg[v as usize], d);
+                }
+            }
+        }
+        for (i, &l) in labels.iter().enumerate() {
+            if self.by_label[l as usize].is_none() {
+                rest.push(i as u32);
+            }
+        }
+        if !rest.is_empty() {
+            let tree = build_tree(vertices)?;
+            let q: Vec<[f64; 3]> = rest.iter().map(|&i| self.points[i as usize]).collect();
+            for (&i, r) in rest.iter().zip(nearest_batch(&tree, &q)) {
+                out[i as usize] = r;
+            }
+        }
+        Ok(out)
     }
 
     /// The cloud points.
@@ -205,8 +331,15 @@ impl CloudIndex {
 
     /// m2p targets of `vertices` (with their current unit normals), pruned.
     /// Returns the targets and the RMS (m) of all nearest distances before pruning.
-    pub fn m2p(&self, vertices: &[[f64; 3]], normals: &[[f64; 3]], pruning: &Pruning) -> (Targets, f64) {
-        let nn = self.nearest(vertices);
+    /// With `vertex_labels` (and [`Self::with_labels`] called), matching is per segment.
+    pub fn m2p(
+        &self,
+        vertices: &[[f64; 3]],
+        normals: &[[f64; 3]],
+        pruning: &Pruning,
+        vertex_labels: Option<&[u8]>,
+    ) -> (Targets, f64) {
+        let nn = self.nearest_labelled(vertices, vertex_labels);
         let rms = rms_of(nn.iter().map(|r| r.1));
         let mut d2: Vec<f64> = nn.iter().map(|r| r.1).collect();
         let lim2 = pruning.limit2(&mut d2);
@@ -237,9 +370,15 @@ impl CloudIndex {
 
     /// p2m targets: the mean of the (pruned) cloud points whose nearest vertex is each vertex.
     /// Returns the targets and the RMS (m) of all point-to-vertex distances before pruning.
-    pub fn p2m(&self, vertices: &[[f64; 3]], normals: &[[f64; 3]], pruning: &Pruning) -> Result<(Targets, f64), String> {
-        let tree = build_tree(vertices)?;
-        let nn = nearest_batch(&tree, &self.points);
+    /// With `vertex_labels` (and [`Self::with_labels`] called), matching is per segment.
+    pub fn p2m(
+        &self,
+        vertices: &[[f64; 3]],
+        normals: &[[f64; 3]],
+        pruning: &Pruning,
+        vertex_labels: Option<&[u8]>,
+    ) -> Result<(Targets, f64), String> {
+        let nn = self.points_to_vertices(vertices, vertex_labels)?;
         let rms = rms_of(nn.iter().map(|r| r.1));
         let mut d2: Vec<f64> = nn.iter().map(|r| r.1).collect();
         let lim2 = pruning.limit2(&mut d2);

@@ -7,6 +7,7 @@
 //! sparse solve with the three coordinates at once). Energies, weights and units are documented in
 //! [`params`] and [`local`].
 
+pub mod articulate;
 pub mod correspond;
 pub mod cotan;
 pub mod error;
@@ -22,7 +23,7 @@ pub use params::{
 };
 pub use prealign::Similarity;
 
-use bsv_core::geometry::{add, cross, dot, normalize, scale, sub, total_area};
+use bsv_core::geometry::{add, dot, scale, sub, total_area, vertex_normals};
 use bsv_core::{PointCloud, TriMesh};
 use correspond::{CloudIndex, Pruning};
 use local::{CellMaps, LocalModel};
@@ -50,19 +51,24 @@ pub struct Registration {
     pub rms_points_to_mesh_mm: f64,
     /// Where the vertex labels came from (`None` when the mesh has no labels).
     pub labels_from: Option<LabelSource>,
+    /// Cloud points dropped by the statistical outlier removal.
+    pub outliers_removed: usize,
+    /// The limbs moved by the articulated initialisation (empty when it did not run).
+    pub articulation: Vec<LimbAlignment>,
 }
 
-/// Area-weighted unit vertex normals of `vertices` with `triangles`.
-pub fn vertex_normals(vertices: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f64; 3]> {
-    let mut acc = vec![[0.0; 3]; vertices.len()];
-    for t in triangles {
-        let [a, b, c] = t.map(|v| vertices[v as usize]);
-        let n = cross(sub(b, a), sub(c, a));
-        for &v in t {
-            acc[v as usize] = add(acc[v as usize], n);
-        }
-    }
-    acc.into_iter().map(normalize).collect()
+/// One limb of the articulated initialisation (see [`articulate`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LimbAlignment {
+    /// Segment id.
+    pub label: u8,
+    /// Angle between the template's and the cloud's limb axes, degrees.
+    pub angle_deg: f64,
+    /// Scale applied along the axis.
+    pub axial_scale: f64,
+    /// Distance between the template's and the cloud's segment centroids (after the global
+    /// pre-alignment), mm.
+    pub shift_mm: f64,
 }
 
 /// Data energy `sum_i d_i |p_i - q_i|^2`.
@@ -106,12 +112,53 @@ fn register_in_pool(
     // Checks.
     let template_box = prealign::check_template(template)?;
     let cloud_box = prealign::check_cloud(cloud, params)?;
+    // Statistical outlier removal (flying pixels trail behind the silhouettes, right where the
+    // gaps are, and would attract the gap-side vertices).
+    let filtered;
+    let mut outliers_removed = 0;
+    let cloud = if params.outlier_k > 0 {
+        let sor = bsv_core::clean::statistical_outliers(
+            &cloud.points,
+            bsv_core::clean::SorParams { k: params.outlier_k, std_ratio: params.outlier_std_ratio },
+        )
+        .map_err(|e| RegisterError::Solver(format!("outlier removal failed: {e}")))?;
+        outliers_removed = sor.keep.iter().filter(|&&k| !k).count();
+        if outliers_removed > 0 && cloud.points.len() - outliers_removed >= params.min_points.max(1) {
+            let mut c = cloud.clone();
+            c.retain_indices(|i| sor.keep[i]);
+            filtered = c;
+            &filtered
+        } else {
+            outliers_removed = 0;
+            cloud
+        }
+    } else {
+        cloud
+    };
     if params.labels == LabelSource::Template && template.vertex_labels.is_none() {
         return Err(RegisterError::TemplateWithoutLabels);
     }
     // Pre-alignment.
     let sim = prealign::similarity(&template_box, &cloud_box, params);
-    let rest: Vec<[f64; 3]> = template.vertices.iter().map(|&p| sim.apply(p)).collect();
+    let mut rest: Vec<[f64; 3]> = template.vertices.iter().map(|&p| sim.apply(p)).collect();
+    // Articulated initialisation (labelled template and cloud).
+    let mut articulation = Vec::new();
+    if let (true, Some(cl), Some(tl)) = (params.articulate, &cloud.labels, &template.vertex_labels) {
+        let poses = articulate::segment_poses(&rest, tl, &cloud.points, cl, params.articulate_axial_scale);
+        if !poses.is_empty() {
+            let w0 = cotan::CotanWeights::new(&rest, &template.triangles);
+            rest = articulate::articulate(&rest, tl, &poses, &w0, params.articulate_smooth_iterations);
+            articulation = poses
+                .iter()
+                .map(|p| LimbAlignment {
+                    label: p.label,
+                    angle_deg: p.angle_deg,
+                    axial_scale: p.axial_scale,
+                    shift_mm: bsv_core::geometry::dist2(p.cloud_centroid, p.template_centroid).sqrt() * 1e3,
+                })
+                .collect();
+        }
+    }
     let n = rest.len();
     let area = total_area(&TriMesh::new(rest.clone(), template.triangles.clone()));
     let lambda = params.alpha * 1e-6 * params.cell_weight * area / n as f64;
@@ -124,7 +171,15 @@ fn register_in_pool(
         )
     });
     let mut solver = solver.map_err(RegisterError::Solver)?;
-    let index = index.map_err(RegisterError::Solver)?;
+    let mut index = index.map_err(RegisterError::Solver)?;
+    // Label-aware matching when both sides are labelled.
+    let match_labels: Option<&[u8]> = match (&cloud.labels, &template.vertex_labels) {
+        (Some(cl), Some(tl)) if params.label_aware => {
+            let matched = index.with_labels(cl, tl).map_err(RegisterError::Solver)?;
+            (matched > 0).then_some(tl.as_slice())
+        }
+        _ => None,
+    };
     let model = pool.install(|| LocalModel::new(rest.clone(), weights, params.cell_weight, lambda));
     let pruning = Pruning {
         distance_factor: params.prune_distance_factor,
@@ -137,7 +192,8 @@ fn register_in_pool(
     };
     let setup_seconds = start.elapsed().as_secs_f64();
 
-    let mut cur = rest;
+    let mut work = TriMesh::new(rest, template.triangles.clone());
+    let mut cur = work.vertices.clone();
     let mut maps = CellMaps::identity(n);
     let mut d = vec![0.0; n];
     let mut q = vec![[0.0; 3]; n];
@@ -149,14 +205,15 @@ fn register_in_pool(
     for (si, stage) in params.schedule.0.iter().enumerate() {
         for _ in 0..stage.iterations {
             let t0 = Instant::now();
-            let normals = vertex_normals(&cur, &template.triangles);
+            work.vertices.copy_from_slice(&cur);
+            let normals = vertex_normals(&work);
             let (targets, rms_m2p, rms_p2m) = match stage.kind {
                 CorrespondenceKind::M2p => {
-                    let (t, rms) = pool.install(|| index.m2p(&cur, &normals, &pruning));
+                    let (t, rms) = pool.install(|| index.m2p(&cur, &normals, &pruning, match_labels));
                     (t, rms, None)
                 }
                 CorrespondenceKind::P2m => {
-                    let (t, rms) = pool.install(|| index.p2m(&cur, &normals, &pruning)).map_err(RegisterError::Solver)?;
+                    let (t, rms) = pool.install(|| index.p2m(&cur, &normals, &pruning, match_labels)).map_err(RegisterError::Solver)?;
                     let m2p = pool.install(|| index.nearest(&cur));
                     let rms_m2p = (m2p.iter().map(|r| r.1).sum::<f64>() / n as f64).sqrt();
                     (t, rms_m2p, Some(rms))
@@ -257,5 +314,7 @@ fn register_in_pool(
         rms_mesh_to_points_mm: rms_m2p * 1e3,
         rms_points_to_mesh_mm: rms_p2m * 1e3,
         labels_from,
+        outliers_removed,
+        articulation,
     })
 }

@@ -12,6 +12,7 @@ pub mod correspond;
 pub mod cotan;
 pub mod error;
 pub mod local;
+pub mod outliers;
 pub mod params;
 pub mod prealign;
 pub mod solver;
@@ -51,7 +52,7 @@ pub struct Registration {
     pub rms_points_to_mesh_mm: f64,
     /// Where the vertex labels came from (`None` when the mesh has no labels).
     pub labels_from: Option<LabelSource>,
-    /// Cloud points dropped by the statistical outlier removal.
+    /// Cloud points dropped as sparse outliers (see [`outliers`]).
     pub outliers_removed: usize,
     /// The limbs moved by the articulated initialisation (empty when it did not run).
     pub articulation: Vec<LimbAlignment>,
@@ -112,27 +113,19 @@ fn register_in_pool(
     // Checks.
     let template_box = prealign::check_template(template)?;
     let cloud_box = prealign::check_cloud(cloud, params)?;
-    // Statistical outlier removal (flying pixels trail behind the silhouettes, right where the
+    // Sparse-point removal (flying pixels trail behind the silhouettes, right where the
     // gaps are, and would attract the gap-side vertices).
     let filtered;
-    let mut outliers_removed = 0;
-    let cloud = if params.outlier_k > 0 {
-        let sor = bsv_core::clean::statistical_outliers(
-            &cloud.points,
-            bsv_core::clean::SorParams { k: params.outlier_k, std_ratio: params.outlier_std_ratio },
-        )
-        .map_err(|e| RegisterError::Solver(format!("outlier removal failed: {e}")))?;
-        outliers_removed = sor.keep.iter().filter(|&&k| !k).count();
-        if outliers_removed > 0 && cloud.points.len() - outliers_removed >= params.min_points.max(1) {
-            let mut c = cloud.clone();
-            c.retain_indices(|i| sor.keep[i]);
-            filtered = c;
-            &filtered
-        } else {
-            outliers_removed = 0;
-            cloud
-        }
+    let mut outliers_removed;
+    let keep = outliers::sparse_points(&cloud.points, params.outlier_voxel_m, params.outlier_min_fraction);
+    outliers_removed = keep.iter().filter(|&&k| !k).count();
+    let cloud = if outliers_removed > 0 && cloud.points.len() - outliers_removed >= params.min_points.max(1) {
+        let mut c = cloud.clone();
+        c.retain_indices(|i| keep[i]);
+        filtered = c;
+        &filtered
     } else {
+        outliers_removed = 0;
         cloud
     };
     if params.labels == LabelSource::Template && template.vertex_labels.is_none() {

@@ -211,13 +211,12 @@ pub struct RegisterParams {
     /// vertex of segment L is matched only to cloud points of segment L and vice versa (see
     /// `correspond.rs`). Default true.
     pub label_aware: bool,
-    /// Statistical outlier removal before the fit: neighbours per point (the point included; 0 =
-    /// off). A point is dropped when its mean distance to its `outlier_k` nearest points exceeds
-    /// the cloud's mean of those distances by `outlier_std_ratio` standard deviations. Default 8
-    /// (measured on L515-like clouds: removes ~75 % of the flying pixels and 0.5 % of the surface).
-    pub outlier_k: usize,
-    /// See [`Self::outlier_k`]. Default 1.0.
-    pub outlier_std_ratio: f64,
+    /// Sparse-point (flying pixel) removal before the fit: voxel side in metres (0 = off). A point
+    /// is dropped when the 27 voxels around it hold fewer than
+    /// [`Self::outlier_min_fraction`] x the median such count (see `outliers.rs`). Default 0.008.
+    pub outlier_voxel_m: f64,
+    /// See [`Self::outlier_voxel_m`]. Default 0.1.
+    pub outlier_min_fraction: f64,
     /// Articulated initialisation when the cloud and the template are both labelled: every limb is
     /// turned (and moved) onto the cloud's limb before the fit (see `articulate.rs`). Default true.
     pub articulate: bool,
@@ -251,8 +250,8 @@ impl Default for RegisterParams {
             threads: 0,
             labels: LabelSource::Cloud,
             label_aware: true,
-            outlier_k: 8,
-            outlier_std_ratio: 1.0,
+            outlier_voxel_m: 0.008,
+            outlier_min_fraction: 0.1,
             articulate: true,
             articulate_axial_scale: false,
             articulate_smooth_iterations: 10,
@@ -310,10 +309,16 @@ impl RegisterParams {
             "must be finite and >= 0",
         )?;
         check(
-            "outlier_std_ratio",
-            self.outlier_std_ratio,
-            self.outlier_std_ratio.is_finite(),
-            "must be finite (e.g. 1.0; outlier_k = 0 turns the filter off)",
+            "outlier_voxel_m",
+            self.outlier_voxel_m,
+            self.outlier_voxel_m.is_finite() && self.outlier_voxel_m >= 0.0,
+            "must be finite and >= 0 metres (0 = no outlier removal)",
+        )?;
+        check(
+            "outlier_min_fraction",
+            self.outlier_min_fraction,
+            (0.0..=1.0).contains(&self.outlier_min_fraction),
+            "must be in [0, 1]",
         )?;
         check("bbox_quantile", self.bbox_quantile, (0.0..0.25).contains(&self.bbox_quantile), "must be in [0, 0.25)")?;
         check(

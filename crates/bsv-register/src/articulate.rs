@@ -14,8 +14,9 @@
 //! 2. the rotation `R_L` is the smallest rotation taking the template axis onto the cloud axis
 //!    (sign chosen so that they agree), about the template centroid; the twist about the axis is
 //!    left to the non-rigid fit;
-//! 3. optionally the axis is scaled by the ratio of the segment lengths (5 %-95 % quantiles of the
-//!    projections on the axis), the cross-section is not (the gaps bias it);
+//! 3. optionally the axis is scaled so that the segment's extent along it (1 % / 99 % quantiles
+//!    of the projections) maps onto the cloud's, ends aligned; the cross-section is not scaled
+//!    (the gaps bias it);
 //! 4. `x -> c_cloud + R_L S_L (x - c_template)` per vertex, then the displacement field is smoothed
 //!    by a few Jacobi iterations over the mesh graph: a rigid motion is an affine field, which the
 //!    averaging keeps inside a segment, so only the joints are blended.
@@ -103,15 +104,15 @@ fn rotation_between(a: [f64; 3], b: [f64; 3]) -> Matrix3<f64> {
 }
 
 /// The `q` and `1 - q` quantiles of the projections of `pts` (about `c`) on `axis`.
-fn axial_extent(pts: &[[f64; 3]], c: [f64; 3], axis: [f64; 3], q: f64) -> f64 {
+fn axial_range(pts: &[[f64; 3]], c: [f64; 3], axis: [f64; 3], q: f64) -> (f64, f64) {
     let mut t: Vec<f64> = pts.iter().map(|p| dot(sub(*p, c), axis)).collect();
     if t.len() < 2 {
-        return 0.0;
+        return (0.0, 0.0);
     }
     t.sort_by(f64::total_cmp);
     let lo = ((q * t.len() as f64) as usize).min(t.len() - 1);
     let hi = (((1.0 - q) * t.len() as f64) as usize).min(t.len() - 1);
-    t[hi] - t[lo]
+    (t[lo], t[hi])
 }
 
 /// The per-limb poses of the template (`rest`, `vertex_labels`) onto the cloud (`points`,
@@ -153,17 +154,20 @@ pub fn segment_poses(
         if dot(ac, at) < 0.0 {
             ac = ac.map(|v| -v);
         }
-        let scale = if axial_scale {
-            let et = axial_extent(&tv, ct, at, 0.05);
-            let ec = axial_extent(&inner, cc, ac, 0.05);
-            if et > 0.0 && ec > 0.0 {
-                (ec / et).clamp(0.7, 1.4)
-            } else {
-                1.0
+        // Along the axis, map the template's segment interval onto the cloud's (1 % / 99 %
+        // quantiles of the projections): ends aligned, not centroids (the template's cap
+        // vertices and the cloud's uneven sampling bias the centroids along the axis).
+        let (mut scale, mut cc) = (1.0, cc);
+        if axial_scale {
+            let (t0, t1) = axial_range(&tv, ct, at, 0.01);
+            let (c0, c1) = axial_range(&inner, cc, ac, 0.01);
+            if t1 > t0 && c1 > c0 {
+                scale = ((c1 - c0) / (t1 - t0)).clamp(0.7, 1.4);
+                // x -> cc' + R S (x - ct) maps t0 to c0: cc' = cc + ac (c0 - scale t0).
+                let off = c0 - scale * t0;
+                cc = [cc[0] + ac[0] * off, cc[1] + ac[1] * off, cc[2] + ac[2] * off];
             }
-        } else {
-            1.0
-        };
+        }
         out.push(SegmentPose {
             label: l,
             template_centroid: ct,

@@ -217,11 +217,15 @@ pub struct RegisterParams {
     pub outlier_voxel_m: f64,
     /// See [`Self::outlier_voxel_m`]. Default 0.1.
     pub outlier_min_fraction: f64,
+    /// Move the fitted vertices out by the inscribed-mesh gap `h^2 H / 8` (see
+    /// [`crate::surface_correction`]) so that the fitted faces, not only the vertices, lie on the
+    /// surface on average: removes the volume bias of a coarse template. Default true.
+    pub surface_correction: bool,
     /// Articulated initialisation when the cloud and the template are both labelled: every limb is
     /// turned (and moved) onto the cloud's limb before the fit (see `articulate.rs`). Default true.
     pub articulate: bool,
     /// Scale each limb along its axis by the ratio of the segment lengths in the articulated
-    /// initialisation. Default false.
+    /// initialisation (ends aligned). Default true.
     pub articulate_axial_scale: bool,
     /// Jacobi smoothing steps of the articulation's displacement field (blends the joints).
     /// Default 10.
@@ -252,8 +256,9 @@ impl Default for RegisterParams {
             label_aware: true,
             outlier_voxel_m: 0.008,
             outlier_min_fraction: 0.1,
+            surface_correction: true,
             articulate: true,
-            articulate_axial_scale: false,
+            articulate_axial_scale: true,
             articulate_smooth_iterations: 10,
         }
     }

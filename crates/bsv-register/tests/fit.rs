@@ -9,7 +9,9 @@ use common::*;
 fn template_registered_to_itself_stays_put() {
     let template = icosphere(0.25, 4);
     let cloud = cloud_of(&template, 100_000, 1);
-    let params = RegisterParams::default();
+    // The surface correction moves vertices off the sampled surface by design (h^2 H / 8,
+    // ~0.1 mm here): this test checks that the fit itself stays put.
+    let params = RegisterParams { surface_correction: false, ..Default::default() };
     let reg = run(&template, &cloud, &params);
     let max = template
         .vertices

@@ -1,0 +1,72 @@
+//! End-to-end runs of the `bsv-cli` binary: template -> scan -> register -> volume, and bad input.
+
+#![allow(clippy::unwrap_used)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bsv(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_bsv-cli")).args(args).current_dir(dir).output().unwrap()
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("bsv-cli-test-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn text(o: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+#[test]
+fn template_scan_register_volume_chain() {
+    let d = tmpdir("chain");
+    let o = bsv(&["template", "-o", "t.ply"], &d);
+    assert!(o.status.success(), "{}", text(&o));
+    let o = bsv(&["scan", "t.ply", "--condition", "noer", "-o", "c.ply"], &d);
+    assert!(o.status.success(), "{}", text(&o));
+    let o = bsv(&["register", "c.ply", "-o", "fit.ply", "--json", "v.json", "--quiet"], &d);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("v.json")).unwrap()).unwrap();
+    let fit = v["volumes_l"]["trunk_limbs"].as_f64().unwrap();
+    let o = bsv(&["volume", "t.ply", "--json", "t.json"], &d);
+    assert!(o.status.success(), "{}", text(&o));
+    let t: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("t.json")).unwrap()).unwrap();
+    let truth = t["volumes_l"]["trunk_limbs"].as_f64().unwrap();
+    // The template registered to its own noise-free scan keeps its volume.
+    assert!((fit - truth).abs() / truth < 0.02, "fit {fit} L, template {truth} L");
+    assert!(v["registration"]["iterations"].as_u64().unwrap() > 0);
+    assert_eq!(v["units"]["volume"], "L");
+    // Outputs are never overwritten without --force.
+    let o = bsv(&["template", "-o", "t.ply"], &d);
+    assert!(!o.status.success());
+    assert!(text(&o).contains("--force"), "{}", text(&o));
+    let o = bsv(&["info", "fit.ply", "--json"], &d);
+    assert!(o.status.success(), "{}", text(&o));
+}
+
+#[test]
+fn bad_inputs_fail_with_clear_messages() {
+    let d = tmpdir("bad");
+    std::fs::write(d.join("empty.ply"), b"").unwrap();
+    let o = bsv(&["volume", "empty.ply"], &d);
+    assert!(!o.status.success());
+    assert!(text(&o).contains("empty.ply"), "{}", text(&o));
+    // A cloud in millimetres.
+    let mut ply = String::from("ply\nformat ascii 1.0\nelement vertex 400\nproperty float x\nproperty float y\nproperty float z\nend_header\n");
+    for i in 0..400 {
+        ply.push_str(&format!("{} {} {}\n", (i % 20) as f64 * 30.0, (i / 20) as f64 * 90.0, (i % 7) as f64 * 10.0));
+    }
+    std::fs::write(d.join("mm.ply"), ply).unwrap();
+    let o = bsv(&["register", "mm.ply"], &d);
+    assert!(!o.status.success());
+    assert!(text(&o).contains("millimetres"), "{}", text(&o));
+    let o = bsv(&["register", "mm.ply", "--schedule", "m2p:x"], &d);
+    assert!(!o.status.success());
+    assert!(text(&o).to_lowercase().contains("schedule"), "{}", text(&o));
+    let o = bsv(&["scan", "mm.ply", "--condition", "foggy"], &d);
+    assert!(!o.status.success());
+    assert!(text(&o).contains("foggy"), "{}", text(&o));
+}

@@ -66,6 +66,10 @@ def run_config(name: str, params: dict, template, clouds: list, verbose: bool, b
     """Registers every cloud; returns errors[condition][segment] -> list of signed % and timings."""
     import bsv
 
+    if isinstance(params.get("schedule"), str):  # "m2p:5,p2m:5" -> the serde form
+        params = dict(params)
+        params["schedule"] = [{"kind": k.strip(), "iterations": int(n)}
+                              for k, n in (part.split(":") for part in params["schedule"].split(","))]
     errs: dict[str, dict[str, list[float]]] = {}
     times: list[float] = []
     rms: list[float] = []

@@ -68,9 +68,9 @@ def test_binding_rebuilds_the_scanner_cloud(capture):
     assert rep["points"] == len(pts) and [v["name"] for v in rep["views"]] == ["front", "back"]
 
 
-def test_default_cloud_drops_extremities_and_outliers(capture):
+def test_cloud_with_sor_drops_extremities_and_outliers(capture):
     cap, scanned = capture
-    cloud, rep = pipeline.build_cloud(_views(cap))
+    cloud, rep = pipeline.build_cloud(_views(cap), sor=True)
     assert not np.isin(cloud.labels, pipeline.EXTREMITY_IDS).any()
     assert cloud.normals is not None and np.allclose(np.linalg.norm(cloud.normals, axis=1), 1.0)
     kept_scanned = int((~np.isin(scanned.labels, pipeline.EXTREMITY_IDS)).sum())

@@ -61,8 +61,41 @@ pub struct Stage {
 }
 
 /// The correspondence schedule, e.g. `m2p:5,p2m:5,m2p:10` (the paper's).
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+///
+/// Serialises as that string (so JSON/Python users write `"schedule": "m2p:10,p2m:5"`);
+/// deserialises from the string or from the older list form
+/// `[{"kind": "m2p", "iterations": 5}, ...]`.
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Schedule(pub Vec<Stage>);
+
+impl Serialize for Schedule {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_str(self)
+    }
+}
+
+/// The accepted serialised forms of a [`Schedule`].
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum ScheduleRepr {
+    /// `"m2p:5,p2m:5,m2p:10"`.
+    Text(String),
+    /// `[{"kind": "m2p", "iterations": 5}, ...]`.
+    Stages(Vec<Stage>),
+}
+
+impl<'de> Deserialize<'de> for Schedule {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        match ScheduleRepr::deserialize(deserializer).map_err(|_| {
+            serde::de::Error::custom(
+                "schedule must be a string like \"m2p:5,p2m:5,m2p:10\" (or a list of {kind, iterations})",
+            )
+        })? {
+            ScheduleRepr::Text(text) => Schedule::parse(&text).map_err(serde::de::Error::custom),
+            ScheduleRepr::Stages(stages) => Ok(Schedule(stages)),
+        }
+    }
+}
 
 /// The paper's schedule: 5 m2p, 5 p2m, 10 m2p.
 pub const DEFAULT_SCHEDULE: &str = "m2p:5,p2m:5,m2p:10";
@@ -393,4 +426,31 @@ pub struct IterationLog {
     pub refactorized: bool,
     /// Time split.
     pub timings: Timings,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn schedule_serialises_as_its_string_and_reads_both_forms() {
+        let s = Schedule::parse("m2p:10, P2M:5").unwrap();
+        let json = serde_json::to_string(&s).unwrap();
+        assert_eq!(json, "\"m2p:10,p2m:5\"");
+        assert_eq!(serde_json::from_str::<Schedule>(&json).unwrap(), s);
+        // The old list form still reads.
+        let old = r#"[{"kind":"m2p","iterations":10},{"kind":"p2m","iterations":5}]"#;
+        assert_eq!(serde_json::from_str::<Schedule>(old).unwrap(), s);
+        // Inside the parameters, and a full round trip of the defaults.
+        let p: RegisterParams = serde_json::from_str(r#"{"schedule": "m2p:3,p2m:2"}"#).unwrap();
+        assert_eq!(p.schedule.to_string(), "m2p:3,p2m:2");
+        let d = RegisterParams::default();
+        let text = serde_json::to_string(&d).unwrap();
+        assert!(text.contains("\"schedule\":\"m2p:5,p2m:5,m2p:10\""), "{text}");
+        assert_eq!(serde_json::from_str::<RegisterParams>(&text).unwrap(), d);
+        // Bad strings and shapes are errors that say what was wrong.
+        let e = serde_json::from_str::<Schedule>("\"m2p:x\"").unwrap_err().to_string();
+        assert!(e.contains("m2p:x"), "{e}");
+        assert!(serde_json::from_str::<Schedule>("3").is_err());
+    }
 }

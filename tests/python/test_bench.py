@@ -325,21 +325,21 @@ def test_faust_command_on_synthetic_bodies(tmp_path: Path) -> None:
         # the template-labelled ground truth agrees with the bodies' own labels on the aggregate
         assert r["truth_l"]["trunk_limbs"] == pytest.approx(truth["trunk_limbs"], rel=0.025)
         assert r["truth_l"]["whole"] == pytest.approx(truth["whole"], rel=1e-6)
-        # regression bound (measured 6.5 % and 3.5 %: the registration still shrinks forearms, see BENCH.md)
-        assert rve(r["estimated_l"]["trunk_limbs"], r["truth_l"]["trunk_limbs"]) < 12.0
+        # regression bound (measured 0.62 % and 0.35 %)
+        assert rve(r["estimated_l"]["trunk_limbs"], r["truth_l"]["trunk_limbs"]) < 1.5
     assert (out / "report.md").read_text().count("tr_scan_0") >= 2
 
 
 # ---------------------------------------------------------------- regression guard (reduced synth run)
 
-#: Bounds of the reduced run (2 subjects x noer, l5ca), set with margin over the values measured with the
-#: first registration engine (noer trunk_limbs 3.2 %, worst segment 26.4 % (forearm); l5ca excess over the
-#: floor 14.0 % trunk_limbs (flying pixels inflate subject 1 by 25 %), worst segment 48.7 %). Far from the
-#: targets: tighten them as the registration improves.
-BOUND_TRUNK_LIMBS_NOER = 5.0
-BOUND_SEGMENT_NOER = 40.0
-BOUND_EXCESS_TRUNK_LIMBS_L5CA = 25.0
-BOUND_EXCESS_SEGMENT_L5CA = 70.0
+#: Bounds of the reduced run (2 subjects x noer, l5ca), set with margin (about 2x) over the values measured
+#: with the current engine (label-aware, articulated, surface-corrected): noer trunk_limbs 0.59 %, worst
+#: segment 1.8 % (forearm_l); l5ca excess over the floor 0.12 % trunk_limbs, worst segment 4.1 %
+#: (forearm_l). Tighten them as accuracy improves.
+BOUND_TRUNK_LIMBS_NOER = 1.2
+BOUND_SEGMENT_NOER = 4.0
+BOUND_EXCESS_TRUNK_LIMBS_L5CA = 1.0
+BOUND_EXCESS_SEGMENT_L5CA = 8.0
 
 
 @needs_register

@@ -66,19 +66,17 @@ def run_config(name: str, params: dict, template, clouds: list, verbose: bool, b
     """Registers every cloud; returns errors[condition][segment] -> list of signed % and timings."""
     import bsv
 
-    if isinstance(params.get("schedule"), str):  # "m2p:5,p2m:5" -> the serde form
-        params = dict(params)
-        params["schedule"] = [{"kind": k.strip(), "iterations": int(n)}
-                              for k, n in (part.split(":") for part in params["schedule"].split(","))]
     errs: dict[str, dict[str, list[float]]] = {}
     times: list[float] = []
     rms: list[float] = []
+    yaws: list[float] = []
     for (idx, cond, cloud, truth) in clouds:
         t0 = time.perf_counter()
         reg = bsv.register(cloud["points"], cloud["labels"], template, **params)
         wall = time.perf_counter() - t0
         times.append(reg.seconds)
         rms.append(reg.volumes["registration"].get("rms_mesh_to_points_mm", float("nan")))
+        yaws.append(reg.volumes["registration"].get("prealign", {}).get("yaw_deg", 0.0))
         variants = [(cond, reg.volumes["volumes_l"])]
         if both_labels and template.vertex_labels is not None:
             # The template's own labels on the fitted vertices (what labels="template" gives).
@@ -94,13 +92,14 @@ def run_config(name: str, params: dict, template, clouds: list, verbose: bool, b
             print(f"  [{name}] subject {idx} {cond}: trunk_limbs {row['trunk_limbs'][-1]:+.2f} %  "
                   + " ".join(f"{s[:6]}{s[-2:] if s[-2] == '_' else ''} {row[s][-1]:+.1f}" for s in SEGMENTS[:-1])
                   + f"  rms {rms[-1]:.2f} mm  reg {reg.seconds:.2f} s (wall {wall:.2f} s)", flush=True)
-    return {"errors": errs, "seconds": times, "rms": rms}
+    return {"errors": errs, "seconds": times, "rms": rms, "yaw": yaws}
 
 
 def print_table(name: str, res: dict) -> None:
     """Per condition: mean signed, mean |.|, max |.| per segment."""
     print(f"\n== {name}: registration {np.mean(res['seconds']):.3f} s mean "
-          f"(max {np.max(res['seconds']):.3f}), rms m2p {np.mean(res['rms']):.2f} mm")
+          f"(max {np.max(res['seconds']):.3f}), rms m2p {np.mean(res['rms']):.2f} mm, "
+          f"max |prealign yaw| {np.max(np.abs(res['yaw'])):.1f} deg")
     for cond, row in res["errors"].items():
         print(f"  {cond:5s} {'segment':12s} {'signed':>8s} {'abs':>7s} {'max|.|':>7s}")
         for s in SEGMENTS:

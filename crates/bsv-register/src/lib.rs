@@ -38,7 +38,7 @@ pub mod solver;
 pub use error::RegisterError;
 pub use params::{
     CorrespondenceKind, Energy, IterationLog, LabelSource, PrealignMode, RegisterParams, Schedule, Stage, Timings,
-    DEFAULT_SCHEDULE,
+    YawMode, DEFAULT_SCHEDULE,
 };
 pub use prealign::Similarity;
 
@@ -201,7 +201,8 @@ fn register_in_pool(
         return Err(RegisterError::TemplateWithoutLabels);
     }
     // Pre-alignment.
-    let sim = prealign::similarity(&template_box, &cloud_box, params);
+    let sim = prealign::prealign(&template.vertices, &template_box, &cloud.points, &cloud_box, params)
+        .map_err(RegisterError::Solver)?;
     let mut rest: Vec<[f64; 3]> = template.vertices.iter().map(|&p| sim.apply(p)).collect();
     // Articulated initialisation (labelled template and cloud).
     let mut articulation = Vec::new();

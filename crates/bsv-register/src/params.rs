@@ -172,6 +172,18 @@ pub enum PrealignMode {
     Auto,
 }
 
+/// Whether the pre-alignment also turns the template about the vertical (y) axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum YawMode {
+    /// No rotation (the paper: template and cloud share the world frame).
+    Off,
+    /// Search a yaw when the horizontal footprints of template and cloud are turned against each
+    /// other (a box at 45 degrees), and keep it only when it clearly lowers the cloud-to-template
+    /// RMS (see `prealign.rs`). A body facing +Z like its template is never turned.
+    Auto,
+}
+
 /// Where the fitted mesh takes its vertex labels from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -221,6 +233,8 @@ pub struct RegisterParams {
     pub estimate_normals_k: usize,
     /// Pre-alignment mode. Default [`PrealignMode::Auto`].
     pub prealign: PrealignMode,
+    /// Rotation search about the vertical axis in the pre-alignment. Default [`YawMode::Auto`].
+    pub prealign_yaw: YawMode,
     /// [`PrealignMode::Auto`] uses per-axis scaling when, for some axis, the ratio of the cloud's
     /// and the template's normalised box side (side / diagonal) differs from 1 by more than this.
     /// Default 0.5 (50 %): a 1.04 x 0.2 x 0.2 m box against a cube template differs by 66 %, human
@@ -279,6 +293,7 @@ impl Default for RegisterParams {
             prune_normal_angle_deg: 60.0,
             estimate_normals_k: 12,
             prealign: PrealignMode::Auto,
+            prealign_yaw: YawMode::Auto,
             auto_aspect_threshold: 0.5,
             bbox_quantile: 0.001,
             min_points: 100,

@@ -1,5 +1,6 @@
 //! Front/back clouds with lateral gaps: boxes of the paper's sizes at 45 degrees and a torso-like
-//! ellipsoid; alpha = 0 must do measurably worse.
+//! ellipsoid; an alpha sweep on the gap torso (the issue expected alpha = 0 to degrade; in this
+//! engine it does not, see `alpha_sweep_on_the_gap_torso` and the table in `params.rs`).
 
 mod common;
 use bsv_core::shapes::{ellipsoid, rotate_y, subdivided_cuboid};
@@ -79,4 +80,41 @@ fn torso_ellipsoid_with_gaps() {
     // have nothing pulling them together, and the result stays close; the numbers are printed.
     let free = gap_case("torso", &template, &truth, &RegisterParams { alpha: 0.0, ..Default::default() }, 0.0);
     assert!(free.is_finite());
+}
+
+/// The issue asked for "alpha = 0 degrades measurably on the gap case". Measured here it does not,
+/// in any data-term mode (point-to-plane default, the paper's point-to-point, with or without the
+/// p2m Lloyd pull, data weights 1 / 0.1 / 0.01, 85 % or 50 % side limits): with free affine cells
+/// the ARAP term is still an affine-invariant Laplacian smoothness term and m2p gives every vertex
+/// a target, so nothing collapses; the regularization only adds stiffness, and a stiffer fit
+/// shrinks the gap sides more. This test pins that behaviour (no collapse at alpha = 0, and the
+/// practically rigid-cell alpha = 1e8 measurably more biased than alpha = 0 in point-to-point
+/// mode) and prints the table documented in `params.rs`.
+#[test]
+fn alpha_sweep_on_the_gap_torso() {
+    let template = ellipsoid([0.15, 0.28, 0.11], 4);
+    let radii = [0.17, 0.30, 0.12];
+    let truth = ellipsoid(radii, 6);
+    let cloud = gappy_cloud(&truth, 0.0);
+    let mut p2p = Vec::new();
+    for (mode, tw) in [("point-to-plane", 0.0), ("point-to-point", 1.0)] {
+        for alpha in [0.0, 1e4, 1e6, 1e8] {
+            let params = RegisterParams { alpha, tangential_weight: tw, ..Default::default() };
+            let reg = run(&template, &cloud, &params);
+            let err = rel_pct(volume(&reg.mesh), volume(&truth));
+            let max = reg.mesh.vertices.iter().map(|&p| ellipsoid_distance(p, radii)).fold(0.0, f64::max);
+            println!(
+                "| {mode} | {alpha:.0e} | {err:+.3} % | {:.2} mm | {:.2} mm | {:.1} mm |",
+                reg.rms_mesh_to_points_mm,
+                reg.rms_points_to_mesh_mm,
+                max * 1e3
+            );
+            // No collapse at any alpha.
+            assert!(err.abs() < 2.0 && max < 0.02, "{mode} alpha {alpha:e}: {err:.3} %, max {:.1} mm", max * 1e3);
+            if tw == 1.0 {
+                p2p.push(err);
+            }
+        }
+    }
+    assert!(p2p[3].abs() > p2p[0].abs() + 0.2, "point-to-point: alpha 1e8 {:.3} % vs alpha 0 {:.3} %", p2p[3], p2p[0]);
 }

@@ -467,6 +467,7 @@ pub struct IterationLog {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
 

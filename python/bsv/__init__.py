@@ -25,8 +25,9 @@ from ._bsv import (
     VolumeError,
     WriteError,
 )
+from .errors import OutputExistsError
 from .interop import as_cloud, as_mesh, opt_labels
-from .types import SEGMENT_IDS, SEGMENT_NAMES, TRUNK_LIMBS, Mesh, PointCloud, Registration
+from .types import SEGMENT_IDS, SEGMENT_NAMES, TRUNK_LIMBS, Mesh, PointCloud, Registration, checked_labels
 
 __version__: str = _bsv.__version__
 
@@ -48,7 +49,7 @@ _LAZY_SUBMODULES = ("bodies", "frontend", "bench", "report", "cli")
 def _out_path(path: PathLike, overwrite: bool) -> str:
     p = Path(path)
     if p.exists() and not overwrite:
-        raise FileExistsError(f"{p} already exists; pass overwrite=True to replace it")
+        raise OutputExistsError(f"{p} already exists; pass overwrite=True to replace it")
     return str(p)
 
 
@@ -118,8 +119,7 @@ def volumes(
     m = as_mesh(mesh, faces)
     vl, fl = m.vertex_labels, m.face_labels
     if labels is not None:
-        lab = opt_labels(labels)
-        assert lab is not None
+        lab = checked_labels(labels, "labels")
         if len(lab) == len(m.vertices):
             vl = lab
         elif len(lab) == len(m.faces):
@@ -189,9 +189,11 @@ def register(
 
 
 def _print_iteration(it: dict[str, Any]) -> None:
+    p2m = it.get("rms_points_to_mesh_mm")
+    p2m_text = "" if p2m is None else f"  p->m {p2m:.2f} mm"
     print(
-        f"  [{it['stage']}:{it['kind']} {it['iteration']:>2}] rms m->p {it['rms_mesh_to_points_mm']:.2f} mm"
-        f"  p->m {it['rms_points_to_mesh_mm']:.2f} mm  E={it['energy']['total']:.4g}",
+        f"  [{it['stage']}:{it['kind']} {it['iteration']:>2}] m->p {it['rms_mesh_to_points_mm']:.2f} mm"
+        f"{p2m_text}  E={it['energy']['total']:.4g}",
         flush=True,
     )
 
@@ -210,9 +212,14 @@ def scan(
     colour PNGs and camera JSON into that folder, as a real capture would.
     """
     m = as_mesh(mesh)
+    if not 0 <= int(seed) < 2**64:
+        raise InputError(f"seed must be a whole number in 0 .. 2**64 - 1, got {seed}")
     img = None if images is None else str(images)
-    if img is not None and Path(img).exists() and any(Path(img).iterdir()) and not overwrite:
-        raise FileExistsError(f"{img} is not empty; pass overwrite=True to write into it")
+    if img is not None and Path(img).exists():
+        if not Path(img).is_dir():
+            raise OutputExistsError(f"{img} is a file; images= needs a folder")
+        if any(Path(img).iterdir()) and not overwrite:
+            raise OutputExistsError(f"{img} is not empty; pass overwrite=True to write into it")
     p, n, c, l = _bsv.scan(m.vertices, m.faces, opt_labels(m.vertex_labels), opt_labels(m.face_labels), condition, int(seed), img)
     return PointCloud(p, n, c, l)
 
@@ -223,6 +230,7 @@ __all__ = [
     "InputError",
     "MeshError",
     "Mesh",
+    "OutputExistsError",
     "PointCloud",
     "Registration",
     "RegistrationError",

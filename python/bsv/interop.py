@@ -6,7 +6,7 @@ from typing import Any, Optional
 
 import numpy as np
 
-from .types import FloatArray, IndexArray, LabelArray, Mesh, PointCloud
+from .types import FloatArray, IndexArray, LabelArray, Mesh, PointCloud, checked_labels
 
 
 def as_mesh(obj: Any, faces: Any = None, vertex_labels: Any = None, face_labels: Any = None) -> Mesh:
@@ -47,14 +47,11 @@ def as_cloud(obj: Any, labels: Any = None, normals: Any = None, colors: Any = No
     return PointCloud(arr, normals, colors, labels)
 
 
-def opt_labels(labels: Optional[Any]) -> Optional[LabelArray]:
-    """``labels`` as a contiguous uint8 array, or None (values are range-checked by the core)."""
+def opt_labels(labels: Optional[Any], what: str = "labels") -> Optional[LabelArray]:
+    """``labels`` as a contiguous uint8 array of segment ids 0..14, or None (InputError otherwise)."""
     if labels is None:
         return None
-    arr = np.asarray(labels)
-    if arr.size and (arr.min() < 0 or arr.max() > 14):
-        raise ValueError(f"labels must be segment ids 0..14, got values in [{arr.min()}, {arr.max()}]")
-    return np.ascontiguousarray(arr, dtype=np.uint8)
+    return checked_labels(labels, what)
 
 
 __all__ = ["as_mesh", "as_cloud", "opt_labels", "FloatArray", "IndexArray"]

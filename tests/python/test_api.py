@@ -71,7 +71,7 @@ def test_cloud_round_trip_and_no_overwrite(tmp_path: Path) -> None:
     c = bsv.read_point_cloud(p)
     np.testing.assert_array_equal(c.points, pts)
     np.testing.assert_array_equal(c.labels, lab)
-    with pytest.raises(FileExistsError):
+    with pytest.raises(bsv.OutputExistsError):
         bsv.write_point_cloud(p, pts)
     bsv.write_point_cloud(p, pts[:10], overwrite=True)
     assert len(bsv.read_point_cloud(p)) == 10
@@ -117,8 +117,15 @@ def test_bad_arrays_raise_input_errors() -> None:
         bsv.volumes(v, np.vstack([f, [[0, 1, 99]]]))
     with pytest.raises(bsv.InputError, match=r"\(N, 3\)"):
         bsv.volumes(v[:, :2], f)
-    with pytest.raises(ValueError, match="segment ids"):
+    with pytest.raises(bsv.InputError, match="segment ids"):
         bsv.volumes(v, f, labels=np.full(len(v), 20))
+    # 270 must not wrap to 14 (foot_r).
+    with pytest.raises(bsv.InputError, match="270"):
+        bsv.volumes(bsv.Mesh(v, f, np.full(len(v), 270)))
+    with pytest.raises(bsv.InputError, match=r"\(N, 3\)"):
+        bsv.register(np.zeros(30))
+    with pytest.raises(bsv.InputError, match="faces"):
+        bsv.volumes(v, f.astype(float) + 0.5)
 
 
 def test_scan_sees_the_template_front_and_back(tmp_path: Path) -> None:
@@ -141,3 +148,19 @@ def test_interop_with_duck_typed_meshes() -> None:
 
     v, f = unit_cube()
     assert math.isclose(bsv.volumes(TrimeshLike(v * 2, f))["volumes_l"]["whole"], 8000.0)
+
+
+def test_register_prints_progress(capsys: pytest.CaptureFixture[str]) -> None:
+    t = bsv.default_template()
+    c = bsv.scan(t, "noer", seed=0)
+    fit = bsv.register(c, progress=True, schedule="m2p:2,p2m:1")
+    out = capsys.readouterr().out
+    assert "m->p" in out and "p->m" in out and len(fit.log) == 3
+    assert abs(fit.volumes["volumes_l"]["trunk_limbs"] / bsv.volumes(t)["volumes_l"]["trunk_limbs"] - 1) < 0.03
+
+
+def test_exceptions_pickle() -> None:
+    import pickle
+
+    e = pickle.loads(pickle.dumps(bsv.FormatError("bad file")))
+    assert isinstance(e, bsv.BsvError) and str(e) == "bad file"

@@ -9,13 +9,29 @@
 //! points lying more than 1 cm off the true surface and 0.5 % of the others on a 100k-point L515
 //! scan, like statistical outlier removal with 8 neighbours and 1 std, at a tenth of its cost
 //! (one hash pass, no k-d tree queries).
+//!
+//! A point more than [`MAX_KEY`] voxels from the origin (or with a non-finite coordinate) cannot be
+//! keyed without overflow; it is always dropped (it is nowhere near a body).
 
 use rayon::prelude::*;
 use std::collections::HashMap;
 
+/// Largest voxel key magnitude (2^52): keys and their +-1 neighbours never overflow an `i64`, and
+/// every integer up to it is exact in an `f64`.
+pub const MAX_KEY: f64 = 4_503_599_627_370_496.0;
+
+/// The voxel key of `p`, or `None` when a coordinate is non-finite or beyond [`MAX_KEY`] voxels.
 #[inline]
-fn key(p: &[f64; 3], inv: f64) -> [i64; 3] {
-    [(p[0] * inv).floor() as i64, (p[1] * inv).floor() as i64, (p[2] * inv).floor() as i64]
+fn key(p: &[f64; 3], inv: f64) -> Option<[i64; 3]> {
+    let mut k = [0i64; 3];
+    for (ka, &x) in k.iter_mut().zip(p) {
+        let v = (x * inv).floor();
+        if !(v.abs() <= MAX_KEY) {
+            return None;
+        }
+        *ka = v as i64;
+    }
+    Some(k)
 }
 
 /// Per point: whether it is kept (see the module docs). All points are kept when `voxel` is not
@@ -25,18 +41,21 @@ pub fn sparse_points(points: &[[f64; 3]], voxel: f64, min_fraction: f64) -> Vec<
         return vec![true; points.len()];
     }
     let inv = 1.0 / voxel;
-    let keys: Vec<[i64; 3]> = points.par_iter().map(|p| key(p, inv)).collect();
+    let keys: Vec<Option<[i64; 3]>> = points.par_iter().map(|p| key(p, inv)).collect();
     let mut counts: HashMap<[i64; 3], u32> = HashMap::with_capacity(points.len() / 4);
-    for k in &keys {
+    for k in keys.iter().flatten() {
         *counts.entry(*k).or_insert(0) += 1;
     }
     let totals: Vec<u32> = keys
         .par_iter()
         .map(|k| {
+            // Unkeyable (absurdly far) points count nothing around them and are dropped below.
+            let Some(k) = k else { return 0 };
             let mut t = 0;
             for dx in -1..=1 {
                 for dy in -1..=1 {
                     for dz in -1..=1 {
+                        // |k| <= 2^52, so k + 1 cannot overflow.
                         if let Some(c) = counts.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
                             t += c;
                         }
@@ -50,7 +69,7 @@ pub fn sparse_points(points: &[[f64; 3]], voxel: f64, min_fraction: f64) -> Vec<
     let mid = sorted.len() / 2;
     let (_, &mut median, _) = sorted.select_nth_unstable(mid);
     let limit = min_fraction * median as f64;
-    totals.iter().map(|&t| t as f64 >= limit).collect()
+    totals.iter().map(|&t| t > 0 && t as f64 >= limit).collect()
 }
 
 #[cfg(test)]
@@ -75,5 +94,21 @@ mod tests {
         assert!(keep[..n_plane].iter().all(|&k| k));
         assert!(keep[n_plane..].iter().all(|&k| !k));
         assert!(sparse_points(&pts, 0.0, 0.1).iter().all(|&k| k));
+    }
+
+    #[test]
+    fn far_and_extreme_points_are_dropped_without_overflow() {
+        let mut pts: Vec<[f64; 3]> = (0..10_000).map(|i| [(i % 100) as f64 * 0.003, (i / 100) as f64 * 0.003, 0.0]).collect();
+        let n = pts.len();
+        pts.push([1e19, 0.0, 0.0]);
+        pts.push([-1e19, 0.0, 0.0]);
+        pts.push([0.0, f64::MAX, -f64::MAX]);
+        pts.push([9.2e15 * 0.008, 0.0, 0.0]); // just past i64::MAX / 1000 voxels
+        let keep = sparse_points(&pts, 0.008, 0.1);
+        assert!(keep[..n].iter().all(|&k| k));
+        assert!(keep[n..].iter().all(|&k| !k));
+        // A tiny voxel makes ordinary coordinates huge keys too.
+        let keep = sparse_points(&pts, 1e-300, 0.1);
+        assert_eq!(keep.len(), pts.len());
     }
 }

@@ -72,6 +72,27 @@ fn bad_inputs_are_typed_errors() {
 }
 
 #[test]
+fn a_far_finite_outlier_never_panics() {
+    // One point 1e19 m away (finite, beyond any i64 voxel key) in a good cloud: with the default
+    // sparse-point removal it is dropped and the fit succeeds; without it the registration still
+    // returns (a fit or a typed error), never a panic.
+    let template = icosphere(0.2, 3);
+    let mut cloud = cloud_of(&icosphere(0.2, 5), 5_000, 1);
+    cloud.points[123] = [1e19, 0.0, 0.0];
+    cloud.normals = None;
+    let reg = run(&template, &cloud, &RegisterParams::default());
+    assert_eq!(reg.outliers_removed, 1);
+    assert!(reg.mesh.vertices.iter().all(|p| p.iter().all(|x| x.abs() < 1.0)));
+    for far in [[1e19, 0.0, 0.0], [-1e300, 1e300, 0.0], [f64::MAX, 0.0, 0.0]] {
+        cloud.points[123] = far;
+        let p = RegisterParams { outlier_voxel_m: 0.0, ..Default::default() };
+        let _ = try_register(&template, &cloud, &p);
+        let p = RegisterParams { outlier_voxel_m: 1e-300, ..Default::default() };
+        let _ = try_register(&template, &cloud, &p);
+    }
+}
+
+#[test]
 fn labels_come_from_the_cloud_or_the_template() {
     let mut template = icosphere(0.2, 3);
     template.vertex_labels = Some(template.vertices.iter().map(|p| if p[1] > 0.0 { 2 } else { 9 }).collect());

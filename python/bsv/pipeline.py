@@ -4,8 +4,10 @@ process: per camera, segmentation of the colour image (MediaPipe, :mod:`bsv.fron
 virtual scanner's own label image, "oracle") -> cloud building in Rust (``bsv._bsv.build_cloud``: masked
 deprojection, statistical outlier removal, calibration, merge, head/hands/feet dropped) -> registration
 (:func:`bsv.register`) -> volumes. Writes into OUT: ``cloud.ply`` (labelled), ``fitted.ply`` (labelled
-fitted template), ``volumes.json`` (DESIGN.md "Formats" with the "registration" and "cloud" sections) and
-the one-page ``report.html`` with its PNG figures (:mod:`bsv.report`).
+fitted template), ``volumes.json`` (DESIGN.md "Formats" with the "registration" and "cloud" sections),
+the one-page ``report.html`` with its PNG figures (:mod:`bsv.report`) and, with camera segmentation,
+``segmentation/<camera>/`` (segmentation.png, mask.png, landmarks.json). Nothing is written into the
+capture folder, and nothing existing in OUT is replaced unless asked (``overwrite``).
 
 demo: a synthetic subject of :mod:`bsv.bodies` -> virtual two-camera capture images (:func:`bsv.scan`)
 -> process -> estimated against true volumes. No camera needed.
@@ -24,6 +26,7 @@ from typing import Any, Callable, Optional, Sequence, Union
 import numpy as np
 
 from . import _bsv
+from .errors import OutputExistsError
 from .frontend.errors import CalibrationFileError, CaptureError, FrontendError, SegmentationError
 from .types import SEGMENT_NAMES, TRUNK_LIMBS, Mesh, PointCloud, Registration
 
@@ -31,6 +34,10 @@ PathLike = Union[str, Path]
 
 #: Files that process writes into OUT (the figures are listed by :data:`bsv.report.FIGURES`).
 OUTPUTS = ("cloud.ply", "fitted.ply", "volumes.json", "report.html")
+#: File that demo writes into OUT besides :data:`OUTPUTS`.
+DEMO_OUTPUT = "demo.json"
+#: Sub-folder of OUT holding the camera segmentation of each camera (``segmentation/<camera>/``).
+SEGMENTATION_DIR = "segmentation"
 #: Segmentation sources: MediaPipe on the colour image, or the scanner's ground-truth label image.
 SEGMENTATIONS = ("camera", "oracle")
 #: Segments dropped from the cloud unless ``keep_extremities`` (head, hands, feet).
@@ -146,8 +153,10 @@ def _read_label_png(path: Path) -> np.ndarray:
     return np.ascontiguousarray(img.astype(np.uint8))
 
 
-def _segment(cam: str, data: dict[str, Any], folder: Path, mode: str, params: dict[str, Any]) -> tuple[np.ndarray, dict]:
-    """Per-pixel segment labels of one camera and a summary of the segmentation."""
+def _segment(cam: str, data: dict[str, Any], folder: Path, mode: str, params: dict[str, Any], seg_out: Path,
+             overwrite: bool) -> tuple[np.ndarray, dict]:
+    """Per-pixel segment labels of one camera and a summary of the segmentation; the camera segmentation
+    is saved into ``seg_out`` (in the output folder, never into the capture ``folder``)."""
     if mode == "oracle":
         labels = _read_label_png(folder / data["meta"].get("labels", "labels.png"))
         summary = {"source": "oracle", "labelled_pixels": int((labels > 0).sum())}
@@ -158,10 +167,8 @@ def _segment(cam: str, data: dict[str, Any], folder: Path, mode: str, params: di
         labels = seg.labels
         summary = {"source": "camera (MediaPipe Holistic)", "labelled_pixels": int((labels > 0).sum()),
                    "hands_found": list(seg.hands_found), "counts": seg.counts()}
-        try:
-            write_segmentation(seg, folder)
-        except (SegmentationError, OSError):
-            pass  # a read-only capture folder: the segmentation is still used, just not saved
+        write_segmentation(seg, seg_out, overwrite=overwrite)
+        summary["files"] = str(seg_out)
     if labels.shape != data["depth_m"].shape:
         raise SegmentationError(
             f"{cam}: label image {labels.shape} and depth image {data['depth_m'].shape} differ in size; the depth must "
@@ -188,14 +195,22 @@ def build_cloud(
     return PointCloud(pts, nrm, col, lab), json.loads(report)
 
 
-def _check_outputs(out: Path, overwrite: bool) -> None:
+def output_files(cameras: Sequence[str] = ("front", "back"), demo: bool = False) -> list[str]:
+    """Paths (relative to OUT) that process (and demo, with ``demo``) may write."""
+    from .frontend.segment import SEGMENTATION_FILES
     from .report import FIGURES
 
+    seg = [f"{SEGMENTATION_DIR}/{cam}/{n}" for cam in cameras for n in SEGMENTATION_FILES]
+    return [*OUTPUTS, *FIGURES, *seg, *((DEMO_OUTPUT,) if demo else ())]
+
+
+def _check_outputs(out: Path, overwrite: bool, cameras: Sequence[str] = ("front", "back"), demo: bool = False) -> None:
     if out.exists() and not out.is_dir():
-        raise FileExistsError(f"{out} exists and is not a folder; choose another output folder")
-    existing = [n for n in (*OUTPUTS, *FIGURES) if (out / n).exists()]
+        raise OutputExistsError(f"{out} exists and is not a folder; choose another output folder")
+    existing = [n for n in output_files(cameras, demo) if (out / n).exists()]
     if existing and not overwrite:
-        raise FileExistsError(f"{out} already holds {', '.join(existing)}; pass overwrite=True (--overwrite) to replace them")
+        raise OutputExistsError(
+            f"{out} already holds {', '.join(existing)}; pass overwrite=True (--overwrite) to replace them")
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -241,7 +256,7 @@ def process(
         raise SegmentationError(f"segmentation must be one of {SEGMENTATIONS}, got {segmentation!r}")
     cap = Path(capture_dir)
     out = Path(out_dir)
-    _check_outputs(out, overwrite)
+    _check_outputs(out, overwrite, cameras)
     dirs = _camera_dirs(cap, cameras)
     steps = _Steps(progress)
 
@@ -257,7 +272,8 @@ def process(
     for cam in cameras:
         d = data[cam]
         labels, summary = steps.run(f"segment_{cam}", f"segmenting the {cam} camera ({segmentation})",
-                                    lambda cam=cam, d=d: _segment(cam, d, dirs[cam], segmentation, segment_params or {}))
+                                    lambda cam=cam, d=d: _segment(cam, d, dirs[cam], segmentation, segment_params or {},
+                                                                  out / SEGMENTATION_DIR / cam, overwrite))
         seg_summary[cam] = summary
         views.append({"name": cam, "intrinsics": d["intrinsics"].to_json(), "camera_to_world": extrinsics[cam],
                       "depth": np.ascontiguousarray(d["depth_m"], dtype=np.float32), "labels": labels,
@@ -270,10 +286,6 @@ def process(
         per = ", ".join(f"{v['name']} {v['kept']} (SOR -{v['sor_removed']})" for v in cloud_report["views"])
         print(f"[bsv]   {len(cloud)} points: {per}", flush=True)
 
-    if not hasattr(_bsv, "register"):
-        from . import RegistrationError
-
-        raise RegistrationError("this build of bsv._bsv has no registration engine; rebuild the extension (maturin develop)")
     reg: Registration = steps.run(
         "register", "registering the template (ARAP)",
         lambda: bsv_register(cloud, template=template, progress=False, density=density, **register_params))
@@ -341,7 +353,7 @@ def demo(
     from . import bodies, scan
 
     out = Path(out_dir)
-    _check_outputs(out, overwrite)
+    _check_outputs(out, overwrite, process_params.get("cameras", ("front", "back")), demo=True)
     cap = out / "capture"
     steps = _Steps(progress)
     subj = steps.run("subject", f"synthetic subject {subject} (cohort seed {seed})", lambda: bodies.subject(subject, seed))
@@ -409,6 +421,9 @@ def main_process(argv: Optional[Sequence[str]] = None) -> int:
                       template=read_mesh(a.template) if a.template else None, progress=not a.quiet,
                       overwrite=a.overwrite, keep_extremities=a.keep_extremities, sor=a.sor, sor_k=a.sor_k,
                       sor_std_ratio=a.sor_std, **_register_args(a.param))
+    except OutputExistsError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     except FrontendError as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
@@ -437,6 +452,9 @@ def main_demo(argv: Optional[Sequence[str]] = None) -> int:
     try:
         res = demo(a.out, seed=a.seed, subject=a.subject, condition=a.condition, segmentation=a.segmentation,
                    progress=not a.quiet, overwrite=a.overwrite, **_register_args(a.param))
+    except OutputExistsError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     except FrontendError as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
@@ -445,5 +463,5 @@ def main_demo(argv: Optional[Sequence[str]] = None) -> int:
     return 0
 
 
-__all__ = ["OUTPUTS", "ProcessResult", "build_cloud", "compare", "comparison_table", "demo", "main_demo",
+__all__ = ["DEMO_OUTPUT", "OUTPUTS", "SEGMENTATION_DIR", "ProcessResult", "output_files", "build_cloud", "compare", "comparison_table", "demo", "main_demo",
            "main_process", "process"]

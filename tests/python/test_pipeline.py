@@ -16,8 +16,6 @@ from bsv.frontend.capture import read_capture
 from bsv.frontend.errors import CalibrationFileError, CaptureError, MarkerNotFoundError, PersonNotFoundError, SegmentationError
 from bsv.types import Registration
 
-HAS_REGISTER = hasattr(bsv._bsv, "register")
-needs_register = pytest.mark.skipif(not HAS_REGISTER, reason="the registration engine is not in this build of bsv._bsv")
 
 
 def _has_mediapipe() -> bool:
@@ -161,6 +159,28 @@ def test_existing_outputs_are_not_overwritten(capture, tmp_path):
     assert (out / "volumes.json").read_text() == "{}"
 
 
+def test_every_output_blocks_a_rerun(capture, tmp_path):
+    """demo.json and the saved segmentation count as outputs too; the refusal is a typed BSV error."""
+    from bsv.errors import OutputExistsError
+
+    cap, _ = capture
+    assert "demo.json" in pipeline.output_files(demo=True) and "segmentation/back/mask.png" in pipeline.output_files()
+    out = tmp_path / "demo_only"
+    out.mkdir()
+    (out / "demo.json").write_text("{}")
+    with pytest.raises(OutputExistsError, match="demo.json"):
+        pipeline.demo(out, segmentation="oracle", progress=False)
+    seg = tmp_path / "seg_only"
+    (seg / "segmentation" / "front").mkdir(parents=True)
+    (seg / "segmentation" / "front" / "landmarks.json").write_text("{}")
+    with pytest.raises(OutputExistsError, match="landmarks.json") as e:
+        pipeline.process(cap, cap / "calibration.json", seg, segmentation="oracle", progress=False)
+    assert isinstance(e.value, bsv.BsvError) and isinstance(e.value, FileExistsError)
+    assert pipeline.main_process([str(cap), "-c", str(cap / "calibration.json"), "-o", str(seg),
+                                  "--segmentation", "oracle", "--quiet"]) == 2
+    assert (seg / "segmentation" / "front" / "landmarks.json").read_text() == "{}"
+
+
 # ----------------------------------------------------------------------------------------------------
 # The report on a known labelled mesh (the subject's own body as the "fitted" mesh)
 
@@ -200,12 +220,10 @@ def _rve(res: pipeline.ProcessResult, name: str) -> float:
     return abs(row["error_pct"])
 
 
-@needs_register
 def test_demo_oracle_trunk_limbs_within_3_percent(demo_oracle):
     assert _rve(demo_oracle, "trunk_limbs") < 3.0, pipeline.comparison_table(demo_oracle.comparison)
 
 
-@needs_register
 def test_demo_writes_every_output(demo_oracle):
     from bsv.report import FIGURES
 
@@ -223,7 +241,6 @@ def test_demo_writes_every_output(demo_oracle):
         pipeline.demo(out, segmentation="oracle", progress=False)
 
 
-@needs_register
 @pytest.mark.skipif(not _has_mediapipe(), reason="mediapipe is not installed")
 def test_demo_camera_segmentation_trunk_limbs_within_3_percent(tmp_path, capsys):
     assert pipeline.main_demo(["-o", str(tmp_path / "demo"), "--quiet"]) == 0
@@ -232,3 +249,8 @@ def test_demo_camera_segmentation_trunk_limbs_within_3_percent(tmp_path, capsys)
     doc = json.loads((tmp_path / "demo" / "demo.json").read_text())
     row = next(r for r in doc["comparison"] if r["segment"] == "trunk_limbs")
     assert abs(row["error_pct"]) < 3.0, table
+    # the segmentation is saved in OUT, never into the (user's) capture folder
+    for cam in ("front", "back"):
+        for f in ("segmentation.png", "mask.png", "landmarks.json"):
+            assert (tmp_path / "demo" / "segmentation" / cam / f).is_file(), (cam, f)
+            assert not (tmp_path / "demo" / "capture" / cam / f).exists(), (cam, f)

@@ -167,3 +167,16 @@ def test_coarse_hands_when_the_hand_model_misses(scans):
               f"pose only {coarse['iou']['hand_l']:.2f}/{coarse['iou']['hand_r']:.2f}")
         assert coarse["accuracy"] > full["accuracy"] - 0.02
         assert min(coarse["iou"]["hand_l"], coarse["iou"]["hand_r"]) > 0.7
+
+
+def test_write_segmentation_refuses_to_overwrite(scans, tmp_path):
+    from bsv.errors import OutputExistsError
+
+    folder, s, _ = scans[("default", "front")]
+    before = (folder / "front" / "landmarks.json").read_text()
+    with pytest.raises(OutputExistsError, match="overwrite"):
+        seg.write_segmentation(s, folder / "front")
+    assert (folder / "front" / "landmarks.json").read_text() == before
+    seg.write_segmentation(s, folder / "front", overwrite=True)
+    seg.write_segmentation(s, tmp_path / "new" / "front")  # a new folder is created
+    assert (tmp_path / "new" / "front" / "segmentation.png").is_file()

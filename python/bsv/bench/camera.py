@@ -7,6 +7,9 @@ labelled either by the scanner's own label image (``oracle``) or by the MediaPip
 exactly as ``bsv process`` builds it (:func:`bsv.pipeline.build_cloud`: masked deprojection with the
 calibrated extrinsics, per-camera statistical outlier removal k = 600 / std ratio 0.05, merge, head,
 hands and feet dropped).
+
+Like ``bsv process``, it only reads the capture folder: the camera segmentation is used in memory and
+nothing is written into the capture (the benchmark's virtual captures live in a temporary folder).
 """
 
 from __future__ import annotations

@@ -563,11 +563,13 @@ def segment_image(colour_rgb: np.ndarray, view: str = "front", depth: Optional[n
 
 
 def segment_capture(folder: PathLike, cameras: Sequence[str] = ("front", "back"), use_depth: bool = True,
-                    write: bool = True, **params: Any) -> dict[str, Segmentation]:
+                    write: bool = True, out_dir: Optional[PathLike] = None, overwrite: bool = False,
+                    **params: Any) -> dict[str, Segmentation]:
     """Segments every camera folder of a capture (or a virtual scan): ``FOLDER/<camera>/`` with the colour
     and depth PNGs and camera.json (see :func:`bsv.frontend.capture.read_capture`). The camera name is the
     view. With ``write``, saves ``segmentation.png`` (uint8 segment ids), ``mask.png`` and
-    ``landmarks.json`` into each camera folder."""
+    ``landmarks.json`` into ``OUT_DIR/<camera>/`` (default: each camera folder of the capture); existing
+    files are refused (:class:`bsv.errors.OutputExistsError`) unless ``overwrite``."""
     from .capture import read_capture
 
     root = Path(folder)
@@ -578,16 +580,30 @@ def segment_capture(folder: PathLike, cameras: Sequence[str] = ("front", "back")
         data = read_capture(root / cam)
         seg = segment_image(data["colour"], view=cam, depth=data["depth_m"] if use_depth else None, **params)
         if write:
-            write_segmentation(seg, root / cam)
+            write_segmentation(seg, (Path(out_dir) if out_dir is not None else root) / cam, overwrite=overwrite)
         out[cam] = seg
     return out
 
 
-def write_segmentation(seg: Segmentation, folder: PathLike) -> None:
-    """Writes ``segmentation.png`` (uint8 ids), ``mask.png`` (0/255) and ``landmarks.json`` into ``folder``."""
+#: Files :func:`write_segmentation` writes into its folder.
+SEGMENTATION_FILES = ("segmentation.png", "mask.png", "landmarks.json")
+
+
+def write_segmentation(seg: Segmentation, folder: PathLike, overwrite: bool = False) -> None:
+    """Writes ``segmentation.png`` (uint8 ids), ``mask.png`` (0/255) and ``landmarks.json`` into ``folder``
+    (created if needed); refuses (:class:`bsv.errors.OutputExistsError`) if any exists, unless ``overwrite``."""
     import cv2
 
+    from ..errors import OutputExistsError
+
     d = Path(folder)
+    existing = [n for n in SEGMENTATION_FILES if (d / n).exists()]
+    if existing and not overwrite:
+        raise OutputExistsError(f"{d} already holds {', '.join(existing)}; pass overwrite=True to replace them")
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise SegmentationError(f"cannot create the segmentation folder {d} ({exc}); choose a writable folder") from exc
     ok = cv2.imwrite(str(d / "segmentation.png"), seg.labels) and cv2.imwrite(str(d / "mask.png"),
                                                                                seg.mask.astype(np.uint8) * 255)
     if not ok:
@@ -624,5 +640,5 @@ def label_accuracy(pred: np.ndarray, truth: np.ndarray) -> dict[str, Any]:
 __all__ = [
     "SEGMENT_IDS", "SEGMENT_NAMES", "POSE_NAMES", "HAND_NAMES", "LANDMARK_NAMES", "REQUIRED_LANDMARKS",
     "SegmentParams", "DEFAULT_PARAMS", "Segmentation", "run_holistic", "label_pixels", "refine_mask_with_depth", "segment_image",
-    "segment_capture", "write_segmentation", "label_accuracy",
+    "segment_capture", "write_segmentation", "SEGMENTATION_FILES", "label_accuracy",
 ]

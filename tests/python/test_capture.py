@@ -118,6 +118,27 @@ def test_replay_named_files_and_short_recordings(recorded, tmp_path):
         cap.capture(tmp_path, config=CONFIG, from_recording={"front": tmp_path / "nope.db3"})
 
 
+def test_replay_and_recording_do_not_overwrite(recorded, tmp_path):
+    from bsv.errors import OutputExistsError
+
+    rec = recorded / "front" / "recording.db3"
+    out = tmp_path / "out"
+    (out / "front").mkdir(parents=True)
+    (out / "front" / "camera.json").write_text("{}")
+    with pytest.raises(OutputExistsError, match="camera.json"):
+        cap.capture(out, config=CONFIG, from_recording={"front": rec})
+    assert (out / "front" / "camera.json").read_text() == "{}" and not (out / "front" / "depth.png").exists()
+    cap.capture(out, config=CONFIG, from_recording={"front": rec}, overwrite=True)
+    assert json.loads((out / "front" / "camera.json").read_text())["frames"] == 30
+    size = rec.stat().st_size
+    d, c = scene_frames(0, 50)
+    with pytest.raises(OutputExistsError, match="overwrite"):
+        write_recording(rec, d[:2], c[:2], D_INTR, C_INTR)
+    assert rec.stat().st_size == size
+    other = write_recording(tmp_path / "r.db3", d[:2], c[:2], D_INTR, C_INTR)
+    write_recording(other, d[:3], c[:3], D_INTR, C_INTR, overwrite=True)
+
+
 def test_no_camera_is_a_clear_error(tmp_path):
     if rs.context().query_devices().size() > 0:
         pytest.skip("a RealSense camera is connected")

@@ -27,6 +27,7 @@ from typing import Any, Mapping, Optional, Union
 
 import numpy as np
 
+from ..errors import OutputExistsError
 from .errors import CaptureError, NoCameraError, RecordingError
 from .intrinsics import Intrinsics
 
@@ -312,6 +313,10 @@ class _Live:
             pass
 
 
+#: Files a capture writes into each ``OUT/<camera>/`` (besides the live recording).
+CAPTURE_FILES = ("color.png", "depth.png", "camera.json")
+
+
 def _reduce(frames: _Frames, config: CaptureConfig, folder: Path) -> CameraCapture:
     """Settling skip, acquisition window, subsampling, temporal median, alignment, files."""
     import cv2
@@ -358,7 +363,11 @@ def capture(
 
     ``from_recording=True`` replays ``out_dir/<camera>/recording.db3`` (or ``.bag``) for the cameras of
     ``serials`` (default front and back); a mapping {camera: file} replays those files. Replays run through
-    the same code, as fast as possible, without recording again."""
+    the same code, as fast as possible, without recording again.
+
+    Nothing existing is replaced unless ``overwrite``: a live capture refuses a non-empty camera folder, a
+    replay refuses a camera folder that already holds color.png, depth.png or camera.json
+    (:class:`bsv.errors.OutputExistsError`)."""
     rs = import_realsense()
     out = Path(out_dir)
     replay = from_recording is not False
@@ -389,8 +398,13 @@ def capture(
         plan = {k: (s, out / k / "recording.db3") for k, s in serials.items()}
     for k in plan:
         folder = out / k
-        if not replay and folder.exists() and any(folder.iterdir()) and not overwrite:
-            raise FileExistsError(f"{folder} is not empty; pass overwrite=True to replace the capture")
+        if not overwrite:
+            if not replay and folder.exists() and any(folder.iterdir()):
+                raise OutputExistsError(f"{folder} is not empty; pass overwrite=True (--overwrite) to replace the capture")
+            existing = [n for n in CAPTURE_FILES if (folder / n).exists()]
+            if replay and existing:
+                raise OutputExistsError(f"{folder} already holds {', '.join(existing)} (a reduced capture); pass "
+                                        "overwrite=True (--overwrite) to replace them from the recording")
         folder.mkdir(parents=True, exist_ok=True)
         if not replay:
             rec = folder / "recording.db3"

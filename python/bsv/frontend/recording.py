@@ -10,6 +10,7 @@ from typing import Optional, Sequence, Union
 
 import numpy as np
 
+from ..errors import OutputExistsError
 from .errors import RecordingError
 from .intrinsics import Intrinsics
 
@@ -37,10 +38,12 @@ def write_recording(
     serial: str = "000000000000",
     name: str = "BSV software camera",
     depth_to_colour: Optional[tuple[np.ndarray, np.ndarray]] = None,
+    overwrite: bool = False,
 ) -> Path:
     """Records synthetic frames as a RealSense recording: ``depth`` uint16 (H x W, device units of
     ``depth_scale`` metres), ``colour`` uint8 RGB (H x W x 3), one pair per frame at ``fps``; the
-    depth-to-colour extrinsics (rotation 3 x 3, translation metres) default to identity."""
+    depth-to-colour extrinsics (rotation 3 x 3, translation metres) default to identity. An existing file
+    is refused (:class:`bsv.errors.OutputExistsError`) unless ``overwrite``."""
     import pyrealsense2 as rs
 
     p = Path(path)
@@ -54,6 +57,8 @@ def write_recording(
     for c in colour:
         if c.dtype != np.uint8 or c.shape != (colour_intrinsics.height, colour_intrinsics.width, 3):
             raise RecordingError(f"{p}: colour frames must be uint8 {colour_intrinsics.height} x {colour_intrinsics.width} x 3")
+    if p.exists() and not overwrite:
+        raise OutputExistsError(f"{p} already exists; pass overwrite=True to replace the recording")
     p.parent.mkdir(parents=True, exist_ok=True)
     if p.exists():
         p.unlink()

@@ -21,8 +21,6 @@ from bsv.bench.reference import PAPER, P2PV_BUFF
 from bsv.bench.tables import (CSV_COLUMNS, bias_table, p2pv_table, paper_table, read_csv, rows, summarise,
                               target_check, write_csv, write_json)
 
-HAS_REGISTER = hasattr(bsv._bsv, "register")
-needs_register = pytest.mark.skipif(not HAS_REGISTER, reason="bsv._bsv.register not built yet")
 
 
 # ---------------------------------------------------------------- metric and tables
@@ -278,6 +276,30 @@ def test_bad_options_are_usage_errors(tmp_path: Path) -> None:
     assert bench_main(["faust", "--root", str(tmp_path), "--out", str(tmp_path / "o"), "--quiet"]) == 2
 
 
+def test_existing_outputs_are_refused_without_overwrite(tmp_path: Path, capsys) -> None:
+    from bsv.bench.output import check_outputs, write_outputs
+    from bsv.errors import OutputExistsError
+
+    (tmp_path / "report.md").write_text("mine")
+    for cmd in (["synth", "--n", "1"], ["boxes", "--seeds", "1"], ["faust", "--root", str(tmp_path)]):
+        assert bench_main([*cmd, "--out", str(tmp_path), "--quiet"]) == 2
+        err = capsys.readouterr().err
+        assert "report.md" in err and "--overwrite" in err, err
+    assert (tmp_path / "report.md").read_text() == "mine"
+    (tmp_path / "report.md").unlink()
+    (tmp_path / "trunk_limbs_hist_bsv.png").write_bytes(b"png")
+    with pytest.raises(OutputExistsError, match="trunk_limbs_hist_bsv.png") as e:
+        write_outputs(tmp_path, "t", {}, [], _runs(), 1.0)
+    assert isinstance(e.value, bsv.BsvError) and isinstance(e.value, FileExistsError)
+    assert (tmp_path / "trunk_limbs_hist_bsv.png").read_bytes() == b"png" and not (tmp_path / "results.json").exists()
+    write_outputs(tmp_path, "t", {}, [], _runs(), 1.0, overwrite=True)
+    assert (tmp_path / "results.json").is_file() and (tmp_path / "trunk_limbs_hist_bsv.png").stat().st_size > 100
+    check_outputs(tmp_path / "new")                                 # a new folder is fine
+    # --overwrite passes the check (the faust root has no scans: a usage error after the check)
+    assert bench_main(["faust", "--root", str(tmp_path / "none"), "--out", str(tmp_path), "--overwrite", "--quiet"]) == 2
+    assert "MPI-FAUST" in capsys.readouterr().err
+
+
 # ---------------------------------------------------------------- FAUST
 
 def _faust_folder(root: Path, poses: dict[int, bsv.Mesh]) -> None:
@@ -308,7 +330,6 @@ def test_faust_loader_and_scan_choice(tmp_path: Path, body: bsv.Mesh) -> None:
         list_scans(tmp_path / "training")
 
 
-@needs_register
 @pytest.mark.slow
 def test_faust_command_on_synthetic_bodies(tmp_path: Path) -> None:
     from bsv.bodies import subject
@@ -342,7 +363,6 @@ BOUND_EXCESS_TRUNK_LIMBS_L5CA = 1.0
 BOUND_EXCESS_SEGMENT_L5CA = 8.0
 
 
-@needs_register
 @pytest.mark.slow
 def test_reduced_synth_run_regression_guard(tmp_path: Path) -> None:
     code = bench_main(["synth", "--n", "2", "--conditions", "noer,l5ca", "--out", str(tmp_path), "--quiet"])

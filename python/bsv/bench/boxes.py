@@ -143,14 +143,17 @@ def measure_box(box: Box, condition: str, seed: int, template: Mesh, methods: It
 
 def run_boxes(out: str | Path, seeds: int = 3, conditions: Sequence[str] = ("noer", "l5ca"),
               methods: Sequence[str] = ("bsv",), params: Optional[dict[str, Any]] = None,
-              progress: bool = True) -> tuple[list[Run], dict]:
-    """Both boxes x conditions x seeds; writes results.json, results.csv and report.md into ``out``."""
+              progress: bool = True, overwrite: bool = False) -> tuple[list[Run], dict]:
+    """Both boxes x conditions x seeds; writes results.json, results.csv and report.md into ``out``
+    (existing outputs are refused before any work, :class:`bsv.errors.OutputExistsError`, unless ``overwrite``)."""
     from tqdm import tqdm
 
+    from .output import check_outputs
     from .tables import rows, summarise, write_csv, write_json
 
     if seeds < 1:
         raise BenchError(f"--seeds {seeds}: need at least one")
+    check_outputs(out, overwrite)
     template = load_cube_template()
     t0 = time.perf_counter()
     runs: list[Run] = []
@@ -170,6 +173,7 @@ def run_boxes(out: str | Path, seeds: int = 3, conditions: Sequence[str] = ("noe
         row["segment"] = row["subject"].rsplit("_s", 1)[0]
     summary = summarise(table)
     d = Path(out)
+    check_outputs(d, overwrite)
     d.mkdir(parents=True, exist_ok=True)
     write_csv(d / "results.csv", table)
     write_json(d / "results.json", {"benchmark": "boxes", "wall_seconds": wall,

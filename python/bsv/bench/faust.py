@@ -171,17 +171,19 @@ def place(reg: Mesh, scan: Mesh, facing: str = "+z") -> tuple[Mesh, Mesh]:
 def run_faust(root: str | Path, out: str | Path, scans: Optional[Sequence[int]] = None,
               conditions: Sequence[str] = CONDITIONS, seed: int = 0, methods: Sequence[str] = ("bsv",),
               params: Optional[dict[str, Any]] = None, progress: bool = True, facing: str = "+z",
-              template: str = "default") -> tuple[list[Run], dict]:
-    """The FAUST benchmark; writes the same outputs as ``bench synth`` into ``out``."""
+              template: str = "default", overwrite: bool = False) -> tuple[list[Run], dict]:
+    """The FAUST benchmark; writes the same outputs as ``bench synth`` into ``out`` (existing outputs are
+    refused before any work, :class:`bsv.errors.OutputExistsError`, unless ``overwrite``)."""
     from tqdm import tqdm
 
     from .. import read_mesh, volumes
     from .common import load_template
-    from .output import write_outputs
+    from .output import check_outputs, write_outputs
     from .synth import measure_condition
 
     if facing not in ("+z", "-z"):
         raise BenchError(f"--facing {facing}: use +z or -z")
+    check_outputs(out, overwrite)
     items = choose_scans(list_scans(root), scans)
     tmpl = load_template(template)
     t0 = time.perf_counter()
@@ -225,5 +227,5 @@ def run_faust(root: str | Path, out: str | Path, scans: Optional[Sequence[int]] 
               "template": template}
     notes = ["Ground truth: FAUST registration meshes labelled by registering the 14-segment template to "
              "them (see bsv/bench/faust.py); the virtual rig scans the raw scans."]
-    summary = write_outputs(out, "BSV FAUST benchmark", config, infos, runs, wall, notes)
+    summary = write_outputs(out, "BSV FAUST benchmark", config, infos, runs, wall, notes, overwrite=overwrite)
     return runs, summary

@@ -7,6 +7,7 @@ import json
 import sys
 from typing import Any, Optional, Sequence
 
+from ..errors import OutputExistsError
 from .common import BenchError
 from .reference import CONDITIONS
 
@@ -44,7 +45,10 @@ def parser() -> argparse.ArgumentParser:
     sub = ap.add_subparsers(dest="command", required=True)
 
     def common(p: argparse.ArgumentParser, out: str) -> None:
-        p.add_argument("--out", default=out, help=f"output folder (default {out}); files in it are replaced")
+        p.add_argument("--out", default=out, help=f"output folder (default {out}); existing outputs in it are "
+                       "refused unless --overwrite")
+        p.add_argument("--overwrite", action="store_true",
+                       help="replace results.json, results.csv, report.md and figures already in --out")
         p.add_argument("--peer", choices=["trimesh"], help="also run trimesh.registration.nricp_amberg (pip install 'bsv[peer]')")
         p.add_argument("--param", action="append", type=_param, default=[], metavar="KEY=VALUE",
                        help="registration parameter passed to bsv.register (repeatable), e.g. --param alpha=1e6")
@@ -78,11 +82,15 @@ def parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    """Runs ``bsv bench ...``; returns the process exit code (0 ok, 1 some run failed, 2 bad usage)."""
+    """Runs ``bsv bench ...``; returns the process exit code (0 ok, 1 some run failed, 2 bad usage or
+    outputs already in --out without --overwrite)."""
     args = parser().parse_args(list(sys.argv[1:] if argv is None else argv))
     params = dict(args.param)
     methods = ("bsv",) + ((args.peer,) if args.peer else ())
     try:
+        from .output import check_outputs
+
+        check_outputs(args.out, args.overwrite)  # before any work: a run can take an hour
         if args.command == "synth":
             from .output import write_outputs
             from .synth import SynthConfig, run_synth
@@ -95,17 +103,22 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             config = {"n": cfg.n, "seed": cfg.seed, "conditions": ",".join(cfg.conditions),
                       "segmentation": cfg.segmentation, "cloud": cfg.cloud, "template": cfg.template, "methods": ",".join(methods),
                       "params": params, "local_modifiers": cfg.local, "jobs": args.jobs}
-            summary = write_outputs(args.out, "BSV synthetic benchmark", config, infos, runs, wall)
+            summary = write_outputs(args.out, "BSV synthetic benchmark", config, infos, runs, wall,
+                                    overwrite=args.overwrite)
         elif args.command == "boxes":
             from .boxes import run_boxes
 
             runs, summary = run_boxes(args.out, seeds=args.seeds, conditions=args.conditions, methods=methods,
-                                      params=params, progress=not args.quiet)
+                                      params=params, progress=not args.quiet, overwrite=args.overwrite)
         else:
             from .faust import run_faust
 
             runs, summary = run_faust(args.root, args.out, scans=args.scans, conditions=args.conditions,
-                                      seed=args.seed, methods=methods, params=params, progress=not args.quiet)
+                                      seed=args.seed, methods=methods, params=params, progress=not args.quiet,
+                                      overwrite=args.overwrite)
+    except OutputExistsError as exc:
+        print(f"bsv bench {args.command}: {exc}", file=sys.stderr)
+        return 2
     except BenchError as exc:
         print(f"bsv bench {args.command}: {exc}", file=sys.stderr)
         return 2

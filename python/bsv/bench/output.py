@@ -7,15 +7,48 @@ import time
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
+from ..errors import OutputExistsError
 from .common import Run
 from .figures import rve_bars, trunk_limbs_histogram
 from .tables import (bias_table, p2pv_table, paper_table, rows, summarise, target_check, targets_md,
                      timing_table, write_csv, write_json)
 
 
+#: Files every benchmark writes into its output folder (besides the figures, :data:`FIGURE_PATTERNS`).
+OUTPUT_FILES = ("results.json", "results.csv", "report.md")
+#: Glob patterns of the figures a benchmark writes.
+FIGURE_PATTERNS = ("rve_per_segment.png", "trunk_limbs_hist_*.png")
+
+
+def existing_outputs(out: str | Path) -> list[str]:
+    """Names of benchmark outputs (tables, report, figures) already in ``out``."""
+    d = Path(out)
+    if not d.is_dir():
+        return []
+    names = [n for n in OUTPUT_FILES if (d / n).exists()]
+    for pat in FIGURE_PATTERNS:
+        names += sorted(p.name for p in d.glob(pat))
+    return names
+
+
+def check_outputs(out: str | Path, overwrite: bool = False) -> None:
+    """Refuses (:class:`bsv.errors.OutputExistsError`) an output folder that already holds benchmark
+    outputs, unless ``overwrite``; also refuses a file in place of the folder."""
+    d = Path(out)
+    if d.exists() and not d.is_dir():
+        raise OutputExistsError(f"{d} exists and is not a folder; choose another --out folder")
+    found = existing_outputs(d)
+    if found and not overwrite:
+        raise OutputExistsError(f"{d} already holds {', '.join(found)}; pass --overwrite (overwrite=True) to "
+                                "replace them, or choose another --out folder")
+
+
 def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos: Sequence[Mapping[str, Any]],
-                  runs: Sequence[Run], wall_seconds: float, notes: Sequence[str] = ()) -> dict[str, Any]:
-    """Writes every output file into ``out`` (created) and returns the summary."""
+                  runs: Sequence[Run], wall_seconds: float, notes: Sequence[str] = (),
+                  overwrite: bool = False) -> dict[str, Any]:
+    """Writes every output file into ``out`` (created) and returns the summary; existing outputs are
+    refused (:func:`check_outputs`) unless ``overwrite``."""
+    check_outputs(out, overwrite)
     d = Path(out)
     d.mkdir(parents=True, exist_ok=True)
     table = rows(runs)

@@ -1,10 +1,8 @@
 //! `bsv-cli register`: fit the template to a cloud, write the fitted mesh, report volumes.
 
 use crate::output::{check_writable, write_json, CliError};
-use bsv_core::clean::drop_segments;
 use bsv_core::io;
 use bsv_core::template::{template, TemplateKind};
-use bsv_core::EXTREMITIES;
 use bsv_register::{register, IterationLog, LabelSource, PrealignMode, RegisterParams, Schedule};
 use bsv_volume::{report_with, IslandOptions, SegmentOptions};
 use std::path::PathBuf;
@@ -61,7 +59,12 @@ pub struct Args {
 }
 
 fn params_from(a: &Args, cloud_labelled: bool) -> Result<RegisterParams, CliError> {
-    let mut p = RegisterParams { schedule: a.schedule.parse::<Schedule>()?, threads: a.threads, ..Default::default() };
+    let mut p = RegisterParams {
+        schedule: a.schedule.parse::<Schedule>()?,
+        threads: a.threads,
+        drop_extremities: !a.keep_extremities,
+        ..Default::default()
+    };
     if let Some(alpha) = a.alpha {
         p.alpha = alpha;
     }
@@ -108,12 +111,6 @@ pub fn run(a: Args) -> Result<(), CliError> {
     if a.units == "mm" {
         cloud.points.iter_mut().for_each(|p| *p = p.map(|v| v / 1000.0));
     }
-    if !a.keep_extremities {
-        let dropped = drop_segments(&mut cloud, &EXTREMITIES);
-        if dropped > 0 {
-            println!("dropped {dropped} head/hand/foot points (labels 1, 7, 8, 13, 14); --keep-extremities keeps them");
-        }
-    }
     let labelled = cloud.labels.as_ref().is_some_and(|l| l.iter().any(|&v| v != 0));
     if !labelled {
         println!("the cloud has no segment labels: volumes come from the template's labels");
@@ -142,6 +139,12 @@ pub fn run(a: Args) -> Result<(), CliError> {
         }
     })
     .map_err(|e| format!("{}: {e}", a.cloud.display()))?;
+    if reg.extremities_dropped > 0 {
+        println!(
+            "dropped {} head/hand/foot points (labels 1, 7, 8, 13, 14); --keep-extremities keeps them",
+            reg.extremities_dropped
+        );
+    }
     let iter_secs: f64 = reg.log.iter().map(|l| l.timings.correspond + l.timings.local + l.timings.solve).sum();
     println!(
         "done in {:.3} s (setup {:.0} ms, {} iterations, {:.1} ms/iteration): RMS mesh->points {:.2} mm, points->mesh {:.2} mm",

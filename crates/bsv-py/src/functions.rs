@@ -137,7 +137,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 }
 
 /// Registers a template onto a cloud: `(fitted vertices, vertex labels, result JSON {"summary", "log"})`.
-/// Head/hand/foot points are dropped first (as `bsv-cli register`). The GIL is released while the
+/// Head/hand/foot points are dropped by the library unless `params_json` sets
+/// `"drop_extremities": false` (the count is `summary["extremities_dropped"]`). The GIL is released while the
 /// solver runs; `progress` (if given) receives each iteration's log as JSON.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
@@ -155,9 +156,8 @@ fn register_template<'py>(
     progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let tmpl = mesh_from(template_vertices, template_faces, template_vertex_labels, template_face_labels)?;
-    let mut cloud = cloud_from(points, normals, None, labels)?;
+    let cloud = cloud_from(points, normals, None, labels)?;
     let params: bsv_register::RegisterParams = serde_json::from_str(params_json).map_err(input_err)?;
-    bsv_core::clean::drop_segments(&mut cloud, &bsv_core::EXTREMITIES);
     let callback = progress.map(|p| p.unbind());
     let mut py_error: Option<PyErr> = None;
     let reg = py

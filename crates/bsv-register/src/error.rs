@@ -11,6 +11,13 @@ pub enum RegisterError {
         /// Minimum number of points a registration needs.
         min: usize,
     },
+    /// Every point of the (labelled) cloud is a head, hand or foot point, dropped by
+    /// `drop_extremities`.
+    #[error("all {n} cloud points are labelled head/hand/foot and were dropped (drop_extremities): check the cloud's labels, or keep them (registration parameter drop_extremities = false; Python: bsv.register(..., drop_extremities=False); bsv-cli: --keep-extremities)")]
+    OnlyExtremities {
+        /// Points in the cloud before dropping.
+        n: usize,
+    },
     /// The point cloud holds too few points to register anything.
     #[error("point cloud has only {n} points: a registration needs at least {min}; check the capture or the cleaning step")]
     TooFewPoints {

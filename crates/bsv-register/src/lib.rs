@@ -1,6 +1,7 @@
 //! BSV registration: warps a template mesh onto a (front + back, gappy) point cloud.
 //!
-//! Pipeline of [`register`]: input checks, sparse-point (flying pixel) removal ([`outliers`]), the
+//! Pipeline of [`register`]: input checks, head/hand/foot removal
+//! ([`RegisterParams::drop_extremities`]), sparse-point (flying pixel) removal ([`outliers`]), the
 //! similarity pre-alignment ([`prealign`]), the articulated initialisation of the limbs when the
 //! template and the cloud are labelled ([`articulate`]; the articulated template is the rest
 //! shape), the cotangent weights ([`cotan`]), the symbolic Cholesky analysis of the global system
@@ -70,6 +71,8 @@ pub struct Registration {
     pub rms_points_to_mesh_mm: f64,
     /// Where the vertex labels came from (`None` when the mesh has no labels).
     pub labels_from: Option<LabelSource>,
+    /// Head/hand/foot cloud points dropped before the fit ([`RegisterParams::drop_extremities`]).
+    pub extremities_dropped: usize,
     /// Cloud points dropped as sparse outliers (see [`outliers`]).
     pub outliers_removed: usize,
     /// The limbs moved by the articulated initialisation (empty when it did not run).
@@ -181,6 +184,29 @@ fn register_in_pool(
     let start = Instant::now();
     // Checks.
     let template_box = prealign::check_template(template)?;
+    // Head/hand/foot points (the paper drops them: poorly captured, not measured).
+    let without_extremities;
+    let mut extremities_dropped = 0;
+    let is_extremity = |l: &u8| bsv_core::EXTREMITIES.iter().any(|s| s.id() == *l);
+    let cloud = match &cloud.labels {
+        Some(labels) if params.drop_extremities && labels.len() != cloud.points.len() => {
+            return Err(RegisterError::LengthMismatch {
+                what: "cloud labels",
+                got: labels.len(),
+                expected: cloud.points.len(),
+            });
+        }
+        Some(labels) if params.drop_extremities && labels.iter().any(is_extremity) => {
+            let mut c = cloud.clone();
+            extremities_dropped = bsv_core::clean::drop_segments(&mut c, &bsv_core::EXTREMITIES);
+            if c.points.is_empty() {
+                return Err(RegisterError::OnlyExtremities { n: extremities_dropped });
+            }
+            without_extremities = c;
+            &without_extremities
+        }
+        _ => cloud,
+    };
     let cloud_box = prealign::check_cloud(cloud, params)?;
     // Sparse-point removal (flying pixels trail behind the silhouettes, right where the
     // gaps are, and would attract the gap-side vertices).
@@ -381,6 +407,7 @@ fn register_in_pool(
         rms_mesh_to_points_mm: rms_m2p * 1e3,
         rms_points_to_mesh_mm: rms_p2m * 1e3,
         labels_from,
+        extremities_dropped,
         outliers_removed,
         articulation,
     })

@@ -291,6 +291,10 @@ pub struct RegisterParams {
     /// [`crate::surface_correction`]) so that the fitted faces, not only the vertices, lie on the
     /// surface on average: removes the volume bias of a coarse template. Default true.
     pub surface_correction: bool,
+    /// Drop the cloud's head, hand and foot points (labels in `bsv_core::EXTREMITIES`: 1, 7, 8, 13,
+    /// 14) before the fit, as in the paper: those segments are poorly captured and not measured.
+    /// No effect on an unlabelled cloud. Default true.
+    pub drop_extremities: bool,
     /// Articulated initialisation when the cloud and the template are both labelled: every limb is
     /// turned (and moved) onto the cloud's limb before the fit (see `articulate.rs`). Default true.
     pub articulate: bool,
@@ -328,6 +332,7 @@ impl Default for RegisterParams {
             outlier_voxel_m: 0.008,
             outlier_min_fraction: 0.1,
             surface_correction: true,
+            drop_extremities: true,
             articulate: true,
             articulate_axial_scale: true,
             articulate_smooth_iterations: 10,

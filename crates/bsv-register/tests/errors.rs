@@ -93,6 +93,31 @@ fn a_far_finite_outlier_never_panics() {
 }
 
 #[test]
+fn extremities_are_dropped_by_the_library() {
+    let template = icosphere(0.2, 3);
+    let mut cloud = cloud_of(&icosphere(0.2, 5), 5_000, 2);
+    // Head (1) above y = 0.15, foot (13) below y = -0.15, trunk (2) between.
+    let labels: Vec<u8> = cloud.points.iter().map(|p| if p[1] > 0.15 { 1 } else if p[1] < -0.15 { 13 } else { 2 }).collect();
+    let expected = labels.iter().filter(|&&l| l != 2).count();
+    assert!(expected > 100);
+    cloud.labels = Some(labels);
+    let p = RegisterParams { articulate: false, ..Default::default() };
+    let reg = run(&template, &cloud, &p);
+    assert_eq!(reg.extremities_dropped, expected);
+    let keep = RegisterParams { drop_extremities: false, ..p.clone() };
+    assert_eq!(run(&template, &cloud, &keep).extremities_dropped, 0);
+
+    let mut all = cloud.clone();
+    all.labels = Some(vec![7; all.points.len()]);
+    let e = try_register(&template, &all, &p).unwrap_err();
+    assert_eq!(e, RegisterError::OnlyExtremities { n: 5_000 });
+    assert!(e.to_string().contains("head/hand/foot"), "{e}");
+    let mut short = cloud.clone();
+    short.labels = Some(vec![2; 10]);
+    assert!(matches!(try_register(&template, &short, &p).unwrap_err(), RegisterError::LengthMismatch { got: 10, .. }));
+}
+
+#[test]
 fn labels_come_from_the_cloud_or_the_template() {
     let mut template = icosphere(0.2, 3);
     template.vertex_labels = Some(template.vertices.iter().map(|p| if p[1] > 0.0 { 2 } else { 9 }).collect());

@@ -32,7 +32,13 @@ def write_point_cloud(
 ) -> None: ...
 def check_mesh(vertices: F64, faces: I64) -> str: ...
 def volumes(
-    vertices: F64, faces: I64, vertex_labels: Optional[U8], face_labels: Optional[U8], density: float, close_holes: bool
+    vertices: F64,
+    faces: I64,
+    vertex_labels: Optional[U8],
+    face_labels: Optional[U8],
+    density: float,
+    close_holes: bool,
+    islands: bool = False,
 ) -> str: ...
 def default_template(full: bool) -> MeshTuple: ...
 def register(
@@ -44,7 +50,7 @@ def register(
     normals: Optional[F64],
     labels: Optional[U8],
     params_json: str,
-    progress: Optional[Callable[[str], None]],
+    progress: Optional[Callable[[str], None]] = None,
 ) -> tuple[F64, Optional[U8], str]: ...
 def scan(
     vertices: F64,

@@ -4,7 +4,7 @@ use crate::output::{check_writable, write_json, CliError};
 use bsv_core::io;
 use bsv_core::template::{template, TemplateKind};
 use bsv_register::{register, IterationLog, LabelSource, PrealignMode, RegisterParams, Schedule};
-use bsv_volume::{report_with, IslandOptions, SegmentOptions};
+use bsv_volume::{report_with, SegmentOptions};
 use std::path::PathBuf;
 
 /// Arguments of `register`.
@@ -165,7 +165,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
             sum(|l| l.timings.solve)
         );
     }
-    let opts = SegmentOptions { close_holes: false, islands: Some(IslandOptions::default()) };
+    let opts = SegmentOptions::fitted();
     let mut report = report_with(&reg.mesh, a.density, &opts)?;
     let mut summary = serde_json::to_value(&reg)?;
     if let Some(obj) = summary.as_object_mut() {

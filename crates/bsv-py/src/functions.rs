@@ -70,8 +70,11 @@ fn check_mesh(vertices: PyReadonlyArray2<'_, f64>, faces: PyReadonlyArray2<'_, i
     serde_json::to_string(&report).map_err(input_err)
 }
 
-/// The volumes report (DESIGN.md "Formats") as JSON.
+/// The volumes report (DESIGN.md "Formats") as JSON. `islands`: merge small label islands first
+/// (`SegmentOptions::fitted()`, the policy for registered meshes).
 #[pyfunction]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (vertices, faces, vertex_labels, face_labels, density, close_holes, islands=false))]
 fn volumes(
     py: Python<'_>,
     vertices: PyReadonlyArray2<'_, f64>,
@@ -80,9 +83,11 @@ fn volumes(
     face_labels: Option<PyReadonlyArray1<'_, u8>>,
     density: f64,
     close_holes: bool,
+    islands: bool,
 ) -> PyResult<String> {
     let mesh = mesh_from(vertices, faces, vertex_labels, face_labels)?;
-    let opts = bsv_volume::SegmentOptions { close_holes, ..Default::default() };
+    let base = if islands { bsv_volume::SegmentOptions::fitted() } else { bsv_volume::SegmentOptions::default() };
+    let opts = bsv_volume::SegmentOptions { close_holes, ..base };
     let report = py.detach(|| bsv_volume::report_with(&mesh, density, &opts)).map_err(volume_err)?;
     Ok(report.to_json())
 }

@@ -54,6 +54,16 @@ pub struct SegmentOptions {
     pub islands: Option<IslandOptions>,
 }
 
+impl SegmentOptions {
+    /// The volume policy for a fitted (registered) mesh, shared by `bsv-cli register` and the
+    /// Python `bsv.register`: small label islands merged with the default [`IslandOptions`] (the
+    /// nearest-point label transfer leaves stray patches of one segment inside another), no hole
+    /// closing (a fitted template is closed).
+    pub fn fitted() -> Self {
+        SegmentOptions { close_holes: false, islands: Some(IslandOptions::default()) }
+    }
+}
+
 /// Volumes of the segments of a labelled closed mesh, m^3.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SegmentVolumes {

@@ -193,3 +193,26 @@ def test_cohort_is_deterministic_and_plausible(tmp_path):
     assert penetrations(v, f, fl) == {}
     other = bodies.subject(0, seed=8)
     assert not np.array_equal(other.body.vertices, s0.body.vertices)
+
+
+def test_cohort_files_are_not_overwritten(tmp_path, capsys):
+    from bsv.bodies.cohort import main as cohort_main
+    from bsv.bodies.errors import OutputExistsError
+
+    (tmp_path / "subject_001.json").write_text("mine")
+    with pytest.raises(OutputExistsError, match="subject_001.json") as e:
+        bodies.write_cohort(tmp_path, 2, seed=7)
+    assert isinstance(e.value, FileExistsError)
+    assert not (tmp_path / "subject_000.ply").exists() and not (tmp_path / "cohort.json").exists()
+    with pytest.raises(SystemExit) as ex:
+        cohort_main([str(tmp_path), "2", "7"])
+    assert ex.value.code == 2 and "--overwrite" in capsys.readouterr().err
+    assert (tmp_path / "subject_001.json").read_text() == "mine"
+    cohort_main([str(tmp_path), "1", "7", "--overwrite"])
+    assert (tmp_path / "cohort.json").is_file() and (tmp_path / "subject_001.json").read_text() == "mine"
+    with pytest.raises(OutputExistsError, match="cohort.json"):
+        bodies.write_cohort(tmp_path, 1, seed=7)
+    s = bodies.subject(0, seed=7)
+    with pytest.raises(OutputExistsError):
+        bodies.write_subject(s, tmp_path)
+    bodies.write_subject(s, tmp_path, overwrite=True)

@@ -100,3 +100,16 @@ def test_watertight_check_rejects_an_open_mesh(built):
         check_watertight(m.vertices, m.faces[1:])
     with pytest.raises(Exception):
         check_watertight(m.vertices, m.faces[:, ::-1])
+
+
+def test_write_templates_does_not_overwrite(tmp_path, capsys):
+    from bsv.bodies.errors import OutputExistsError
+    from bsv.bodies.template import main as template_main, write_templates
+
+    (tmp_path / "template_fine.obj").write_text("mine")
+    with pytest.raises(OutputExistsError, match="template_fine.obj"):
+        write_templates(tmp_path)
+    assert template_main([str(tmp_path)]) == 2 and "--overwrite" in capsys.readouterr().err
+    assert (tmp_path / "template_fine.obj").read_text() == "mine" and not (tmp_path / "template.ply").exists()
+    assert template_main([str(tmp_path), "--overwrite"]) == 0
+    assert (tmp_path / "template.ply").read_bytes() == (TEMPLATES / "template.ply").read_bytes()

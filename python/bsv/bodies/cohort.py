@@ -22,6 +22,7 @@ import numpy as np
 
 from .body import Body, SolveError, make_body, solve_stature_bmi
 from .collide import penetrations
+from .errors import OutputExistsError
 from .meshio import ply_bytes
 from .model import Phenotype
 from .pose import Pose
@@ -158,22 +159,40 @@ def volumes_json(s: Subject) -> str:
     return json.dumps(doc, indent=1, sort_keys=True) + "\n"
 
 
-def write_subject(s: Subject, out_dir: str | Path) -> tuple[Path, Path]:
-    """Write ``subject_NNN.ply`` (labelled, binary little-endian) and ``subject_NNN.json`` (volumes)."""
+def subject_files(index: int, out_dir: str | Path) -> tuple[Path, Path]:
+    """Paths of subject ``index``'s mesh and volumes files in ``out_dir``."""
     out = Path(out_dir)
+    return out / f"subject_{index:03d}.ply", out / f"subject_{index:03d}.json"
+
+
+def _refuse_existing(paths: list[Path], overwrite: bool) -> None:
+    existing = [str(p) for p in paths if p.exists()]
+    if existing and not overwrite:
+        raise OutputExistsError(f"{', '.join(existing)} already exist(s); pass overwrite=True (--overwrite) to "
+                                "replace, or choose another output folder")
+
+
+def write_subject(s: Subject, out_dir: str | Path, overwrite: bool = False) -> tuple[Path, Path]:
+    """Write ``subject_NNN.ply`` (labelled, binary little-endian) and ``subject_NNN.json`` (volumes);
+    existing files are refused (:class:`bsv.errors.OutputExistsError`) unless ``overwrite``."""
+    out = Path(out_dir)
+    ply, js = subject_files(s.index, out)
+    _refuse_existing([ply, js], overwrite)
     out.mkdir(parents=True, exist_ok=True)
     b = s.body
-    ply = out / f"subject_{s.index:03d}.ply"
-    js = out / f"subject_{s.index:03d}.json"
     ply.write_bytes(ply_bytes(b.vertices, b.faces, b.vertex_labels, b.face_labels))
     js.write_text(volumes_json(s))
     return ply, js
 
 
-def write_cohort(out_dir: str | Path, n: int, seed: int = 0, local: bool = True) -> list[tuple[Path, Path]]:
-    """Generate and write a cohort: one PLY + JSON per subject and ``cohort.json`` listing them."""
+def write_cohort(out_dir: str | Path, n: int, seed: int = 0, local: bool = True,
+                 overwrite: bool = False) -> list[tuple[Path, Path]]:
+    """Generate and write a cohort: one PLY + JSON per subject and ``cohort.json`` listing them. Any of
+    these files already present is refused before anything is generated (:class:`bsv.errors.OutputExistsError`)
+    unless ``overwrite``."""
     out = Path(out_dir)
-    paths = [write_subject(s, out) for s in iter_cohort(n, seed, local)]
+    _refuse_existing([out / "cohort.json", *(p for i in range(max(n, 0)) for p in subject_files(i, out))], overwrite)
+    paths = [write_subject(s, out, overwrite) for s in iter_cohort(n, seed, local)]
     index = {"seed": int(seed), "n": int(n), "local_modifiers": bool(local),
              "subjects": [{"mesh": p.name, "volumes": j.name} for p, j in paths]}
     (out / "cohort.json").write_text(json.dumps(index, indent=1) + "\n")
@@ -181,7 +200,8 @@ def write_cohort(out_dir: str | Path, n: int, seed: int = 0, local: bool = True)
 
 
 def main(argv: list[str] | None = None) -> None:
-    """``python -m bsv.bodies.cohort OUT_DIR N [SEED] [--no-local]``: write a cohort."""
+    """``python -m bsv.bodies.cohort OUT_DIR N [SEED] [--no-local] [--overwrite]``: write a cohort (exits
+    with status 2 and a message if files exist and --overwrite is not given)."""
     import argparse
 
     ap = argparse.ArgumentParser(description="Write a synthetic MakeHuman cohort (PLY + ground-truth JSON).")
@@ -189,8 +209,16 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("n", type=int)
     ap.add_argument("seed", type=int, nargs="?", default=0)
     ap.add_argument("--no-local", action="store_true", help="macro phenotypes only (no local modifiers)")
+    ap.add_argument("--overwrite", action="store_true", help="replace subject files and cohort.json already in OUT_DIR")
     args = ap.parse_args(argv)
-    for ply, js in write_cohort(args.out_dir, args.n, args.seed, not args.no_local):
+    try:
+        written = write_cohort(args.out_dir, args.n, args.seed, not args.no_local, overwrite=args.overwrite)
+    except OutputExistsError as exc:
+        import sys
+
+        print(f"error: {exc}", file=sys.stderr)
+        raise SystemExit(2) from exc
+    for ply, js in written:
         print(ply, js)
 
 

@@ -3,7 +3,7 @@ macros at their defaults) in the default A-pose, with 14 segments (``full``) or 
 removed and every hole capped (the paper's template, 9 segments), and a finer, midpoint-subdivided
 version of the latter. Written as labelled PLY and OBJ into assets/template/.
 
-Run ``python -m bsv.bodies.template OUT_DIR`` (or scripts/make_assets.py --templates) to regenerate.
+Run ``python -m bsv.bodies.template OUT_DIR --overwrite`` (or scripts/make_assets.py --templates) to regenerate.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ import numpy as np
 
 from ..types import SEGMENT_IDS, Mesh
 from .body import make_body
+from .errors import OutputExistsError
 from .labels import vertex_labels_from_faces
 from .meshio import obj_text, ply_bytes
 from .model import Phenotype
@@ -157,12 +158,22 @@ def templates() -> dict[str, Mesh]:
     return {"template": trunk, "template_full": full, "template_fine": subdivide_midpoint(trunk)}
 
 
-def write_templates(out_dir: str | Path) -> dict[str, tuple[int, int]]:
-    """Write every template as PLY and OBJ into out_dir; returns {name: (vertices, faces)}."""
+#: Names of the default templates (each written as NAME.ply and NAME.obj).
+TEMPLATE_NAMES = ("template", "template_full", "template_fine")
+
+
+def write_templates(out_dir: str | Path, overwrite: bool = False) -> dict[str, tuple[int, int]]:
+    """Write every template as PLY and OBJ into out_dir; returns {name: (vertices, faces)}. Existing files
+    are refused before any work (:class:`bsv.errors.OutputExistsError`) unless ``overwrite``."""
     out = Path(out_dir)
+    existing = [f"{n}.{ext}" for n in TEMPLATE_NAMES for ext in ("ply", "obj") if (out / f"{n}.{ext}").exists()]
+    if existing and not overwrite:
+        raise OutputExistsError(f"{out} already holds {', '.join(existing)}; pass overwrite=True "
+                                "(python -m bsv.bodies.template OUT_DIR --overwrite) to regenerate them")
+    built = templates()
     out.mkdir(parents=True, exist_ok=True)
     counts = {}
-    for name, m in templates().items():
+    for name, m in built.items():
         (out / f"{name}.ply").write_bytes(ply_bytes(m.vertices, m.faces, m.vertex_labels, m.face_labels))
         note = (f"BSV {name}: MakeHuman (CC0) gender 0.5, default macros, A-pose; metres, Y up, faces +Z.\n"
                 f"{len(m.vertices)} vertices, {len(m.faces)} triangles. Regenerate: python -m bsv.bodies.template")
@@ -171,7 +182,23 @@ def write_templates(out_dir: str | Path) -> dict[str, tuple[int, int]]:
     return counts
 
 
-if __name__ == "__main__":
-    target = sys.argv[1] if len(sys.argv) > 1 else str(Path(__file__).resolve().parents[3] / "assets" / "template")
-    for k, (nv, nf) in write_templates(target).items():
+def main(argv: list[str] | None = None) -> int:
+    """``python -m bsv.bodies.template [OUT_DIR] [--overwrite]`` (default: the repository's assets/template)."""
+    import argparse
+
+    ap = argparse.ArgumentParser(description="Write the default templates (PLY + OBJ).")
+    ap.add_argument("out_dir", nargs="?", default=str(Path(__file__).resolve().parents[3] / "assets" / "template"))
+    ap.add_argument("--overwrite", action="store_true", help="replace template files already in OUT_DIR")
+    args = ap.parse_args(argv)
+    try:
+        counts = write_templates(args.out_dir, overwrite=args.overwrite)
+    except OutputExistsError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    for k, (nv, nf) in counts.items():
         print(f"{k}: {nv} vertices, {nf} triangles")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -4,14 +4,14 @@ use pyo3::create_exception;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
 
-create_exception!(_bsv, BsvError, PyException, "Base class of every BSV error.");
-create_exception!(_bsv, FormatError, BsvError, "A file could not be read: malformed, truncated or unsupported.");
-create_exception!(_bsv, WriteError, BsvError, "A file could not be written.");
-create_exception!(_bsv, InputError, BsvError, "Arrays or parameters passed from Python are not valid.");
-create_exception!(_bsv, MeshError, BsvError, "A mesh failed a check: open, non-manifold, degenerate.");
-create_exception!(_bsv, VolumeError, BsvError, "Volumes could not be computed (open or non-manifold segments).");
-create_exception!(_bsv, RegistrationError, BsvError, "The registration rejected its inputs or failed.");
-create_exception!(_bsv, ScanError, BsvError, "The virtual scanner rejected its inputs or failed.");
+create_exception!(bsv._bsv, BsvError, PyException, "Base class of every BSV error.");
+create_exception!(bsv._bsv, FormatError, BsvError, "A file could not be read: malformed, truncated or unsupported.");
+create_exception!(bsv._bsv, WriteError, BsvError, "A file could not be written.");
+create_exception!(bsv._bsv, InputError, BsvError, "Arrays or parameters passed from Python are not valid.");
+create_exception!(bsv._bsv, MeshError, BsvError, "A mesh failed a check: open, non-manifold, degenerate.");
+create_exception!(bsv._bsv, VolumeError, BsvError, "Volumes could not be computed (open or non-manifold segments).");
+create_exception!(bsv._bsv, RegistrationError, BsvError, "The registration rejected its inputs or failed.");
+create_exception!(bsv._bsv, ScanError, BsvError, "The virtual scanner rejected its inputs or failed.");
 
 /// The error's message followed by its chain of causes.
 fn message(e: &dyn std::error::Error) -> String {

@@ -15,6 +15,7 @@ from typing import Any, Optional, Sequence, Union
 
 import numpy as np
 
+from .errors import OutputExistsError
 from .types import SEGMENT_NAMES, TRUNK_LIMBS
 
 PathLike = Union[str, Path]
@@ -184,7 +185,7 @@ def write_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", o
     report = out / "report.html"
     existing = [p.name for p in (*paths.values(), report) if p.exists()]
     if existing and not overwrite:
-        raise FileExistsError(f"{out} already holds {', '.join(existing)}; pass overwrite=True to replace them")
+        raise OutputExistsError(f"{out} already holds {', '.join(existing)}; pass overwrite=True to replace them")
     out.mkdir(parents=True, exist_ok=True)
     mesh = result.registration.mesh
     flabels = face_labels(mesh.faces, mesh.vertex_labels, mesh.face_labels)

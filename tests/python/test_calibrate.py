@@ -103,8 +103,14 @@ def test_extrinsics_recovered_both_cameras(frames, tmp_path):
     again = cal.read_calibration(out)
     np.testing.assert_allclose(again.cameras["back"].translation, result.cameras["back"].translation)
     assert again.board == BOARD
-    with pytest.raises(FileExistsError):
+    from bsv.errors import OutputExistsError
+
+    with pytest.raises(OutputExistsError, match="overwrite"):
         result.write(out)
+    before = out.read_text()
+    with pytest.raises(OutputExistsError, match="overwrite"):  # refused before calibrating again
+        cal.calibrate({"front": []}, {"front": INTR}, BOARD, out=out)
+    assert out.read_text() == before
 
 
 def test_pose_averaging_mode(frames):

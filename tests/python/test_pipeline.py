@@ -201,7 +201,9 @@ def test_report_files_from_a_known_mesh(capture, subject, tmp_path):
     html = files["report"].read_text()
     assert "Estimated mass" in html and "asymmetry" in html.lower() and "upper_arm_l" in html
     assert f"{vols['mass_kg']:.1f} kg" in html
-    with pytest.raises(FileExistsError):
+    from bsv.errors import OutputExistsError
+
+    with pytest.raises(OutputExistsError, match="overwrite"):
         write_report(res, tmp_path)
 
 

@@ -32,6 +32,7 @@ from .errors import (
     MarkerNotFoundError,
     WrongMarkerError,
 )
+from ..errors import OutputExistsError
 from .intrinsics import Intrinsics, load_intrinsics
 from .marker import SIDES, Board, MarkerSpec
 
@@ -315,7 +316,7 @@ class Calibration:
         """Writes calibration.json (refuses to replace an existing file unless ``overwrite``)."""
         p = Path(path)
         if p.exists() and not overwrite:
-            raise FileExistsError(f"{p} already exists; pass overwrite=True to replace it")
+            raise OutputExistsError(f"{p} already exists; pass overwrite=True (--overwrite) to replace it")
         p.parent.mkdir(parents=True, exist_ok=True)
         p.write_text(json.dumps(self.to_json(), indent=2))
         return p
@@ -418,7 +419,10 @@ def calibrate(
     overwrite: bool = False,
 ) -> Calibration:
     """Calibrates every camera of ``images`` ({"front": frames, "back": frames}) and optionally writes
-    calibration.json to ``out``."""
+    calibration.json to ``out`` (an existing file is refused before any work, :class:`bsv.errors.OutputExistsError`,
+    unless ``overwrite``)."""
+    if out is not None and Path(out).exists() and not overwrite:
+        raise OutputExistsError(f"{out} already exists; pass overwrite=True (--overwrite) to replace it")
     cams = {}
     for side, frames in images.items():
         if side not in intrinsics:

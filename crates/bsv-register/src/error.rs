@@ -99,7 +99,9 @@ pub enum RegisterError {
     /// Template labels were requested but the template carries none.
     #[error("labels = template was requested but the template has no vertex labels: use a labelled template (OBJ groups / PLY label) or labels = cloud")]
     TemplateWithoutLabels,
-    /// Labels from the cloud were requested but the cloud carries none.
+    /// Labels from the cloud were requested but the cloud carries none. Not returned by
+    /// [`crate::register`], which falls back to the template's labels (see
+    /// [`crate::RegisterParams::labels`]); kept for callers that require cloud labels.
     #[error("labels = cloud was requested but the cloud has no labels: pass a labelled cloud or use labels = template")]
     CloudWithoutLabels,
     /// A per-element attribute has the wrong length.
@@ -131,7 +133,7 @@ pub enum RegisterError {
         hint: &'static str,
     },
     /// No correspondence survived the pruning in an iteration.
-    #[error("iteration {iteration}: no correspondence survived the pruning; the template and the cloud do not overlap (check units, frame, or loosen --prune-distance / --prune-angle)")]
+    #[error("iteration {iteration}: no correspondence survived the pruning; the template and the cloud do not overlap (check units and frame, or loosen the pruning: registration parameters prune_distance_factor / prune_normal_angle_deg, Python: bsv.register(..., prune_distance_factor=..., prune_normal_angle_deg=...))")]
     NoCorrespondences {
         /// The global iteration index.
         iteration: usize,
@@ -139,8 +141,12 @@ pub enum RegisterError {
     /// The linear system could not be factorized or solved.
     #[error("linear solver failed: {0}; the template is probably degenerate (run the mesh check) or the weights are invalid")]
     Solver(String),
+    /// A spatial index (k-d tree over the cloud or the fitted vertices) could not be built or
+    /// queried.
+    #[error("spatial index (k-d tree) failed: {0}; the cloud probably holds very many identical points: remove duplicates (e.g. voxel-downsample the cloud) and retry")]
+    Index(String),
     /// The fit produced non-finite vertices.
-    #[error("iteration {iteration}: the fit diverged (non-finite vertices); lower the data weight or raise alpha")]
+    #[error("iteration {iteration}: the fit diverged (non-finite vertices); lower the registration parameter data_weight or raise alpha (Python: bsv.register(..., data_weight=..., alpha=...); bsv-cli: --alpha)")]
     Diverged {
         /// The global iteration index.
         iteration: usize,

@@ -228,7 +228,7 @@ fn register_in_pool(
     }
     // Pre-alignment.
     let sim = prealign::prealign(&template.vertices, &template_box, &cloud.points, &cloud_box, params)
-        .map_err(RegisterError::Solver)?;
+        .map_err(RegisterError::Index)?;
     let mut rest: Vec<[f64; 3]> = template.vertices.iter().map(|&p| sim.apply(p)).collect();
     // Articulated initialisation (labelled template and cloud).
     let mut articulation = Vec::new();
@@ -260,11 +260,11 @@ fn register_in_pool(
         )
     });
     let mut solver = solver.map_err(RegisterError::Solver)?;
-    let mut index = index.map_err(RegisterError::Solver)?;
+    let mut index = index.map_err(RegisterError::Index)?;
     // Label-aware matching when both sides are labelled.
     let match_labels: Option<&[u8]> = match (&cloud.labels, &template.vertex_labels) {
         (Some(cl), Some(tl)) if params.label_aware => {
-            let matched = index.with_labels(cl, tl).map_err(RegisterError::Solver)?;
+            let matched = index.with_labels(cl, tl).map_err(RegisterError::Index)?;
             (matched > 0).then_some(tl.as_slice())
         }
         _ => None,
@@ -302,7 +302,7 @@ fn register_in_pool(
                     (t, rms, None)
                 }
                 CorrespondenceKind::P2m => {
-                    let (t, rms) = pool.install(|| index.p2m(&cur, &normals, &pruning, match_labels)).map_err(RegisterError::Solver)?;
+                    let (t, rms) = pool.install(|| index.p2m(&cur, &normals, &pruning, match_labels)).map_err(RegisterError::Index)?;
                     let m2p = pool.install(|| index.nearest(&cur));
                     let rms_m2p = (m2p.iter().map(|r| r.1).sum::<f64>() / n as f64).sqrt();
                     (t, rms_m2p, Some(rms))
@@ -383,7 +383,7 @@ fn register_in_pool(
     // Final distances and labels.
     let nearest = pool.install(|| index.nearest(&cur));
     let rms_m2p = (nearest.iter().map(|r| r.1).sum::<f64>() / n as f64).sqrt();
-    let rms_p2m = pool.install(|| index.rms_points_to_mesh(&cur)).map_err(RegisterError::Solver)?;
+    let rms_p2m = pool.install(|| index.rms_points_to_mesh(&cur)).map_err(RegisterError::Index)?;
     let mut mesh = TriMesh::new(cur, template.triangles.clone());
     let labels_from = match (params.labels, &cloud.labels) {
         (LabelSource::Cloud, Some(labels)) => {

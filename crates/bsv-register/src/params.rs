@@ -275,7 +275,10 @@ pub struct RegisterParams {
     pub min_extent_m: f64,
     /// Worker threads (a rayon pool of this size; 0 = all cores). Default 0.
     pub threads: usize,
-    /// Label source of the fitted mesh. Default [`LabelSource::Cloud`].
+    /// Label source of the fitted mesh. Default [`LabelSource::Cloud`]. With `Cloud` and an
+    /// unlabelled cloud the fit does not fail: the mesh falls back to the template's vertex labels
+    /// (no labels when the template has none either) and `Registration::labels_from` says
+    /// `Template` (or `None`).
     pub labels: LabelSource,
     /// Label-aware correspondences when the cloud and the template are both labelled: a template
     /// vertex of segment L is matched only to cloud points of segment L and vice versa (see

@@ -72,6 +72,20 @@ fn bad_inputs_are_typed_errors() {
 }
 
 #[test]
+fn hints_name_real_parameters() {
+    let fields = serde_json::to_value(RegisterParams::default()).unwrap();
+    let msgs = [RegisterError::NoCorrespondences { iteration: 3 }.to_string(), RegisterError::Diverged { iteration: 3 }.to_string()];
+    for (msg, names) in msgs.iter().zip([&["prune_distance_factor", "prune_normal_angle_deg"][..], &["data_weight", "alpha"][..]]) {
+        assert!(!msg.contains("--prune") && !msg.contains("data weight"), "{msg}");
+        for name in names {
+            assert!(msg.contains(name), "{msg} lacks {name}");
+            assert!(fields.get(name).is_some(), "{name} is not a RegisterParams field");
+        }
+    }
+    assert!(RegisterError::Index("x".into()).to_string().contains("k-d tree"));
+}
+
+#[test]
 fn a_far_finite_outlier_never_panics() {
     // One point 1e19 m away (finite, beyond any i64 voxel key) in a good cloud: with the default
     // sparse-point removal it is dropped and the fit succeeds; without it the registration still

@@ -276,6 +276,15 @@ def test_bad_options_are_usage_errors(tmp_path: Path) -> None:
     assert bench_main(["faust", "--root", str(tmp_path), "--out", str(tmp_path / "o"), "--quiet"]) == 2
 
 
+def test_bench_errors_are_bsv_errors() -> None:
+    from bsv.bench.floor import FloorError
+
+    assert issubclass(BenchError, bsv.BsvError) and issubclass(BenchError, RuntimeError)
+    assert issubclass(FloorError, bsv.BsvError) and issubclass(FloorError, ValueError)
+    with pytest.raises(bsv.BsvError):
+        rve(1.0, 0.0)
+
+
 def test_existing_outputs_are_refused_without_overwrite(tmp_path: Path, capsys) -> None:
     from bsv.bench.output import check_outputs, write_outputs
     from bsv.errors import OutputExistsError

@@ -216,3 +216,17 @@ def test_cohort_files_are_not_overwritten(tmp_path, capsys):
     with pytest.raises(OutputExistsError):
         bodies.write_subject(s, tmp_path)
     bodies.write_subject(s, tmp_path, overwrite=True)
+
+
+def test_bodies_errors_are_bsv_errors():
+    from bsv.bodies.errors import BsvError
+    from bsv.bodies.template import TemplateError
+
+    for cls, builtin in ((bodies.PoseError, ValueError), (bodies.PhenotypeError, ValueError),
+                         (bodies.SolveError, ValueError), (bodies.LabelError, ValueError),
+                         (bodies.AssetError, RuntimeError), (TemplateError, RuntimeError)):
+        assert issubclass(cls, BsvError) and issubclass(cls, builtin), cls
+    with pytest.raises(BsvError):
+        bodies.make_body(bodies.Phenotype(weight=1.5))
+    if "bsv._bsv" in sys.modules and sys.modules["bsv._bsv"] is not None:
+        assert BsvError is sys.modules["bsv._bsv"].BsvError      # the extension's class when it is built

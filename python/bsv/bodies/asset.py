@@ -9,8 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import BsvError
 
-class AssetError(RuntimeError):
+
+class AssetError(BsvError, RuntimeError):
     """The MakeHuman asset is missing or malformed."""
 
 

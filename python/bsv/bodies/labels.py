@@ -15,6 +15,7 @@ import numpy as np
 
 from ..types import SEGMENT_IDS, SEGMENT_NAMES, TRUNK_LIMBS
 from .asset import Asset, load_asset
+from .errors import BsvError
 
 #: Palette colours (RGB) per segment id, for PLY output.
 PALETTE = np.array([[128, 128, 128], [230, 190, 150], [70, 130, 180], [220, 60, 60], [60, 180, 75],
@@ -22,7 +23,7 @@ PALETTE = np.array([[128, 128, 128], [230, 190, 150], [70, 130, 180], [220, 60, 
                     [210, 245, 60], [0, 128, 128], [170, 110, 40], [128, 0, 0], [0, 0, 128]], dtype=np.uint8)
 
 
-class LabelError(ValueError):
+class LabelError(BsvError, ValueError):
     """A labelled mesh cannot be split into closed segments."""
 
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .asset import Asset, AssetError, load_asset
+from .errors import BsvError
 
 GENDERS = ("female", "male")
 AGES = ("child", "young", "old")
@@ -21,7 +22,7 @@ RACES = ("african", "asian", "caucasian")
 LEVELS = ("min", "average", "max")
 
 
-class PhenotypeError(ValueError):
+class PhenotypeError(BsvError, ValueError):
     """A phenotype or local-modifier value is out of range or unknown."""
 
 

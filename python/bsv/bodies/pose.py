@@ -15,9 +15,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .asset import Asset, load_asset
+from .errors import BsvError
 
 
-class PoseError(ValueError):
+class PoseError(BsvError, ValueError):
     """A pose angle is out of its allowed range."""
 
 

@@ -26,7 +26,7 @@ fn key(p: &[f64; 3], inv: f64) -> Option<[i64; 3]> {
     let mut k = [0i64; 3];
     for (ka, &x) in k.iter_mut().zip(p) {
         let v = (x * inv).floor();
-        if !(v.abs() <= MAX_KEY) {
+        if v.is_nan() || v.abs() > MAX_KEY {
             return None;
         }
         *ka = v as i64;

@@ -1,6 +1,7 @@
 //! The energy never increases within an iteration (fixed correspondences): the local step and the
 //! global step each minimise their own block exactly.
 
+#![allow(clippy::unwrap_used)]
 mod common;
 use bsv_core::shapes::{ellipsoid, icosphere};
 use bsv_register::{IterationLog, RegisterParams, Schedule};

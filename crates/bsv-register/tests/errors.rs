@@ -1,5 +1,6 @@
 //! Bad input gives typed errors, never a panic.
 
+#![allow(clippy::unwrap_used)]
 mod common;
 use bsv_core::shapes::{cuboid, icosphere};
 use bsv_core::PointCloud;

@@ -15,6 +15,7 @@ from typing import Any, Optional, Sequence, Union
 
 import numpy as np
 
+from .bodies.labels import PALETTE
 from .errors import OutputExistsError
 from .types import SEGMENT_NAMES, TRUNK_LIMBS
 
@@ -33,9 +34,7 @@ VIEWS = {
 
 
 def palette() -> np.ndarray:
-    """(15, 3) float RGB in [0, 1] of the segment ids."""
-    from .bodies.labels import PALETTE
-
+    """(15, 3) float RGB in [0, 1] of the segment ids (:data:`bsv.bodies.labels.PALETTE`, Rust's palette)."""
     return np.asarray(PALETTE, dtype=np.float64) / 255.0
 
 

@@ -207,6 +207,24 @@ def test_report_files_from_a_known_mesh(capture, subject, tmp_path):
         write_report(res, tmp_path)
 
 
+def test_python_palette_is_the_rust_palette(tmp_path):
+    """The PLY colours the Rust writer gives each segment id equal bsv.bodies.labels.PALETTE (and the
+    report's palette)."""
+    from bsv.bodies.labels import PALETTE
+    from bsv.report import palette
+
+    verts = np.array([[i, 0.0, 0.0] for i in range(15)] + [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], dtype=np.float64)
+    faces = np.array([[i, 15, 16] for i in range(15)], dtype=np.uint32)
+    labels = np.array([*range(15), 2, 2], dtype=np.uint8)
+    path = tmp_path / "labelled.ply"
+    bsv.write_mesh(path, bsv.Mesh(verts, faces, labels))
+    colors = bsv.read_point_cloud(path).colors
+    assert colors is not None
+    np.testing.assert_array_equal(np.asarray(colors)[:15], PALETTE)
+    np.testing.assert_allclose(palette() * 255.0, PALETTE)
+    assert PALETTE.shape == (15, 3) and len({tuple(c) for c in PALETTE}) == 15
+
+
 # ----------------------------------------------------------------------------------------------------
 # The demo chain end to end
 

@@ -17,10 +17,25 @@ from ..types import SEGMENT_IDS, SEGMENT_NAMES, TRUNK_LIMBS
 from .asset import Asset, load_asset
 from .errors import BsvError
 
-#: Palette colours (RGB) per segment id, for PLY output.
-PALETTE = np.array([[128, 128, 128], [230, 190, 150], [70, 130, 180], [220, 60, 60], [60, 180, 75],
-                    [245, 130, 48], [145, 30, 180], [255, 225, 25], [70, 240, 240], [240, 50, 230],
-                    [210, 245, 60], [0, 128, 128], [170, 110, 40], [128, 0, 0], [0, 0, 128]], dtype=np.uint8)
+#: Palette colours (sRGB) per segment id, exactly crates/bsv-core/src/segment.rs PALETTE (what the Rust
+#: writers put in PLY files); used by the PLY writer here and by the report figures.
+PALETTE = np.array([
+    [200, 200, 200],  # 0 unlabelled
+    [255, 213, 170],  # 1 head
+    [70, 130, 180],   # 2 torso
+    [228, 26, 28],    # 3 upper_arm_l
+    [55, 126, 184],   # 4 upper_arm_r
+    [255, 127, 0],    # 5 forearm_l
+    [77, 175, 74],    # 6 forearm_r
+    [247, 129, 191],  # 7 hand_l
+    [152, 78, 163],   # 8 hand_r
+    [166, 86, 40],    # 9 thigh_l
+    [27, 158, 119],   # 10 thigh_r
+    [255, 255, 51],   # 11 shin_l
+    [102, 194, 165],  # 12 shin_r
+    [153, 153, 153],  # 13 foot_l
+    [31, 120, 180],   # 14 foot_r
+], dtype=np.uint8)
 
 
 class LabelError(BsvError, ValueError):

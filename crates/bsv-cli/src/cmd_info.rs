@@ -3,9 +3,9 @@
 use crate::output::{check_writable, CliError};
 use bsv_core::check::{check_mesh, repair_mesh};
 use bsv_core::geometry::Aabb;
-use bsv_core::io;
-use bsv_core::Segment;
-use std::path::PathBuf;
+use bsv_core::io::{self, obj, ply, Format, ReadError};
+use bsv_core::{PointCloud, Segment, TriMesh};
+use std::path::{Path, PathBuf};
 
 /// Arguments of `info`.
 #[derive(clap::Args, Debug)]
@@ -39,10 +39,50 @@ fn label_counts(labels: &[u8]) -> Vec<(String, usize)> {
         .collect()
 }
 
+/// Whether some line of an OBJ file is a face (`f ...`).
+fn obj_has_faces(bytes: &[u8]) -> bool {
+    bytes.split(|&b| b == b'\n').any(|line| line.split(u8::is_ascii_whitespace).find(|w| !w.is_empty()) == Some(b"f"))
+}
+
+/// Reads `path` once: the file as a point cloud, and as a mesh when it has faces (`Some(Err)`
+/// when it has faces that cannot be read).
+fn read_file(path: &Path) -> Result<(PointCloud, Option<Result<TriMesh, ReadError>>), ReadError> {
+    let format = Format::from_path(path).ok_or_else(|| ReadError::UnsupportedExtension {
+        path: path.to_path_buf(),
+        extension: path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default(),
+    })?;
+    let bytes = std::fs::read(path).map_err(|source| ReadError::Io { path: path.to_path_buf(), source })?;
+    match format {
+        Format::Ply => {
+            let data = ply::parse(&bytes).map_err(|source| ReadError::Ply { path: path.to_path_buf(), source })?;
+            let mesh = data.triangles.as_ref().filter(|t| !t.is_empty()).map(|t| {
+                Ok(TriMesh {
+                    vertices: data.points.clone(),
+                    triangles: t.clone(),
+                    vertex_labels: data.vertex_labels.clone(),
+                    face_labels: data.face_labels.clone(),
+                })
+            });
+            Ok((data.into_cloud(), mesh))
+        }
+        Format::Obj => {
+            let points = obj::parse_points(&bytes).map_err(|source| ReadError::Obj { path: path.to_path_buf(), source })?;
+            let mesh = obj_has_faces(&bytes).then(|| {
+                obj::parse(&bytes).map(|(m, _)| m).map_err(|source| ReadError::Obj { path: path.to_path_buf(), source })
+            });
+            Ok((PointCloud::new(points), mesh))
+        }
+    }
+}
+
 /// Runs `info`.
 pub fn run(a: Args) -> Result<(), CliError> {
-    let cloud = io::read_point_cloud(&a.file)?;
-    let mesh = io::read_mesh(&a.file).ok().filter(|m| m.n_triangles() > 0);
+    let (cloud, mesh) = read_file(&a.file)?;
+    let (mesh, mesh_error) = match mesh {
+        Some(Ok(m)) if m.n_triangles() > 0 => (Some(m), None),
+        Some(Err(e)) => (None, Some(e)),
+        _ => (None, None),
+    };
     let bbox = Aabb::of_points(&cloud.points);
     let mut json = serde_json::json!({
         "file": a.file.display().to_string(),
@@ -72,6 +112,12 @@ pub fn run(a: Args) -> Result<(), CliError> {
             None => println!("  labels: none"),
         }
     }
+    if let Some(e) = &mesh_error {
+        json["mesh_error"] = e.to_string().into();
+        if !a.json {
+            println!("  faces: present but unreadable, showing the vertices only: {e}");
+        }
+    }
     if let Some(mut m) = mesh {
         let report = check_mesh(&m);
         json["mesh"] = serde_json::to_value(&report)?;
@@ -92,6 +138,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
             }
         }
     } else if a.repair.is_some() {
+        if let Some(e) = mesh_error {
+            return Err(e.into());
+        }
         return Err(format!("{} has no faces: only meshes can be repaired", a.file.display()).into());
     }
     if a.json {

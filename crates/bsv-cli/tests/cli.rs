@@ -70,3 +70,31 @@ fn bad_inputs_fail_with_clear_messages() {
     assert!(!o.status.success());
     assert!(text(&o).contains("foggy"), "{}", text(&o));
 }
+
+#[test]
+fn info_reports_unreadable_faces() {
+    let d = tmpdir("info");
+    // A tetrahedron whose last face refers to a vertex that does not exist.
+    std::fs::write(d.join("bad.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 9\n").unwrap();
+    let o = bsv(&["info", "bad.obj"], &d);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("4 vertices/points"), "{}", text(&o));
+    assert!(text(&o).contains("unreadable"), "{}", text(&o));
+    let o = bsv(&["info", "bad.obj", "--json"], &d);
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(j["mesh_error"].as_str().unwrap().contains("bad.obj"), "{j}");
+    assert!(j.get("mesh").is_none(), "{j}");
+    let o = bsv(&["info", "bad.obj", "--repair", "r.obj"], &d);
+    assert!(!o.status.success());
+    assert!(!text(&o).contains("has no faces"), "{}", text(&o));
+    // The same mesh with a valid last face is a mesh.
+    std::fs::write(d.join("ok.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n").unwrap();
+    let o = bsv(&["info", "ok.obj", "--json"], &d);
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(j.get("mesh").is_some() && j.get("mesh_error").is_none(), "{j}");
+    // A point cloud (no faces) is no error.
+    std::fs::write(d.join("pts.obj"), "v 0 0 0\nv 1 0 0\n").unwrap();
+    let o = bsv(&["info", "pts.obj", "--json"], &d);
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(j.get("mesh").is_none() && j.get("mesh_error").is_none(), "{j}");
+}

@@ -13,8 +13,6 @@ import pytest
 cv2 = pytest.importorskip("cv2")
 pytest.importorskip("mediapipe", reason="mediapipe not installed (pip install -r requirements-frontend.txt)")
 bsv = pytest.importorskip("bsv")
-if not hasattr(bsv, "scan"):
-    pytest.skip("the bsv extension (virtual scanner) is not built", allow_module_level=True)
 
 from bsv.frontend import errors  # noqa: E402
 from bsv.frontend import segment as seg  # noqa: E402

@@ -286,7 +286,7 @@ def write_templates_from(npz: Path, out: Path) -> None:
         pkg.__path__ = [str(REPO / "python" / "bsv")]
         sys.modules["bsv"] = pkg
     template = importlib.import_module("bsv.bodies.template")
-    for name, (nv, nf) in template.write_templates(out).items():
+    for name, (nv, nf) in template.write_templates(out, overwrite=True).items():
         print(f"{name}: {nv} vertices, {nf} triangles")
 
 

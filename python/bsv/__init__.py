@@ -110,11 +110,13 @@ def volumes(
     *,
     density: float = 1000.0,
     close_holes: bool = False,
+    islands: bool = False,
 ) -> dict[str, Any]:
     """Segment volumes (litres), aggregates, ratios and mass of a closed mesh.
 
     ``labels`` are per-vertex segment ids (or per-face when their length equals the face count);
-    without labels only ``whole`` is reported. Returns the volumes JSON of DESIGN.md as a dict.
+    without labels only ``whole`` is reported. ``islands``: merge small stray label patches first (what
+    :func:`register` does for fitted meshes). Returns the volumes JSON of DESIGN.md as a dict.
     """
     m = as_mesh(mesh, faces)
     vl, fl = m.vertex_labels, m.face_labels
@@ -128,7 +130,7 @@ def volumes(
             raise InputError(
                 f"labels has {len(lab)} entries; expected one per vertex ({len(m.vertices)}) or per face ({len(m.faces)})"
             )
-    return json.loads(_bsv.volumes(m.vertices, m.faces, vl, fl, float(density), bool(close_holes)))
+    return json.loads(_bsv.volumes(m.vertices, m.faces, vl, fl, float(density), bool(close_holes), bool(islands)))
 
 
 def default_template(full: bool = False) -> Mesh:
@@ -183,7 +185,7 @@ def register(
     )
     result = json.loads(result_json)
     fitted = Mesh(v, tmpl.faces, vl, None)
-    vols = volumes(fitted, density=density)
+    vols = volumes(fitted, density=density, islands=True)
     vols["registration"] = result["summary"]
     return Registration(mesh=fitted, volumes=vols, log=result["log"], seconds=result["summary"]["seconds"])
 

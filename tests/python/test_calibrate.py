@@ -6,8 +6,6 @@ from __future__ import annotations
 import importlib
 import json
 import math
-import sys
-import types
 from pathlib import Path
 
 import numpy as np
@@ -17,16 +15,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def _import(name: str):
-    """The front-end is pure Python: import it even when the Rust extension bsv._bsv is not built."""
-    sys.path.insert(0, str(ROOT / "python"))
-    try:
-        importlib.import_module("bsv")
-    except ImportError:
-        for k in [k for k in sys.modules if k == "bsv" or k.startswith("bsv.")]:
-            del sys.modules[k]
-        pkg = types.ModuleType("bsv")
-        pkg.__path__ = [str(ROOT / "python" / "bsv")]
-        sys.modules["bsv"] = pkg
+    """Imports from the installed bsv package (scripts/setup.sh builds its extension)."""
     return importlib.import_module(name)
 
 

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import importlib
-import sys
-import types
 from pathlib import Path
 
 import numpy as np
@@ -15,15 +13,7 @@ TEMPLATES = ROOT / "assets" / "template"
 
 
 def _import_bodies():
-    sys.path.insert(0, str(ROOT / "python"))
-    try:
-        importlib.import_module("bsv")
-    except ImportError:  # the Rust extension is not built; bsv.bodies is pure numpy
-        for k in [k for k in sys.modules if k == "bsv" or k.startswith("bsv.")]:
-            del sys.modules[k]
-        pkg = types.ModuleType("bsv")
-        pkg.__path__ = [str(ROOT / "python" / "bsv")]
-        sys.modules["bsv"] = pkg
+    """Imports from the installed bsv package (scripts/setup.sh builds its extension)."""
     return importlib.import_module("bsv.bodies")
 
 

@@ -6,7 +6,7 @@
 
 use bsv_core::clean::{mean_knn_distances, mean_knn_distances_naive, statistical_outliers, SorParams};
 use bsv_core::scanner::{scan, write_capture, Condition, Rig};
-use bsv_core::{shapes, TriMesh};
+use bsv_core::shapes;
 use std::time::Instant;
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -38,37 +38,11 @@ fn time<T>(runs: usize, mut f: impl FnMut() -> T) -> (f64, T) {
     (median(times), last.expect("runs >= 1"))
 }
 
-fn append(mesh: &mut TriMesh, part: TriMesh, label: u8) {
-    let off = mesh.vertices.len() as u32;
-    mesh.vertices.extend(part.vertices);
-    let labels = mesh.face_labels.get_or_insert_with(Vec::new);
-    labels.extend(std::iter::repeat(label).take(part.triangles.len()));
-    mesh.triangles.extend(part.triangles.iter().map(|t| t.map(|i| i + off)));
-}
 
-/// A body-sized labelled mesh of capsules and a sphere head (~27k triangles).
-fn body() -> TriMesh {
-    let mut m = TriMesh::default();
-    let mut torso = shapes::capsule(0.16, 0.45, 64, 12, 40);
-    shapes::translate(&mut torso, [0.0, 0.98, 0.0]);
-    append(&mut m, torso, 2);
-    let mut head = shapes::icosphere(0.1, 4);
-    shapes::translate(&mut head, [0.0, 1.72, 0.0]);
-    append(&mut m, head, 1);
-    for (x, arm, leg) in [(0.27, 3u8, 9u8), (-0.27, 4, 10)] {
-        let mut a = shapes::capsule(0.045, 0.5, 32, 6, 30);
-        shapes::translate(&mut a, [x, 0.9, 0.0]);
-        append(&mut m, a, arm);
-        let mut l = shapes::capsule(0.07, 0.75, 40, 8, 50);
-        shapes::translate(&mut l, [x * 0.4, 0.08, 0.0]);
-        append(&mut m, l, leg);
-    }
-    m
-}
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let mesh = body();
+    let mesh = shapes::capsule_body(true, false);
     let rig = Rig::paper_default();
     println!("threads: {}", rayon::current_num_threads());
     println!("| step | size | median of 5 (s) |");

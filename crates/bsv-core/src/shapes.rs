@@ -206,6 +206,45 @@ pub fn sample_surface(mesh: &TriMesh, n: usize, seed: u64) -> (Vec<[f64; 3]>, Ve
     (points, faces)
 }
 
+/// Appends `part` to `mesh`, every new face labelled `label` (face labels are created if absent).
+pub fn append_labelled(mesh: &mut TriMesh, part: TriMesh, label: u8) {
+    let off = mesh.vertices.len() as u32;
+    let n_old = mesh.triangles.len();
+    mesh.vertices.extend(part.vertices);
+    let labels = mesh.face_labels.get_or_insert_with(|| vec![0; n_old]);
+    labels.extend(std::iter::repeat_n(label, part.triangles.len()));
+    mesh.triangles.extend(part.triangles.iter().map(|t| t.map(|i| i + off)));
+}
+
+/// A crude labelled "body" standing on y = 0 for scanner tests and benchmarks: capsules for the torso,
+/// arms and legs, a sphere head and (with `hands`) sphere hands, each a separate closed part.
+/// `fine` raises the tessellation from ~5k to ~27k triangles.
+pub fn capsule_body(fine: bool, hands: bool) -> TriMesh {
+    let (torso_res, arm_res, leg_res, ico) =
+        if fine { ((64, 12, 40), (32, 6, 30), (40, 8, 50), 4) } else { ((32, 8, 10), (16, 4, 6), (20, 4, 8), 3) };
+    let mut m = TriMesh::default();
+    let mut torso = capsule(0.15, 0.45, torso_res.0, torso_res.1, torso_res.2);
+    translate(&mut torso, [0.0, 0.98, 0.0]);
+    append_labelled(&mut m, torso, 2);
+    let mut head = icosphere(0.1, ico);
+    translate(&mut head, [0.0, 1.72, 0.0]);
+    append_labelled(&mut m, head, 1);
+    for (x, arm, leg, hand) in [(0.26, 3u8, 9u8, 7u8), (-0.26, 4, 10, 8)] {
+        let mut a = capsule(0.045, 0.5, arm_res.0, arm_res.1, arm_res.2);
+        translate(&mut a, [x, 0.9, 0.0]);
+        append_labelled(&mut m, a, arm);
+        if hands {
+            let mut h = icosphere(0.04, 2);
+            translate(&mut h, [x * 1.25, 0.55, 0.0]);
+            append_labelled(&mut m, h, hand);
+        }
+        let mut l = capsule(0.07, 0.75, leg_res.0, leg_res.1, leg_res.2);
+        translate(&mut l, [x * 0.4, 0.08, 0.0]);
+        append_labelled(&mut m, l, leg);
+    }
+    m
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,39 +8,9 @@
 use bsv_core::camera::{Extrinsics, Intrinsics};
 use bsv_core::fuse::{build_cloud, ColorMode, DepthImage, DepthView, FuseError, FuseParams};
 use bsv_core::scanner::{scan, write_capture, CameraView, Condition, Rig, DEPTH_SCALE};
-use bsv_core::{shapes, TriMesh};
+use bsv_core::shapes;
 
-/// Appends `part` to `mesh` with every face labelled `label`.
-fn append(mesh: &mut TriMesh, part: TriMesh, label: u8) {
-    let off = mesh.vertices.len() as u32;
-    mesh.vertices.extend(part.vertices);
-    let labels = mesh.face_labels.get_or_insert_with(Vec::new);
-    labels.extend(std::iter::repeat(label).take(part.triangles.len()));
-    mesh.triangles.extend(part.triangles.iter().map(|t| t.map(|i| i + off)));
-}
 
-/// A crude labelled body: capsules for torso, arms, legs, a sphere head, small sphere hands.
-fn toy_body() -> TriMesh {
-    let mut m = TriMesh::default();
-    let mut torso = shapes::capsule(0.15, 0.45, 32, 8, 10);
-    shapes::translate(&mut torso, [0.0, 0.98, 0.0]);
-    append(&mut m, torso, 2);
-    let mut head = shapes::icosphere(0.1, 3);
-    shapes::translate(&mut head, [0.0, 1.72, 0.0]);
-    append(&mut m, head, 1);
-    for (x, arm, leg, hand) in [(0.26, 3u8, 9u8, 7u8), (-0.26, 4, 10, 8)] {
-        let mut a = shapes::capsule(0.045, 0.5, 16, 4, 6);
-        shapes::translate(&mut a, [x, 0.9, 0.0]);
-        append(&mut m, a, arm);
-        let mut h = shapes::icosphere(0.04, 2);
-        shapes::translate(&mut h, [x * 1.25, 0.55, 0.0]);
-        append(&mut m, h, hand);
-        let mut l = shapes::capsule(0.07, 0.75, 20, 4, 8);
-        shapes::translate(&mut l, [x * 0.4, 0.08, 0.0]);
-        append(&mut m, l, leg);
-    }
-    m
-}
 
 /// Parameters that keep every point (no SOR, no dropping, no normals, palette colours).
 fn keep_all() -> FuseParams {
@@ -69,7 +39,7 @@ fn max_dist(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 #[test]
 fn rebuilding_from_exact_depth_reproduces_the_scanner_cloud() {
     for condition in [Condition::NoEr, Condition::L5Ca] {
-        let s = scan(&toy_body(), &Rig::paper_default(), condition, 3).unwrap();
+        let s = scan(&shapes::capsule_body(false, true), &Rig::paper_default(), condition, 3).unwrap();
         let views: Vec<DepthView> = s.views.iter().map(exact_view).collect();
         let (cloud, report) = build_cloud(&views, &keep_all()).unwrap();
         assert_eq!(cloud.len(), s.cloud.len(), "{condition:?}");
@@ -88,7 +58,7 @@ fn rebuilding_from_exact_depth_reproduces_the_scanner_cloud() {
 
 #[test]
 fn rebuilding_from_written_16_bit_pngs_reproduces_the_scanner_cloud_to_quantisation() {
-    let s = scan(&toy_body(), &Rig::paper_default(), Condition::NoEr, 1).unwrap();
+    let s = scan(&shapes::capsule_body(false, true), &Rig::paper_default(), Condition::NoEr, 1).unwrap();
     let dir = std::env::temp_dir().join(format!("bsv_fuse_png_{}", std::process::id()));
     write_capture(&s, &dir).unwrap();
     let views: Vec<DepthView> = s
@@ -136,7 +106,7 @@ fn rebuilding_from_written_16_bit_pngs_reproduces_the_scanner_cloud_to_quantisat
 
 #[test]
 fn extremities_are_dropped_by_default_and_counted() {
-    let s = scan(&toy_body(), &Rig::paper_default(), Condition::NoEr, 0).unwrap();
+    let s = scan(&shapes::capsule_body(false, true), &Rig::paper_default(), Condition::NoEr, 0).unwrap();
     let views: Vec<DepthView> = s.views.iter().map(exact_view).collect();
     let params = FuseParams { sor: false, ..FuseParams::default() };
     let (cloud, report) = build_cloud(&views, &params).unwrap();
@@ -155,7 +125,7 @@ fn extremities_are_dropped_by_default_and_counted() {
 
 #[test]
 fn outlier_removal_removes_injected_flying_points() {
-    let s = scan(&toy_body(), &Rig::paper_default(), Condition::NoEr, 0).unwrap();
+    let s = scan(&shapes::capsule_body(false, true), &Rig::paper_default(), Condition::NoEr, 0).unwrap();
     let mut views: Vec<DepthView> = s.views.iter().map(exact_view).collect();
     // Mark 300 scattered person pixels of the front camera in red and pull them 0.3 m toward it.
     let v = &mut views[0];
@@ -234,7 +204,7 @@ fn normals_of_a_sphere_point_outward_toward_the_camera() {
 
 #[test]
 fn bad_inputs_give_typed_errors() {
-    let s = scan(&toy_body(), &Rig::paper_default(), Condition::NoEr, 0).unwrap();
+    let s = scan(&shapes::capsule_body(false, true), &Rig::paper_default(), Condition::NoEr, 0).unwrap();
     let good = exact_view(&s.views[0]);
     let p = FuseParams::default();
 

@@ -13,34 +13,7 @@ use parry3d_f64::query::PointQueryWithLocation;
 use parry3d_f64::shape::TrianglePointLocation;
 use rand::SeedableRng;
 
-/// Appends `part` to `mesh` with every face labelled `label`.
-fn append(mesh: &mut TriMesh, part: TriMesh, label: u8) {
-    let off = mesh.vertices.len() as u32;
-    mesh.vertices.extend(part.vertices);
-    let labels = mesh.face_labels.get_or_insert_with(Vec::new);
-    labels.extend(std::iter::repeat(label).take(part.triangles.len()));
-    mesh.triangles.extend(part.triangles.iter().map(|t| t.map(|i| i + off)));
-}
 
-/// A crude labelled "body": separate capsules for torso, arms, legs and a sphere head.
-fn toy_body() -> TriMesh {
-    let mut m = TriMesh::default();
-    let mut torso = shapes::capsule(0.15, 0.45, 32, 8, 10);
-    shapes::translate(&mut torso, [0.0, 0.98, 0.0]);
-    append(&mut m, torso, 2);
-    let mut head = shapes::icosphere(0.1, 3);
-    shapes::translate(&mut head, [0.0, 1.72, 0.0]);
-    append(&mut m, head, 1);
-    for (x, arm, leg) in [(0.26, 3u8, 9u8), (-0.26, 4, 10)] {
-        let mut a = shapes::capsule(0.045, 0.5, 16, 4, 6);
-        shapes::translate(&mut a, [x, 0.9, 0.0]);
-        append(&mut m, a, arm);
-        let mut l = shapes::capsule(0.07, 0.75, 20, 4, 8);
-        shapes::translate(&mut l, [x * 0.4, 0.08, 0.0]);
-        append(&mut m, l, leg);
-    }
-    m
-}
 
 fn front_only() -> Rig {
     let mut rig = Rig::paper_default();
@@ -50,7 +23,7 @@ fn front_only() -> Rig {
 
 #[test]
 fn noer_points_lie_on_the_mesh_with_the_right_label() {
-    let body = toy_body();
+    let body = shapes::capsule_body(false, false);
     let labels = face_labels(&body).unwrap();
     let bvh = parry_mesh(&body).unwrap();
     let s = scan(&body, &Rig::paper_default(), Condition::NoEr, 7).unwrap();
@@ -100,7 +73,7 @@ fn wall_residuals(depth_to_face: f64) -> (Vec<f64>, f64) {
     let mut wall = TriMesh::default();
     let mut b = shapes::cuboid([1.2, 1.4, 0.1]);
     shapes::translate(&mut b, [0.0, 1.0, 2.0 - depth_to_face - 0.05]);
-    append(&mut wall, b, 2);
+    shapes::append_labelled(&mut wall, b, 2);
     // Distinct label on the front (+z) face: triangles 2 and 3 of shapes::cuboid.
     wall.face_labels.as_mut().unwrap()[2] = 5;
     wall.face_labels.as_mut().unwrap()[3] = 5;
@@ -141,10 +114,10 @@ fn flying_pixels_appear_only_at_discontinuities_in_l515() {
     let mut scene = TriMesh::default();
     let mut wall = shapes::cuboid([3.0, 3.0, 0.1]);
     shapes::translate(&mut wall, [0.0, 1.0, -1.05]);
-    append(&mut scene, wall, 2);
+    shapes::append_labelled(&mut scene, wall, 2);
     let mut b = shapes::cuboid([0.3, 0.3, 0.3]);
     shapes::translate(&mut b, [0.0, 1.0, 0.35]);
-    append(&mut scene, b, 9);
+    shapes::append_labelled(&mut scene, b, 9);
     let rig = front_only();
     let between = |c: Condition| {
         let s = scan(&scene, &rig, c, 4).unwrap();

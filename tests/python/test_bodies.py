@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib
 import json
 import sys
 from pathlib import Path
@@ -13,23 +12,13 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _import_bodies():
-    """Imports from the installed bsv package (scripts/setup.sh builds its extension)."""
-    return importlib.import_module("bsv.bodies")
-
-
-bodies = _import_bodies()
+from bsv import bodies  # noqa: E402
+from meshcheck import edges_closed  # noqa: E402
 from bsv.bodies.collide import penetrations, winding_numbers  # noqa: E402
 from bsv.bodies.labels import boundary_loops  # noqa: E402
 from bsv.bodies.meshio import read_ply  # noqa: E402
 
 
-def edges_closed(faces: np.ndarray) -> bool:
-    """Every directed edge appears once and its reverse once: closed and consistently oriented."""
-    e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]).astype(np.int64)
-    n = int(faces.max()) + 1
-    key, rev = e[:, 0] * n + e[:, 1], e[:, 1] * n + e[:, 0]
-    return len(np.unique(key)) == len(key) and np.array_equal(np.sort(key), np.sort(rev))
 
 
 @pytest.fixture(scope="module")

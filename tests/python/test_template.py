@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib
 from pathlib import Path
 
 import numpy as np
@@ -12,21 +11,12 @@ ROOT = Path(__file__).resolve().parents[2]
 TEMPLATES = ROOT / "assets" / "template"
 
 
-def _import_bodies():
-    """Imports from the installed bsv package (scripts/setup.sh builds its extension)."""
-    return importlib.import_module("bsv.bodies")
-
-
-bodies = _import_bodies()
+from bsv import bodies  # noqa: E402
+from meshcheck import edges_closed  # noqa: E402
 from bsv.bodies.meshio import ply_bytes, read_ply  # noqa: E402
 from bsv.bodies.template import check_watertight, obj_text, templates  # noqa: E402
 
 
-def edges_closed(faces: np.ndarray) -> bool:
-    e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]).astype(np.int64)
-    n = int(faces.max()) + 1
-    key, rev = e[:, 0] * n + e[:, 1], e[:, 1] * n + e[:, 0]
-    return len(np.unique(key)) == len(key) and np.array_equal(np.sort(key), np.sort(rev))
 
 
 def signed_volume(v, f):

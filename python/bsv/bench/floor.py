@@ -20,15 +20,12 @@ from typing import Any, Mapping
 import numpy as np
 
 from .. import volumes as _volumes
-from ..errors import BsvError
+from ..errors import FloorError
 from ..types import Mesh
 
 #: Half-width of the blending band in n . d (0.3: the blend spans normals within ~17 deg of lateral).
 DEFAULT_BAND: float = 0.3
 
-
-class FloorError(BsvError, ValueError):
-    """A capture folder lacks the per-camera extrinsics the floor needs."""
 
 
 @dataclass(frozen=True)

@@ -9,18 +9,11 @@ import numpy as np
 
 from ..types import SEGMENT_NAMES, Mesh
 from .asset import Asset, load_asset
-from .errors import BsvError
+from ..errors import SolveError
 from .labels import aggregates, body_labels, segment_volumes, volume
 from .model import Phenotype, shape
 from .pose import Pose, pose_vertices
 
-
-class SolveError(BsvError, ValueError):
-    """The stature/BMI solver cannot reach the requested values (``reachable``: the attainable range)."""
-
-    def __init__(self, message: str, reachable: tuple[float, float] | None = None) -> None:
-        super().__init__(message)
-        self.reachable = reachable
 
 
 @lru_cache(maxsize=1)

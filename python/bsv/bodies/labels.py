@@ -15,7 +15,7 @@ import numpy as np
 
 from ..types import SEGMENT_IDS, SEGMENT_NAMES, TRUNK_LIMBS
 from .asset import Asset, load_asset
-from .errors import BsvError
+from ..errors import LabelError
 
 #: Palette colours (sRGB) per segment id, exactly crates/bsv-core/src/segment.rs PALETTE (what the Rust
 #: writers put in PLY files); used by the PLY writer here and by the report figures.
@@ -37,9 +37,6 @@ PALETTE = np.array([
     [31, 120, 180],   # 14 foot_r
 ], dtype=np.uint8)
 
-
-class LabelError(BsvError, ValueError):
-    """A labelled mesh cannot be split into closed segments."""
 
 
 def bone_segment(name: str) -> int:

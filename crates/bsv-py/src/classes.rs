@@ -11,7 +11,8 @@ use pythonize::{depythonize, pythonize};
 
 /// Any serializable Rust value as a Python object (dicts, lists, floats, strings, None).
 pub fn to_py<'py, T: serde::Serialize>(py: Python<'py>, value: &T) -> PyResult<Bound<'py, PyAny>> {
-    pythonize(py, value).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(format!("cannot convert a result to Python: {e}")))
+    pythonize(py, value)
+        .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(format!("cannot convert a result to Python: {e}")))
 }
 
 /// Deserializes keyword parameters; on failure, finds the key at fault (each key alone) so the error
@@ -76,9 +77,9 @@ impl PyRegisterParams {
     }
 
     fn __getattr__<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyAny>> {
-        self.to_dict(py)?
-            .get_item(name)
-            .map_err(|_| pyo3::exceptions::PyAttributeError::new_err(format!("RegisterParams has no parameter {name:?}")))
+        self.to_dict(py)?.get_item(name).map_err(|_| {
+            pyo3::exceptions::PyAttributeError::new_err(format!("RegisterParams has no parameter {name:?}"))
+        })
     }
 
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {

@@ -8,7 +8,9 @@
 use crate::errors::input_error;
 use bsv_core::{PointCloud, TriMesh};
 use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayDescrMethods, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyArrayDescrMethods, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -34,8 +36,7 @@ fn asarray<'py>(obj: &Bound<'py, PyAny>, dtype: Option<&str>, what: &str) -> PyR
     let arr = np
         .call_method("asarray", (obj,), Some(&kwargs))
         .map_err(|e| input_error(what, None, format!("{what} is not a numeric array: {e}")))?;
-    arr.cast_into::<PyUntypedArray>()
-        .map_err(|_| input_error(what, None, format!("{what} is not a numeric array")))
+    arr.cast_into::<PyUntypedArray>().map_err(|_| input_error(what, None, format!("{what} is not a numeric array")))
 }
 
 /// dtype kind character (`'f'`, `'i'`, `'u'`, `'b'`, ...).
@@ -47,7 +48,11 @@ fn kind(a: &Bound<'_, PyUntypedArray>) -> u8 {
 fn rows3(obj: &Bound<'_, PyAny>, what: &str, hint: &str) -> PyResult<Vec<[f64; 3]>> {
     let a = asarray(obj, None, what)?;
     if a.ndim() != 2 || a.shape()[1] != 3 {
-        return Err(input_error(what, None, format!("{what} must have shape (N, 3) ({hint}), got {}", shape_text(a.shape()))));
+        return Err(input_error(
+            what,
+            None,
+            format!("{what} must have shape (N, 3) ({hint}), got {}", shape_text(a.shape())),
+        ));
     }
     if !matches!(kind(&a), b'f' | b'i' | b'u' | b'b') {
         return Err(input_error(what, None, format!("{what} must hold real numbers, got dtype {}", a.dtype())));
@@ -110,7 +115,9 @@ pub fn triangles_from(obj: &Bound<'_, PyAny>, n_vertices: usize, what: &str) -> 
                 return Err(input_error(
                     what,
                     Some(f),
-                    format!("{what}[{f}] refers to vertex {v}, but there are {n_vertices} vertices; indices are 0-based"),
+                    format!(
+                        "{what}[{f}] refers to vertex {v}, but there are {n_vertices} vertices; indices are 0-based"
+                    ),
                 ));
             }
             t[k] = v as u32;
@@ -151,7 +158,11 @@ pub fn labels_from(obj: Option<&Bound<'_, PyAny>>, expected: usize, what: &str) 
     let Some(obj) = obj.filter(|o| !o.is_none()) else { return Ok(None) };
     let l = label_values(obj, what)?;
     if l.len() != expected {
-        return Err(input_error(what, None, format!("{what} has {} entries, expected {expected} (one per element)", l.len())));
+        return Err(input_error(
+            what,
+            None,
+            format!("{what} has {} entries, expected {expected} (one per element)", l.len()),
+        ));
     }
     Ok(Some(l))
 }
@@ -182,7 +193,11 @@ pub fn cloud_from(
         Some(a) => {
             let n = rows3(a, "normals", "unit normals")?;
             if n.len() != p.len() {
-                return Err(input_error("normals", None, format!("normals has {} rows, points has {}", n.len(), p.len())));
+                return Err(input_error(
+                    "normals",
+                    None,
+                    format!("normals has {} rows, points has {}", n.len(), p.len()),
+                ));
             }
             Some(n)
         }
@@ -191,11 +206,17 @@ pub fn cloud_from(
     let c = match colors.filter(|o| !o.is_none()) {
         Some(a) => {
             let arr = asarray(a, None, "colors")?;
-            if arr.ndim() != 2 || arr.shape()[1] != 3 || arr.shape()[0] != p.len() || !matches!(kind(&arr), b'u' | b'i') {
+            if arr.ndim() != 2 || arr.shape()[1] != 3 || arr.shape()[0] != p.len() || !matches!(kind(&arr), b'u' | b'i')
+            {
                 return Err(input_error(
                     "colors",
                     None,
-                    format!("colors must be a ({}, 3) uint8 array, got {} {}", p.len(), arr.dtype(), shape_text(arr.shape())),
+                    format!(
+                        "colors must be a ({}, 3) uint8 array, got {} {}",
+                        p.len(),
+                        arr.dtype(),
+                        shape_text(arr.shape())
+                    ),
                 ));
             }
             let u = asarray(arr.as_any(), Some("uint8"), "colors")?;
@@ -211,19 +232,25 @@ pub fn cloud_from(
 /// (N, 3) float64 array from points.
 pub fn points_to<'py>(py: Python<'py>, p: &[[f64; 3]]) -> Bound<'py, PyArray2<f64>> {
     let flat: Vec<f64> = p.iter().flatten().copied().collect();
-    Array2::from_shape_vec((p.len(), 3), flat).map(|a| a.into_pyarray(py)).unwrap_or_else(|_| PyArray2::zeros(py, [0, 3], false))
+    Array2::from_shape_vec((p.len(), 3), flat)
+        .map(|a| a.into_pyarray(py))
+        .unwrap_or_else(|_| PyArray2::zeros(py, [0, 3], false))
 }
 
 /// (M, 3) int64 array from triangles.
 pub fn triangles_to<'py>(py: Python<'py>, t: &[[u32; 3]]) -> Bound<'py, PyArray2<i64>> {
     let flat: Vec<i64> = t.iter().flatten().map(|&i| i64::from(i)).collect();
-    Array2::from_shape_vec((t.len(), 3), flat).map(|a| a.into_pyarray(py)).unwrap_or_else(|_| PyArray2::zeros(py, [0, 3], false))
+    Array2::from_shape_vec((t.len(), 3), flat)
+        .map(|a| a.into_pyarray(py))
+        .unwrap_or_else(|_| PyArray2::zeros(py, [0, 3], false))
 }
 
 /// (N, 3) uint8 array from colours.
 pub fn colors_to<'py>(py: Python<'py>, c: &[[u8; 3]]) -> Bound<'py, PyArray2<u8>> {
     let flat: Vec<u8> = c.iter().flatten().copied().collect();
-    Array2::from_shape_vec((c.len(), 3), flat).map(|a| a.into_pyarray(py)).unwrap_or_else(|_| PyArray2::zeros(py, [0, 3], false))
+    Array2::from_shape_vec((c.len(), 3), flat)
+        .map(|a| a.into_pyarray(py))
+        .unwrap_or_else(|_| PyArray2::zeros(py, [0, 3], false))
 }
 
 /// uint8 label array.

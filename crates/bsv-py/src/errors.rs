@@ -98,7 +98,9 @@ impl ToPyErr for ReadError {
 fn ply_location(e: &PlyError) -> Vec<(&'static str, Field)> {
     let mut out = Vec::new();
     match e {
-        PlyError::HeaderSyntax { line, .. } | PlyError::UnknownType { line, .. } => out.push(("line", Field::Int(*line))),
+        PlyError::HeaderSyntax { line, .. } | PlyError::UnknownType { line, .. } => {
+            out.push(("line", Field::Int(*line)))
+        }
         PlyError::AsciiRecord { line, element, .. } => {
             out.push(("line", Field::Int(*line)));
             out.push(("element", Field::Str(element.clone())));
@@ -110,7 +112,9 @@ fn ply_location(e: &PlyError) -> Vec<(&'static str, Field)> {
         | PlyError::ExtraData { element, .. }
         | PlyError::BadListCount { element, .. }
         | PlyError::LabelOutOfRange { element, .. } => out.push(("element", Field::Str(element.clone()))),
-        PlyError::FaceTooSmall { .. } | PlyError::FaceIndexOutOfRange { .. } => out.push(("element", Field::Str("face".into()))),
+        PlyError::FaceTooSmall { .. } | PlyError::FaceIndexOutOfRange { .. } => {
+            out.push(("element", Field::Str("face".into())))
+        }
         PlyError::NonFinite { .. } => out.push(("element", Field::Str("vertex".into()))),
         _ => {}
     }
@@ -132,7 +136,9 @@ fn obj_line(e: &ObjError) -> Option<usize> {
 impl ToPyErr for WriteError {
     fn to_py_err(&self) -> PyErr {
         let path = match self {
-            WriteError::Io { path, .. } | WriteError::UnsupportedExtension { path, .. } | WriteError::Invalid { path, .. } => path,
+            WriteError::Io { path, .. }
+            | WriteError::UnsupportedExtension { path, .. }
+            | WriteError::Invalid { path, .. } => path,
         };
         exception("WriteError", message(self), vec![("path", Field::path(path))])
     }
@@ -140,13 +146,16 @@ impl ToPyErr for WriteError {
 
 impl ToPyErr for VolumeError {
     fn to_py_err(&self) -> PyErr {
-        let at = |element: &str, index: usize| vec![("element", Field::Str(element.into())), ("index", Field::Int(index))];
+        let at =
+            |element: &str, index: usize| vec![("element", Field::Str(element.into())), ("index", Field::Int(index))];
         let fields = match self {
             VolumeError::IndexOutOfRange { face, .. } | VolumeError::DegenerateFace { face, .. } => at("face", *face),
             VolumeError::NonFiniteVertex { vertex, .. } => at("vertex", *vertex),
             VolumeError::UnknownLabel { what, index, .. } => at(what, *index),
             VolumeError::LabelCountMismatch { what, .. } => vec![("element", Field::Str((*what).into()))],
-            VolumeError::OpenMesh { .. } | VolumeError::NonManifold { .. } | VolumeError::InconsistentOrientation { .. } => {
+            VolumeError::OpenMesh { .. }
+            | VolumeError::NonManifold { .. }
+            | VolumeError::InconsistentOrientation { .. } => {
                 vec![("element", Field::Str("edge".into()))]
             }
             _ => Vec::new(),

@@ -68,7 +68,11 @@ fn write_point_cloud(
 
 /// The mesh-check report (`bsv_core::check::MeshReport`) as a dict.
 #[pyfunction]
-fn check_mesh<'py>(py: Python<'py>, vertices: &Bound<'py, PyAny>, faces: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+fn check_mesh<'py>(
+    py: Python<'py>,
+    vertices: &Bound<'py, PyAny>,
+    faces: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
     let mesh = mesh_from(vertices, faces, None, None)?;
     to_py(py, &bsv_core::check::check_mesh(&mesh))
 }
@@ -185,7 +189,11 @@ fn vertex_labels_from_faces<'py>(
 
 /// Area-weighted unit vertex normals (`bsv_core::geometry::vertex_normals`; zero for isolated vertices).
 #[pyfunction]
-fn vertex_normals<'py>(py: Python<'py>, vertices: &Bound<'py, PyAny>, faces: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+fn vertex_normals<'py>(
+    py: Python<'py>,
+    vertices: &Bound<'py, PyAny>,
+    faces: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let v = points_from(vertices, "vertices")?;
     let t = triangles_from(faces, v.len(), "faces")?;
     let mesh = TriMesh::new(v, t);

@@ -1,8 +1,8 @@
 //! Python binding of cloud building (`bsv_core::fuse::build_cloud`): dicts of numpy images and a
 //! dict of parameters in, the cloud tuple and the report dict out. Conversion only.
 
-use crate::convert::{colors_to, labels_to, points_to};
 use crate::classes::{from_kwargs, to_py};
+use crate::convert::{colors_to, labels_to, points_to};
 use crate::errors::{input_error, py_err};
 use bsv_core::camera::{Extrinsics, Intrinsics};
 use bsv_core::fuse::{self, DepthImage, DepthView, FuseParams};
@@ -26,9 +26,9 @@ fn item<'py>(d: &Bound<'py, PyDict>, key: &str, camera: &str) -> PyResult<Bound<
 
 fn float(d: &Bound<'_, PyDict>, key: &str, camera: &str, default: Option<f64>) -> PyResult<f64> {
     match (d.get_item(key)?.filter(|v| !v.is_none()), default) {
-        (Some(v), _) => v.extract::<f64>().map_err(|_| {
-            views_error(format!("view `{camera}`: `{key}` must be a number, got {v}"))
-        }),
+        (Some(v), _) => {
+            v.extract::<f64>().map_err(|_| views_error(format!("view `{camera}`: `{key}` must be a number, got {v}")))
+        }
         (None, Some(x)) => Ok(x),
         (None, None) => Err(views_error(format!("view `{camera}`: intrinsics lack `{key}`"))),
     }
@@ -38,15 +38,21 @@ fn intrinsics_from(d: &Bound<'_, PyDict>, camera: &str) -> PyResult<Intrinsics> 
     let int = |key: &str| -> PyResult<u32> {
         let v = float(d, key, camera, None)?;
         if v.fract() != 0.0 || !(1.0..=f64::from(u32::MAX)).contains(&v) {
-            return Err(views_error(format!("view `{camera}`: intrinsics `{key}` = {v} is not a positive pixel count")));
+            return Err(views_error(format!(
+                "view `{camera}`: intrinsics `{key}` = {v} is not a positive pixel count"
+            )));
         }
         Ok(v as u32)
     };
     let mut k = [0.0f64; 5];
     if let Some(c) = d.get_item("coeffs")?.filter(|v| !v.is_none()) {
-        let c: Vec<f64> = c.extract().map_err(|_| views_error(format!("view `{camera}`: intrinsics `coeffs` must be 5 numbers")))?;
+        let c: Vec<f64> =
+            c.extract().map_err(|_| views_error(format!("view `{camera}`: intrinsics `coeffs` must be 5 numbers")))?;
         if c.len() != 5 {
-            return Err(views_error(format!("view `{camera}`: intrinsics `coeffs` has {} numbers, expected 5 (k1, k2, p1, p2, k3)", c.len())));
+            return Err(views_error(format!(
+                "view `{camera}`: intrinsics `coeffs` has {} numbers, expected 5 (k1, k2, p1, p2, k3)",
+                c.len()
+            )));
         }
         k.copy_from_slice(&c);
     } else {
@@ -108,9 +114,9 @@ fn view_from(obj: &Bound<'_, PyAny>, index: usize) -> PyResult<DepthView> {
         _ => format!("view {index}"),
     };
     let intr_obj = item(d, "intrinsics", &name)?;
-    let intr_dict = intr_obj
-        .cast::<PyDict>()
-        .map_err(|_| views_error(format!("view `{name}`: intrinsics must be a dict (width, height, fx, fy, cx, cy, coeffs)")))?;
+    let intr_dict = intr_obj.cast::<PyDict>().map_err(|_| {
+        views_error(format!("view `{name}`: intrinsics must be a dict (width, height, fx, fy, cx, cy, coeffs)"))
+    })?;
     let intrinsics = intrinsics_from(intr_dict, &name)?;
     let camera_to_world = extrinsics_from(&item(d, "camera_to_world", &name)?, &name)?;
 
@@ -118,7 +124,9 @@ fn view_from(obj: &Bound<'_, PyAny>, index: usize) -> PyResult<DepthView> {
     let depth = if let Ok(a) = depth_obj.extract::<PyReadonlyArray2<'_, u16>>() {
         check_shape(a.shape(), &intrinsics, &name, "depth")?;
         let scale = float(d, "depth_scale", &name, None).map_err(|_| {
-            views_error(format!("view `{name}`: a uint16 depth image needs `depth_scale` (metres per unit, from camera.json)"))
+            views_error(format!(
+                "view `{name}`: a uint16 depth image needs `depth_scale` (metres per unit, from camera.json)"
+            ))
         })?;
         DepthImage::Units { data: a.as_array().iter().copied().collect(), scale }
     } else if let Ok(a) = depth_obj.extract::<PyReadonlyArray2<'_, f32>>() {
@@ -139,12 +147,15 @@ fn view_from(obj: &Bound<'_, PyAny>, index: usize) -> PyResult<DepthView> {
     let colors = match d.get_item("colors")?.filter(|v| !v.is_none()) {
         None => None,
         Some(c) => {
-            let a = c.extract::<PyReadonlyArray3<'_, u8>>().map_err(|_| {
-                views_error(format!("view `{name}`: colors must be an (H, W, 3) uint8 RGB array"))
-            })?;
+            let a = c
+                .extract::<PyReadonlyArray3<'_, u8>>()
+                .map_err(|_| views_error(format!("view `{name}`: colors must be an (H, W, 3) uint8 RGB array")))?;
             check_shape(a.shape(), &intrinsics, &name, "colors")?;
             if a.shape()[2] != 3 {
-                return Err(views_error(format!("view `{name}`: colors must have 3 channels (RGB), got {}", a.shape()[2])));
+                return Err(views_error(format!(
+                    "view `{name}`: colors must have 3 channels (RGB), got {}",
+                    a.shape()[2]
+                )));
             }
             let flat: Vec<u8> = a.as_array().iter().copied().collect();
             Some(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
@@ -157,7 +168,11 @@ fn view_from(obj: &Bound<'_, PyAny>, index: usize) -> PyResult<DepthView> {
 /// `(points, normals | None, colors | None, labels | None, report dict)`.
 #[pyfunction]
 #[pyo3(signature = (views, params=None))]
-fn build_cloud<'py>(py: Python<'py>, views: Vec<Bound<'py, PyAny>>, params: Option<Bound<'py, PyDict>>) -> PyResult<Bound<'py, PyTuple>> {
+fn build_cloud<'py>(
+    py: Python<'py>,
+    views: Vec<Bound<'py, PyAny>>,
+    params: Option<Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyTuple>> {
     let params: FuseParams = from_kwargs("cloud-building", &params.unwrap_or_else(|| PyDict::new(py)))?;
     let views: Vec<DepthView> = views.iter().enumerate().map(|(i, v)| view_from(v, i)).collect::<PyResult<_>>()?;
     let (cloud, report) = py.detach(|| fuse::build_cloud(&views, &params)).map_err(py_err)?;

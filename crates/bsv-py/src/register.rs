@@ -79,7 +79,8 @@ pub fn register<'py>(
     let (reg, report) = fitted.map_err(py_err)?;
     let report = report.map_err(py_err)?;
     let summary = to_py(py, &reg)?.cast_into::<PyDict>()?;
-    let log = summary.get_item("log")?.map(|l| l.cast_into::<PyList>()).transpose()?.unwrap_or_else(|| PyList::empty(py));
+    let log =
+        summary.get_item("log")?.map(|l| l.cast_into::<PyList>()).transpose()?.unwrap_or_else(|| PyList::empty(py));
     summary.del_item("log")?;
     summary.set_item("iterations", reg.log.len())?;
     summary.set_item("seconds", reg.total_seconds)?;

@@ -12,8 +12,6 @@ while it initialises.
 
 from __future__ import annotations
 
-from typing import Optional
-
 
 class BsvError(Exception):
     """Base class of every BSV error."""
@@ -28,15 +26,15 @@ class FormatError(BsvError):
     ``path``: the file; ``element`` / ``line``: where in it (PLY element, OBJ or PLY header line),
     when the reader knows."""
 
-    path: Optional[str] = None
-    element: Optional[str] = None
-    line: Optional[int] = None
+    path: str | None = None
+    element: str | None = None
+    line: int | None = None
 
 
 class WriteError(BsvError):
     """A file could not be written (``path``)."""
 
-    path: Optional[str] = None
+    path: str | None = None
 
 
 class InputError(BsvError):
@@ -45,8 +43,8 @@ class InputError(BsvError):
     ``argument``: the argument at fault (``"points"``, ``"faces"``, ``"labels"``, ...);
     ``index``: the first bad row or entry, when there is one."""
 
-    argument: Optional[str] = None
-    index: Optional[int] = None
+    argument: str | None = None
+    index: int | None = None
 
 
 class MeshError(BsvError):
@@ -58,8 +56,8 @@ class VolumeError(BsvError):
 
     ``element`` (``"vertex"``, ``"face"``, ``"edge"``) and ``index`` locate the problem when known."""
 
-    element: Optional[str] = None
-    index: Optional[int] = None
+    element: str | None = None
+    index: int | None = None
 
 
 class RegistrationError(BsvError):
@@ -68,7 +66,7 @@ class RegistrationError(BsvError):
     ``parameter``: the registration parameter (keyword of :func:`bsv.register`) whose change is the
     remedy, when there is one."""
 
-    parameter: Optional[str] = None
+    parameter: str | None = None
 
 
 class RegistrationInputError(RegistrationError, InputError):
@@ -85,7 +83,7 @@ class RegistrationNumericError(RegistrationError):
     """The fit failed numerically (no correspondence left, solver failure, divergence);
     ``iteration`` is the global iteration when known."""
 
-    iteration: Optional[int] = None
+    iteration: int | None = None
 
 
 class RegistrationResourceError(RegistrationError):
@@ -95,7 +93,7 @@ class RegistrationResourceError(RegistrationError):
 class RegistrationStopped(RegistrationError):
     """The fit was stopped by its progress callback (``iteration``: the last iteration run)."""
 
-    iteration: Optional[int] = None
+    iteration: int | None = None
 
 
 class ScanError(BsvError):

@@ -46,4 +46,4 @@ def as_cloud(obj: Any, labels: Any = None, normals: Any = None, colors: Any = No
     return PointCloud(np.asarray(obj), normals, colors, labels)
 
 
-__all__ = ["as_mesh", "as_cloud", "FloatArray", "IndexArray"]
+__all__ = ["FloatArray", "IndexArray", "as_cloud", "as_mesh"]

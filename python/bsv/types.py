@@ -7,7 +7,7 @@ raises :class:`bsv.InputError` naming the argument."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -37,8 +37,8 @@ class Mesh:
 
     vertices: FloatArray
     faces: IndexArray
-    vertex_labels: Optional[LabelArray] = None
-    face_labels: Optional[LabelArray] = None
+    vertex_labels: LabelArray | None = None
+    face_labels: LabelArray | None = None
 
     def __post_init__(self) -> None:
         self.vertices = np.asarray(self.vertices)
@@ -60,9 +60,9 @@ class PointCloud:
     """A point cloud in metres: ``points`` (N, 3) float64 with optional normals, uint8 colours and labels."""
 
     points: FloatArray
-    normals: Optional[FloatArray] = None
-    colors: Optional[npt.NDArray[np.uint8]] = None
-    labels: Optional[LabelArray] = None
+    normals: FloatArray | None = None
+    colors: npt.NDArray[np.uint8] | None = None
+    labels: LabelArray | None = None
 
     def __post_init__(self) -> None:
         self.points = np.asarray(self.points)
@@ -87,8 +87,8 @@ class Registration:
     volumes: dict[str, Any]
     log: list[dict[str, Any]] = field(default_factory=list)
     seconds: float = 0.0
-    params: Optional[_bsv.RegisterParams] = None
-    report: Optional[_bsv.VolumeReport] = None
+    params: _bsv.RegisterParams | None = None
+    report: _bsv.VolumeReport | None = None
 
     @property
     def summary(self) -> dict[str, Any]:

@@ -39,7 +39,7 @@ def _params(fn: ast.FunctionDef) -> list[tuple[str, Any]]:
     a = fn.args
     positional = a.posonlyargs + a.args
     defaults: list[Any] = [...] * (len(positional) - len(a.defaults)) + [ast.literal_eval(d) for d in a.defaults]
-    out = [(p.arg, d) for p, d in zip(positional, defaults)]
+    out = [(p.arg, d) for p, d in zip(positional, defaults, strict=True)]
     if a.kwarg is not None:
         out.append((f"**{a.kwarg.arg}", ...))
     return out

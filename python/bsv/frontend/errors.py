@@ -22,7 +22,17 @@ from ..errors import (
 )
 
 __all__ = [
-    "BsvError", "FrontendError", "CalibrationError", "MarkerNotFoundError", "WrongMarkerError",
-    "BlurredImageError", "CalibrationFileError", "CaptureError", "NoCameraError", "RecordingError",
-    "SegmentationError", "PersonNotFoundError", "LandmarkMissingError",
+    "BlurredImageError",
+    "BsvError",
+    "CalibrationError",
+    "CalibrationFileError",
+    "CaptureError",
+    "FrontendError",
+    "LandmarkMissingError",
+    "MarkerNotFoundError",
+    "NoCameraError",
+    "PersonNotFoundError",
+    "RecordingError",
+    "SegmentationError",
+    "WrongMarkerError",
 ]

@@ -7,7 +7,6 @@ mesh checks, volumes, the virtual scanner, the ARAP registration) runs in the Ru
 
 from __future__ import annotations
 
-import json
 import os
 from pathlib import Path
 from typing import Any, Callable, Optional, Union
@@ -15,19 +14,25 @@ from typing import Any, Callable, Optional, Union
 import numpy as np
 
 from . import _bsv
-from ._bsv import (
+from ._bsv import RegisterParams, VolumeReport
+from .errors import (
     BsvError,
     FormatError,
     InputError,
     MeshError,
+    OutputExistsError,
     RegistrationError,
+    RegistrationInputError,
+    RegistrationNumericError,
+    RegistrationParameterError,
+    RegistrationResourceError,
+    RegistrationStopped,
     ScanError,
     VolumeError,
     WriteError,
 )
-from .errors import OutputExistsError
-from .interop import as_cloud, as_mesh, opt_labels
-from .types import SEGMENT_IDS, SEGMENT_NAMES, TRUNK_LIMBS, Mesh, PointCloud, Registration, checked_labels
+from .interop import as_cloud, as_mesh
+from .types import SEGMENT_IDS, SEGMENT_NAMES, TRUNK_LIMBS, Mesh, PointCloud, Registration
 
 __version__: str = _bsv.__version__
 
@@ -77,9 +82,7 @@ def write_mesh(
 ) -> None:
     """Writes a mesh as PLY (binary little-endian unless ``ascii``, labels + palette colours) or OBJ."""
     m = as_mesh(mesh, faces, vertex_labels, face_labels)
-    _bsv.write_mesh(
-        _out_path(path, overwrite), m.vertices, m.faces, opt_labels(m.vertex_labels), opt_labels(m.face_labels), ascii
-    )
+    _bsv.write_mesh(_out_path(path, overwrite), m.vertices, m.faces, m.vertex_labels, m.face_labels, ascii)
 
 
 def write_point_cloud(
@@ -94,13 +97,13 @@ def write_point_cloud(
 ) -> None:
     """Writes a point cloud as PLY (binary little-endian unless ``ascii``)."""
     c = as_cloud(cloud, labels=labels, normals=normals, colors=colors)
-    _bsv.write_point_cloud(_out_path(path, overwrite), c.points, c.normals, c.colors, opt_labels(c.labels), ascii)
+    _bsv.write_point_cloud(_out_path(path, overwrite), c.points, c.normals, c.colors, c.labels, ascii)
 
 
 def check_mesh(mesh: Any, faces: Any = None) -> dict[str, Any]:
     """The mesh-check report: degenerate/duplicate faces, boundary and non-manifold edges, orientation, ..."""
     m = as_mesh(mesh, faces)
-    return json.loads(_bsv.check_mesh(m.vertices, m.faces))
+    return _bsv.check_mesh(m.vertices, m.faces)
 
 
 def volumes(
@@ -118,19 +121,23 @@ def volumes(
     without labels only ``whole`` is reported. ``islands``: merge small stray label patches first (what
     :func:`register` does for fitted meshes). Returns the volumes JSON of DESIGN.md as a dict.
     """
+    return volume_report(mesh, faces, labels, density=density, close_holes=close_holes, islands=islands).to_dict()
+
+
+def volume_report(
+    mesh: Any,
+    faces: Any = None,
+    labels: Any = None,
+    *,
+    density: float = 1000.0,
+    close_holes: bool = False,
+    islands: bool = False,
+) -> VolumeReport:
+    """:func:`volumes` as the typed :class:`bsv.VolumeReport` (``.to_dict()`` is what :func:`volumes` returns)."""
     m = as_mesh(mesh, faces)
-    vl, fl = m.vertex_labels, m.face_labels
-    if labels is not None:
-        lab = checked_labels(labels, "labels")
-        if len(lab) == len(m.vertices):
-            vl = lab
-        elif len(lab) == len(m.faces):
-            fl = lab
-        else:
-            raise InputError(
-                f"labels has {len(lab)} entries; expected one per vertex ({len(m.vertices)}) or per face ({len(m.faces)})"
-            )
-    return json.loads(_bsv.volumes(m.vertices, m.faces, vl, fl, float(density), bool(close_holes), bool(islands)))
+    return _bsv.volumes(
+        m.vertices, m.faces, m.vertex_labels, m.face_labels, labels, float(density), bool(close_holes), bool(islands)
+    )
 
 
 def default_template(full: bool = False) -> Mesh:
@@ -171,23 +178,24 @@ def register(
     if label_source is None:
         label_source = "cloud" if cloud.labels is not None else "template"
     params["labels"] = label_source
-    wrapped = None if callback is None else (lambda s: callback(json.loads(s)))
-    v, vl, result_json = _bsv.register(
+    result = _bsv.register(
         tmpl.vertices,
         tmpl.faces,
         tmpl.vertex_labels,
         tmpl.face_labels,
         cloud.points,
         cloud.normals,
-        opt_labels(cloud.labels),
-        json.dumps(params),
-        wrapped,
+        cloud.labels,
+        RegisterParams(**params),
+        float(density),
+        callback,
     )
-    result = json.loads(result_json)
-    fitted = Mesh(v, tmpl.faces, vl, None)
-    vols = volumes(fitted, density=density, islands=True)
-    vols["registration"] = result["summary"]
-    return Registration(mesh=fitted, volumes=vols, log=result["log"], seconds=result["summary"]["seconds"])
+    fitted = Mesh(result.vertices, tmpl.faces, result.vertex_labels, None)
+    vols = result.report.to_dict()
+    vols["registration"] = result.summary
+    return Registration(
+        mesh=fitted, volumes=vols, log=result.log, seconds=result.seconds, params=result.params, report=result.report
+    )
 
 
 def _print_iteration(it: dict[str, Any]) -> None:
@@ -222,7 +230,7 @@ def scan(
             raise OutputExistsError(f"{img} is a file; images= needs a folder")
         if any(Path(img).iterdir()) and not overwrite:
             raise OutputExistsError(f"{img} is not empty; pass overwrite=True to write into it")
-    p, n, c, l = _bsv.scan(m.vertices, m.faces, opt_labels(m.vertex_labels), opt_labels(m.face_labels), condition, int(seed), img)
+    p, n, c, l = _bsv.scan(m.vertices, m.faces, m.vertex_labels, m.face_labels, condition, int(seed), img)
     return PointCloud(p, n, c, l)
 
 
@@ -234,13 +242,20 @@ __all__ = [
     "Mesh",
     "OutputExistsError",
     "PointCloud",
+    "RegisterParams",
     "Registration",
     "RegistrationError",
+    "RegistrationInputError",
+    "RegistrationNumericError",
+    "RegistrationParameterError",
+    "RegistrationResourceError",
+    "RegistrationStopped",
     "ScanError",
     "SEGMENT_IDS",
     "SEGMENT_NAMES",
     "TRUNK_LIMBS",
     "VolumeError",
+    "VolumeReport",
     "WriteError",
     "check_mesh",
     "default_template",
@@ -248,6 +263,7 @@ __all__ = [
     "read_point_cloud",
     "register",
     "scan",
+    "volume_report",
     "volumes",
     "write_mesh",
     "write_point_cloud",

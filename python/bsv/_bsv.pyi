@@ -1,70 +1,132 @@
-"""Type stubs of the Rust extension ``bsv._bsv`` (thin: numpy <-> core types; errors -> exceptions)."""
+# Type stubs of the Rust extension ``bsv._bsv`` (thin: Python arrays <-> core types, one validation
+# layer; Rust errors -> the classes of :mod:`bsv.errors`). Kept in sync with the extension by
+# tests/python/test_stubs.py (every name, every function's parameters and defaults).
 
-from typing import Callable, Optional
+from collections.abc import Callable
+from typing import Any, TypeAlias
 
 import numpy as np
 import numpy.typing as npt
 
-F64 = npt.NDArray[np.float64]
-I64 = npt.NDArray[np.int64]
-U8 = npt.NDArray[np.uint8]
-MeshTuple = tuple[F64, I64, Optional[U8], Optional[U8]]
-CloudTuple = tuple[F64, Optional[F64], Optional[U8], Optional[U8]]
+F64: TypeAlias = npt.NDArray[np.float64]
+I64: TypeAlias = npt.NDArray[np.int64]
+U8: TypeAlias = npt.NDArray[np.uint8]
+MeshTuple: TypeAlias = tuple[F64, I64, U8 | None, U8 | None]
+CloudTuple: TypeAlias = tuple[F64, F64 | None, U8 | None, U8 | None]
+#: Any array-like the extension converts (numpy array of any numeric dtype, nested lists).
+ArrayLike: TypeAlias = Any
 
 __version__: str
+#: Segment name by id (0 = "unlabelled"), from ``bsv_core::Segment``.
+SEGMENT_NAMES: tuple[str, ...]
+#: Palette colour (r, g, b) by segment id.
+PALETTE: tuple[tuple[int, int, int], ...]
+#: Ids of the nine trunk-and-limb segments.
+TRUNK_LIMBS: tuple[int, ...]
+#: Ids of head, hands and feet.
+EXTREMITIES: tuple[int, ...]
 
-class BsvError(Exception): ...
-class FormatError(BsvError): ...
-class WriteError(BsvError): ...
-class InputError(BsvError): ...
-class MeshError(BsvError): ...
-class VolumeError(BsvError): ...
-class RegistrationError(BsvError): ...
-class ScanError(BsvError): ...
+class RegisterParams:
+    # Registration parameters (``bsv_register::RegisterParams``); unknown names, wrong types and
+    # out-of-range values raise ``RegistrationParameterError`` naming the parameter.
+
+    def __init__(self, **kwargs: Any) -> None: ...
+    def to_dict(self) -> dict[str, Any]: ...
+    def __getattr__(self, name: str) -> Any: ...
+
+class VolumeReport:
+    # The volumes report (DESIGN.md "Formats"); ``to_dict()`` is what ``bsv.volumes`` returns.
+
+    def to_dict(self) -> dict[str, Any]: ...
+    def __getitem__(self, key: str) -> Any: ...
+    @property
+    def volumes_l(self) -> dict[str, float]: ...
+    @property
+    def ratios(self) -> dict[str, float]: ...
+    @property
+    def mass_kg(self) -> float: ...
+    @property
+    def density_kg_m3(self) -> float: ...
+    @property
+    def notes(self) -> list[str]: ...
+
+class RegistrationResult:
+    # What ``register`` returns: fitted vertices and labels (faces: the template's), the volume
+    # report of the fitted mesh, the summary, the per-iteration log and the parameters used.
+
+    @property
+    def vertices(self) -> F64: ...
+    @property
+    def vertex_labels(self) -> U8 | None: ...
+    @property
+    def report(self) -> VolumeReport: ...
+    @property
+    def summary(self) -> dict[str, Any]: ...
+    @property
+    def log(self) -> list[dict[str, Any]]: ...
+    @property
+    def params(self) -> RegisterParams: ...
+    @property
+    def seconds(self) -> float: ...
 
 def read_mesh(path: str) -> MeshTuple: ...
 def read_point_cloud(path: str) -> CloudTuple: ...
 def write_mesh(
-    path: str, vertices: F64, faces: I64, vertex_labels: Optional[U8], face_labels: Optional[U8], ascii: bool
+    path: str,
+    vertices: ArrayLike,
+    faces: ArrayLike,
+    vertex_labels: ArrayLike | None = None,
+    face_labels: ArrayLike | None = None,
+    ascii: bool = False,
 ) -> None: ...
 def write_point_cloud(
-    path: str, points: F64, normals: Optional[F64], colors: Optional[U8], labels: Optional[U8], ascii: bool
+    path: str,
+    points: ArrayLike,
+    normals: ArrayLike | None = None,
+    colors: ArrayLike | None = None,
+    labels: ArrayLike | None = None,
+    ascii: bool = False,
 ) -> None: ...
-def check_mesh(vertices: F64, faces: I64) -> str: ...
+def check_mesh(vertices: ArrayLike, faces: ArrayLike) -> dict[str, Any]: ...
 def volumes(
-    vertices: F64,
-    faces: I64,
-    vertex_labels: Optional[U8],
-    face_labels: Optional[U8],
-    density: float,
-    close_holes: bool,
+    vertices: ArrayLike,
+    faces: ArrayLike,
+    vertex_labels: ArrayLike | None = None,
+    face_labels: ArrayLike | None = None,
+    labels: ArrayLike | None = None,
+    density: float = 1000.0,
+    close_holes: bool = False,
     islands: bool = False,
-) -> str: ...
-def default_template(full: bool) -> MeshTuple: ...
+) -> VolumeReport: ...
+def default_template(full: bool = False) -> MeshTuple: ...
 def register(
-    template_vertices: F64,
-    template_faces: I64,
-    template_vertex_labels: Optional[U8],
-    template_face_labels: Optional[U8],
-    points: F64,
-    normals: Optional[F64],
-    labels: Optional[U8],
-    params_json: str,
-    progress: Optional[Callable[[str], None]] = None,
-) -> tuple[F64, Optional[U8], str]: ...
+    template_vertices: ArrayLike,
+    template_faces: ArrayLike,
+    template_vertex_labels: ArrayLike | None,
+    template_face_labels: ArrayLike | None,
+    points: ArrayLike,
+    normals: ArrayLike | None,
+    labels: ArrayLike | None,
+    params: RegisterParams,
+    density: float = 1000.0,
+    progress: Callable[[dict[str, Any]], object] | None = None,
+) -> RegistrationResult: ...
 def scan(
-    vertices: F64,
-    faces: I64,
-    vertex_labels: Optional[U8],
-    face_labels: Optional[U8],
-    condition: str,
-    seed: int,
-    images_dir: Optional[str],
+    vertices: ArrayLike,
+    faces: ArrayLike,
+    vertex_labels: ArrayLike | None = None,
+    face_labels: ArrayLike | None = None,
+    condition: str = "noer",
+    seed: int = 0,
+    images_dir: str | None = None,
 ) -> CloudTuple: ...
+def face_labels_from_vertices(faces: ArrayLike, vertex_labels: ArrayLike) -> U8: ...
+def vertex_labels_from_faces(n_vertices: int, faces: ArrayLike, face_labels: ArrayLike) -> U8: ...
+def vertex_normals(vertices: ArrayLike, faces: ArrayLike) -> F64: ...
 def build_cloud(
-    views: list[dict], params_json: str
-) -> tuple[F64, Optional[F64], Optional[U8], Optional[U8], str]:
-    """Merged labelled world cloud from per-camera dicts {name, intrinsics (dict), camera_to_world
-    {rotation, translation}, depth (H, W) uint16 + depth_scale or float32 metres, labels (H, W) uint8,
-    colors (H, W, 3) uint8 optional}: (points, normals, colors, labels, report_json)."""
+    views: list[dict[str, Any]], params: dict[str, Any] | None = None
+) -> tuple[F64, F64 | None, U8 | None, U8 | None, dict[str, Any]]:
+    # Merged labelled world cloud from per-camera dicts {name, intrinsics (dict), camera_to_world
+    # {rotation, translation}, depth (H, W) uint16 + depth_scale or float32 metres, labels (H, W) uint8,
+    # colors (H, W, 3) uint8 optional} and ``FuseParams`` keywords: (points, normals, colors, labels, report).
     ...

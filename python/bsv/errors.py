@@ -1,12 +1,208 @@
-"""Python-side exception classes; every BSV error derives from :class:`bsv.BsvError`."""
+"""Every BSV exception class, defined once here; every one derives from :class:`BsvError`.
+
+The Rust extension ``bsv._bsv`` imports these classes (it defines none) and raises the one that its
+error variant maps to, with the structured fields of the Rust error set as attributes (``path``,
+``element``, ``line``, ``index``, ``argument``, ``parameter``, ``iteration``), so code can react to
+the field, not parse the text. Other modules (``bsv.frontend.errors``, ``bsv.bodies``, ``bsv.bench``)
+re-export the classes they raise.
+
+This module imports nothing from the package (numpy-free, extension-free): the extension imports it
+while it initialises.
+"""
 
 from __future__ import annotations
 
-from ._bsv import BsvError, InputError
+
+class BsvError(Exception):
+    """Base class of every BSV error."""
+
+
+# --- the core (raised by the Rust extension) ----------------------------------------------------
+
+
+class FormatError(BsvError):
+    """A file could not be read: missing, malformed, truncated or unsupported.
+
+    ``path``: the file; ``element`` / ``line``: where in it (PLY element, OBJ or PLY header line),
+    when the reader knows."""
+
+    path: str | None = None
+    element: str | None = None
+    line: int | None = None
+
+
+class WriteError(BsvError):
+    """A file could not be written (``path``)."""
+
+    path: str | None = None
+
+
+class InputError(BsvError):
+    """Arrays or parameters passed from Python are not valid.
+
+    ``argument``: the argument at fault (``"points"``, ``"faces"``, ``"labels"``, ...);
+    ``index``: the first bad row or entry, when there is one."""
+
+    argument: str | None = None
+    index: int | None = None
+
+
+class MeshError(BsvError):
+    """A mesh failed a check: open, non-manifold, degenerate."""
+
+
+class VolumeError(BsvError):
+    """Volumes could not be computed (open or non-manifold segments, bad labels or density).
+
+    ``element`` (``"vertex"``, ``"face"``, ``"edge"``) and ``index`` locate the problem when known."""
+
+    element: str | None = None
+    index: int | None = None
+
+
+class RegistrationError(BsvError):
+    """The registration rejected its inputs or failed (see the subclasses per stage).
+
+    ``parameter``: the registration parameter (keyword of :func:`bsv.register`) whose change is the
+    remedy, when there is one."""
+
+    parameter: str | None = None
+
+
+class RegistrationInputError(RegistrationError, InputError):
+    """The cloud, the template or their labels cannot be registered (empty, too few points, not in
+    metres, non-manifold template, ...)."""
+
+
+class RegistrationParameterError(RegistrationError, InputError):
+    """A registration parameter is unknown, of the wrong type or out of range, or the schedule does
+    not parse (``parameter`` names it)."""
+
+
+class RegistrationNumericError(RegistrationError):
+    """The fit failed numerically (no correspondence left, solver failure, divergence);
+    ``iteration`` is the global iteration when known."""
+
+    iteration: int | None = None
+
+
+class RegistrationResourceError(RegistrationError):
+    """A resource (the thread pool) could not be obtained."""
+
+
+class RegistrationStopped(RegistrationError):
+    """The fit was stopped by its progress callback (``iteration``: the last iteration run)."""
+
+    iteration: int | None = None
+
+
+class ScanError(BsvError):
+    """The virtual scanner rejected its inputs or failed."""
 
 
 class OutputExistsError(BsvError, FileExistsError):
     """An output file or folder exists and overwriting was not asked for (``overwrite=True``, ``--overwrite``)."""
 
 
-__all__ = ["BsvError", "InputError", "OutputExistsError"]
+# --- the front end (calibration, capture, segmentation) -----------------------------------------
+
+
+class FrontendError(BsvError):
+    """Base of every calibration, capture and segmentation error."""
+
+
+class CalibrationError(FrontendError):
+    """The ArUco calibration failed (see the subclasses)."""
+
+
+class MarkerNotFoundError(CalibrationError):
+    """No ArUco marker of the configured dictionary was found in an image."""
+
+
+class WrongMarkerError(CalibrationError):
+    """Markers were found, but none has the configured id."""
+
+
+class BlurredImageError(CalibrationError):
+    """The image (or the marker in it) is too blurred for an accurate pose."""
+
+
+class CalibrationFileError(CalibrationError):
+    """A calibration or intrinsics JSON file is missing or malformed."""
+
+
+class CaptureError(FrontendError):
+    """A RealSense capture or replay failed."""
+
+
+class NoCameraError(CaptureError):
+    """No RealSense camera is connected, or not the one with the requested serial number."""
+
+
+class RecordingError(CaptureError):
+    """A recording cannot be opened, holds no usable frames, or lacks a stream."""
+
+
+class SegmentationError(FrontendError):
+    """Body segmentation failed."""
+
+
+class PersonNotFoundError(SegmentationError):
+    """No person was detected in the colour image."""
+
+
+class LandmarkMissingError(SegmentationError):
+    """A landmark needed for the segmentation (an ankle, a wrist, ...) was not detected confidently."""
+
+
+# --- the synthetic bodies (bsv.bodies) -----------------------------------------------------------
+
+
+class AssetError(BsvError, RuntimeError):
+    """The MakeHuman asset is missing or malformed."""
+
+
+class PhenotypeError(BsvError, ValueError):
+    """A phenotype or local-modifier value is out of range or unknown."""
+
+
+class PoseError(BsvError, ValueError):
+    """A pose angle is out of its allowed range."""
+
+
+class SolveError(BsvError, ValueError):
+    """The stature/BMI solver cannot reach the requested values (``reachable``: the attainable range)."""
+
+    def __init__(self, message: str, reachable: tuple[float, float] | None = None) -> None:
+        super().__init__(message)
+        self.reachable = reachable
+
+
+class LabelError(BsvError, ValueError):
+    """A labelled mesh cannot be split into closed segments."""
+
+
+class TemplateError(BsvError, RuntimeError):
+    """A template could not be built watertight."""
+
+
+# --- the benchmarks (bsv.bench) ------------------------------------------------------------------
+
+
+class BenchError(BsvError, RuntimeError):
+    """A benchmark could not run as asked (bad option, missing data or dependency); says what to do."""
+
+
+class FloorError(BsvError, ValueError):
+    """A capture folder lacks the per-camera extrinsics the floor needs."""
+
+
+__all__ = [
+    "AssetError", "BenchError", "BlurredImageError", "BsvError", "CalibrationError", "CalibrationFileError",
+    "CaptureError", "FloorError", "FormatError", "FrontendError", "InputError", "LabelError",
+    "LandmarkMissingError", "MarkerNotFoundError", "MeshError", "NoCameraError", "OutputExistsError",
+    "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",
+    "RegistrationInputError", "RegistrationNumericError", "RegistrationParameterError",
+    "RegistrationResourceError", "RegistrationStopped", "ScanError", "SegmentationError", "SolveError",
+    "TemplateError", "VolumeError", "WriteError", "WrongMarkerError",
+]

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 
-from .types import FloatArray, IndexArray, LabelArray, Mesh, PointCloud, checked_labels
+from .types import FloatArray, IndexArray, Mesh, PointCloud
 
 
 def as_mesh(obj: Any, faces: Any = None, vertex_labels: Any = None, face_labels: Any = None) -> Mesh:
@@ -43,15 +43,7 @@ def as_cloud(obj: Any, labels: Any = None, normals: Any = None, colors: Any = No
         return PointCloud(pts, normals, colors, labels)
     if hasattr(obj, "vertices") and not isinstance(obj, np.ndarray):  # trimesh PointCloud / Trimesh
         return PointCloud(np.asarray(obj.vertices), normals, colors, labels)
-    arr = np.asarray(obj, dtype=np.float64)
-    return PointCloud(arr, normals, colors, labels)
+    return PointCloud(np.asarray(obj), normals, colors, labels)
 
 
-def opt_labels(labels: Optional[Any], what: str = "labels") -> Optional[LabelArray]:
-    """``labels`` as a contiguous uint8 array of segment ids 0..14, or None (InputError otherwise)."""
-    if labels is None:
-        return None
-    return checked_labels(labels, what)
-
-
-__all__ = ["as_mesh", "as_cloud", "opt_labels", "FloatArray", "IndexArray"]
+__all__ = ["FloatArray", "IndexArray", "as_cloud", "as_mesh"]

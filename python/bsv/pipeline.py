@@ -191,8 +191,8 @@ def build_cloud(
     """Merged labelled world cloud from camera views (dicts of ``bsv._bsv.build_cloud``) and its report."""
     p = {"sor": bool(sor), "sor_k": int(sor_k), "sor_std_ratio": float(sor_std_ratio), "normals": bool(normals),
          "colors": colors, "drop_labels": [] if keep_extremities else list(EXTREMITY_IDS), **params}
-    pts, nrm, col, lab, report = _bsv.build_cloud(list(views), json.dumps(p))
-    return PointCloud(pts, nrm, col, lab), json.loads(report)
+    pts, nrm, col, lab, report = _bsv.build_cloud(list(views), p)
+    return PointCloud(pts, nrm, col, lab), report
 
 
 def output_files(cameras: Sequence[str] = ("front", "back"), demo: bool = False) -> list[str]:

@@ -15,9 +15,9 @@ from typing import Any, Optional, Sequence, Union
 
 import numpy as np
 
-from .bodies.labels import PALETTE
+from . import _bsv
 from .errors import OutputExistsError
-from .types import SEGMENT_NAMES, TRUNK_LIMBS
+from .types import PALETTE, SEGMENT_NAMES, TRUNK_LIMBS
 
 PathLike = Union[str, Path]
 
@@ -34,18 +34,19 @@ VIEWS = {
 
 
 def palette() -> np.ndarray:
-    """(15, 3) float RGB in [0, 1] of the segment ids (:data:`bsv.bodies.labels.PALETTE`, Rust's palette)."""
+    """(15, 3) float RGB in [0, 1] of the segment ids (:data:`bsv.types.PALETTE`, Rust's palette)."""
     return np.asarray(PALETTE, dtype=np.float64) / 255.0
 
 
 def face_labels(faces: np.ndarray, vertex_labels: Optional[np.ndarray], face_labels_: Optional[np.ndarray] = None) -> np.ndarray:
-    """Per-face segment ids: the given face labels, else the majority of the corners (first corner on ties)."""
+    """Per-face segment ids: the given face labels, else Rust's one rule
+    (``bsv_volume::face_labels_from_vertices``: the label shared by two corners; three different: the
+    corner with the smallest vertex index)."""
     if face_labels_ is not None and len(face_labels_) == len(faces):
         return np.asarray(face_labels_, dtype=np.uint8)
     if vertex_labels is None:
         return np.zeros(len(faces), dtype=np.uint8)
-    c = np.asarray(vertex_labels)[faces]
-    return np.where(c[:, 1] == c[:, 2], c[:, 1], c[:, 0]).astype(np.uint8)
+    return _bsv.face_labels_from_vertices(faces, vertex_labels)
 
 
 def render_mesh(ax: Any, vertices: np.ndarray, faces: np.ndarray, labels: Optional[np.ndarray], view: str = "front",

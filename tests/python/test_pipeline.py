@@ -55,14 +55,14 @@ def _views(cap: Path, labels_from: str = "labels.png") -> list[dict]:
 
 def test_binding_rebuilds_the_scanner_cloud(capture):
     cap, scanned = capture
-    params = json.dumps({"sor": False, "drop_labels": [], "normals": False})
+    params = {"sor": False, "drop_labels": [], "normals": False}
     pts, normals, colors, labels, report = bsv._bsv.build_cloud(_views(cap), params)
     assert normals is None and colors is not None
     assert pts.shape == scanned.points.shape
     np.testing.assert_array_equal(labels, scanned.labels)
     # 16-bit depth at 0.25 mm: half a unit along rays at most ~1.25x longer than their depth.
     assert np.abs(np.linalg.norm(pts - scanned.points, axis=1)).max() <= 0.5 * 0.00025 * 1.25
-    rep = json.loads(report)
+    rep = report
     assert rep["points"] == len(pts) and [v["name"] for v in rep["views"]] == ["front", "back"]
 
 
@@ -81,17 +81,17 @@ def test_binding_errors_are_input_errors(capture):
     v = _views(cap)
     bad = [dict(v[0], labels=np.ascontiguousarray(v[0]["labels"].T)), v[1]]
     with pytest.raises(bsv.InputError, match="shape"):
-        bsv._bsv.build_cloud(bad, "{}")
+        bsv._bsv.build_cloud(bad, {})
     with pytest.raises(bsv.InputError, match="depth_scale"):
-        bsv._bsv.build_cloud([{k: x for k, x in v[0].items() if k != "depth_scale"}], "{}")
+        bsv._bsv.build_cloud([{k: x for k, x in v[0].items() if k != "depth_scale"}], {})
     with pytest.raises(bsv.InputError, match="no person"):
-        bsv._bsv.build_cloud([dict(v[0], labels=np.zeros_like(v[0]["labels"]))], "{}")
+        bsv._bsv.build_cloud([dict(v[0], labels=np.zeros_like(v[0]["labels"]))], {})
     with pytest.raises(bsv.InputError, match="depth scale"):
-        bsv._bsv.build_cloud([dict(v[0], depth_scale=0.0)], "{}")
+        bsv._bsv.build_cloud([dict(v[0], depth_scale=0.0)], {})
     with pytest.raises(bsv.InputError, match="camera_to_world"):
-        bsv._bsv.build_cloud([dict(v[0], camera_to_world={"rotation": [[1, 0], [0, 1]], "translation": [0, 0, 0]})], "{}")
+        bsv._bsv.build_cloud([dict(v[0], camera_to_world={"rotation": [[1, 0], [0, 1]], "translation": [0, 0, 0]})], {})
     with pytest.raises(bsv.InputError, match="unknown field"):
-        bsv._bsv.build_cloud(v, '{"sor_kk": 3}')
+        bsv._bsv.build_cloud(v, {"sor_kk": 3})
 
 
 # ----------------------------------------------------------------------------------------------------

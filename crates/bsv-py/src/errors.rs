@@ -1,20 +1,60 @@
-//! Python exceptions of `bsv._bsv` and the mapping of core errors onto them (message = Rust message).
+//! Rust errors -> Python exceptions. The classes are defined once, in `python/bsv/errors.py`; this
+//! module imports them (cached) and maps every error variant to one class, setting the structured
+//! fields of the variant (`path`, `element`, `line`, `index`, `argument`, `parameter`, `iteration`)
+//! as attributes of the exception. One [`ToPyErr`] impl per Rust error type.
 
-use pyo3::create_exception;
-use pyo3::exceptions::PyException;
+use bsv_core::io::obj::ObjError;
+use bsv_core::io::ply::PlyError;
+use bsv_core::io::{ReadError, WriteError};
+use bsv_register::RegisterError;
+use bsv_volume::VolumeError;
 use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
+use pyo3::types::PyModule;
+use std::path::Path;
 
-create_exception!(bsv._bsv, BsvError, PyException, "Base class of every BSV error.");
-create_exception!(bsv._bsv, FormatError, BsvError, "A file could not be read: malformed, truncated or unsupported.");
-create_exception!(bsv._bsv, WriteError, BsvError, "A file could not be written.");
-create_exception!(bsv._bsv, InputError, BsvError, "Arrays or parameters passed from Python are not valid.");
-create_exception!(bsv._bsv, MeshError, BsvError, "A mesh failed a check: open, non-manifold, degenerate.");
-create_exception!(bsv._bsv, VolumeError, BsvError, "Volumes could not be computed (open or non-manifold segments).");
-create_exception!(bsv._bsv, RegistrationError, BsvError, "The registration rejected its inputs or failed.");
-create_exception!(bsv._bsv, ScanError, BsvError, "The virtual scanner rejected its inputs or failed.");
+static ERRORS: PyOnceLock<Py<PyModule>> = PyOnceLock::new();
+
+/// A structured field of an exception.
+pub enum Field {
+    /// Text (a path, an element or argument name).
+    Str(String),
+    /// A count or index.
+    Int(usize),
+}
+
+impl Field {
+    fn path(p: &Path) -> Field {
+        Field::Str(p.display().to_string())
+    }
+}
+
+/// An exception of class `class` (a name in `bsv.errors`) with `message` and `fields` as attributes.
+pub fn exception(class: &'static str, message: String, fields: Vec<(&'static str, Field)>) -> PyErr {
+    Python::attach(|py| build(py, class, message, fields).unwrap_or_else(|e| e))
+}
+
+fn build(py: Python<'_>, class: &'static str, message: String, fields: Vec<(&'static str, Field)>) -> PyResult<PyErr> {
+    let module = ERRORS.get_or_try_init(py, || py.import("bsv.errors").map(Bound::unbind))?.bind(py);
+    let value = module.getattr(class)?.call1((message,))?;
+    for (name, field) in fields {
+        match field {
+            Field::Str(s) => value.setattr(name, s)?,
+            Field::Int(i) => value.setattr(name, i)?,
+        }
+    }
+    Ok(PyErr::from_value(value))
+}
+
+/// `InputError` for argument `argument` (and the first bad entry `index`, if any).
+pub fn input_error(argument: &str, index: Option<usize>, message: String) -> PyErr {
+    let mut fields = vec![("argument", Field::Str(argument.to_string()))];
+    fields.extend(index.map(|i| ("index", Field::Int(i))));
+    exception("InputError", message, fields)
+}
 
 /// The error's message followed by its chain of causes.
-fn message(e: &dyn std::error::Error) -> String {
+pub fn message(e: &dyn std::error::Error) -> String {
     let mut s = e.to_string();
     let mut src = e.source();
     while let Some(c) = src {
@@ -28,51 +68,185 @@ fn message(e: &dyn std::error::Error) -> String {
     s
 }
 
-/// Converts a read error into `FormatError`.
-pub fn format_err(e: impl std::error::Error) -> PyErr {
-    FormatError::new_err(message(&e))
+/// A Rust error that maps onto one Python exception class.
+pub trait ToPyErr {
+    /// The Python exception.
+    fn to_py_err(&self) -> PyErr;
 }
 
-/// Converts a write error into `WriteError`.
-pub fn write_err(e: impl std::error::Error) -> PyErr {
-    WriteError::new_err(message(&e))
+impl ToPyErr for ReadError {
+    fn to_py_err(&self) -> PyErr {
+        let mut fields = Vec::new();
+        match self {
+            ReadError::Io { path, .. } | ReadError::UnsupportedExtension { path, .. } => {
+                fields.push(("path", Field::path(path)));
+            }
+            ReadError::Ply { path, source } => {
+                fields.push(("path", Field::path(path)));
+                fields.extend(ply_location(source));
+            }
+            ReadError::Obj { path, source } => {
+                fields.push(("path", Field::path(path)));
+                fields.extend(obj_line(source).map(|l| ("line", Field::Int(l))));
+            }
+        }
+        exception("FormatError", message(self), fields)
+    }
 }
 
-/// Converts a mesh-check error into `MeshError`.
-pub fn mesh_err(e: impl std::error::Error) -> PyErr {
-    MeshError::new_err(message(&e))
+/// Element and line of a PLY error, when it has them.
+fn ply_location(e: &PlyError) -> Vec<(&'static str, Field)> {
+    let mut out = Vec::new();
+    match e {
+        PlyError::HeaderSyntax { line, .. } | PlyError::UnknownType { line, .. } => {
+            out.push(("line", Field::Int(*line)))
+        }
+        PlyError::AsciiRecord { line, element, .. } => {
+            out.push(("line", Field::Int(*line)));
+            out.push(("element", Field::Str(element.clone())));
+        }
+        PlyError::MissingElement { element }
+        | PlyError::MissingProperty { element, .. }
+        | PlyError::Truncated { element, .. }
+        | PlyError::EndsEarly { element, .. }
+        | PlyError::ExtraData { element, .. }
+        | PlyError::BadListCount { element, .. }
+        | PlyError::LabelOutOfRange { element, .. } => out.push(("element", Field::Str(element.clone()))),
+        PlyError::FaceTooSmall { .. } | PlyError::FaceIndexOutOfRange { .. } => {
+            out.push(("element", Field::Str("face".into())))
+        }
+        PlyError::NonFinite { .. } => out.push(("element", Field::Str("vertex".into()))),
+        _ => {}
+    }
+    out
 }
 
-/// Converts a volume error into `VolumeError`.
-pub fn volume_err(e: impl std::error::Error) -> PyErr {
-    VolumeError::new_err(message(&e))
+/// Line of an OBJ error, when it has one.
+fn obj_line(e: &ObjError) -> Option<usize> {
+    match e {
+        ObjError::BadVertex { line, .. }
+        | ObjError::NonFinite { line, .. }
+        | ObjError::BadFace { line, .. }
+        | ObjError::FaceTooSmall { line, .. }
+        | ObjError::IndexOutOfRange { line, .. } => Some(*line),
+        _ => None,
+    }
 }
 
-/// Converts a registration error into `RegistrationError`.
-pub fn register_err(e: impl std::error::Error) -> PyErr {
-    RegistrationError::new_err(message(&e))
+impl ToPyErr for WriteError {
+    fn to_py_err(&self) -> PyErr {
+        let path = match self {
+            WriteError::Io { path, .. }
+            | WriteError::UnsupportedExtension { path, .. }
+            | WriteError::Invalid { path, .. } => path,
+        };
+        exception("WriteError", message(self), vec![("path", Field::path(path))])
+    }
 }
 
-/// Converts a scanner error into `ScanError`.
-pub fn scan_err(e: impl std::error::Error) -> PyErr {
-    ScanError::new_err(message(&e))
+impl ToPyErr for VolumeError {
+    fn to_py_err(&self) -> PyErr {
+        let at =
+            |element: &str, index: usize| vec![("element", Field::Str(element.into())), ("index", Field::Int(index))];
+        let fields = match self {
+            VolumeError::IndexOutOfRange { face, .. } | VolumeError::DegenerateFace { face, .. } => at("face", *face),
+            VolumeError::NonFiniteVertex { vertex, .. } => at("vertex", *vertex),
+            VolumeError::UnknownLabel { what, index, .. } => at(what, *index),
+            VolumeError::LabelCountMismatch { what, .. } => vec![("element", Field::Str((*what).into()))],
+            VolumeError::OpenMesh { .. }
+            | VolumeError::NonManifold { .. }
+            | VolumeError::InconsistentOrientation { .. } => {
+                vec![("element", Field::Str("edge".into()))]
+            }
+            _ => Vec::new(),
+        };
+        exception("VolumeError", message(self), fields)
+    }
 }
 
-/// Converts a JSON (de)serialisation error of parameters into `InputError`.
-pub fn input_err(e: impl std::error::Error) -> PyErr {
-    InputError::new_err(message(&e))
+impl ToPyErr for RegisterError {
+    fn to_py_err(&self) -> PyErr {
+        let (class, mut fields) = register_class(self);
+        fields.extend(register_parameter(self).map(|p| ("parameter", Field::Str(p.into()))));
+        exception(class, message(self), fields)
+    }
 }
 
-/// Registers the exception classes on the module.
-pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    let py = m.py();
-    m.add("BsvError", py.get_type::<BsvError>())?;
-    m.add("FormatError", py.get_type::<FormatError>())?;
-    m.add("WriteError", py.get_type::<WriteError>())?;
-    m.add("InputError", py.get_type::<InputError>())?;
-    m.add("MeshError", py.get_type::<MeshError>())?;
-    m.add("VolumeError", py.get_type::<VolumeError>())?;
-    m.add("RegistrationError", py.get_type::<RegistrationError>())?;
-    m.add("ScanError", py.get_type::<ScanError>())?;
-    Ok(())
+/// The class of a registration error (one per stage) and its index fields.
+// After the bsv-register split (RegisterError::{Input, Parameter, Numeric, Resource, Stopped}) this
+// becomes a match on the outer variant.
+fn register_class(e: &RegisterError) -> (&'static str, Vec<(&'static str, Field)>) {
+    use RegisterError as E;
+    match e {
+        E::BadSchedule { .. } | E::BadParameter { .. } => ("RegistrationParameterError", Vec::new()),
+        E::NoCorrespondences { iteration } | E::Diverged { iteration } => {
+            ("RegistrationNumericError", vec![("iteration", Field::Int(*iteration))])
+        }
+        E::Solver(_) | E::Index(_) => ("RegistrationNumericError", Vec::new()),
+        E::ThreadPool { .. } => ("RegistrationResourceError", Vec::new()),
+        E::NonFinitePoint { index, .. } | E::NonFiniteTemplateVertex { index, .. } => {
+            ("RegistrationInputError", vec![("index", Field::Int(*index))])
+        }
+        E::BadTriangleIndex { triangle, .. } | E::DegenerateTemplate { triangle, .. } => {
+            ("RegistrationInputError", vec![("index", Field::Int(*triangle))])
+        }
+        _ => ("RegistrationInputError", Vec::new()),
+    }
+}
+
+/// The registration parameter whose change is the remedy.
+// After the bsv-register split: `e.parameter()`.
+fn register_parameter(e: &RegisterError) -> Option<&'static str> {
+    use RegisterError as E;
+    match e {
+        E::BadParameter { name, .. } => Some(name),
+        E::BadSchedule { .. } => Some("schedule"),
+        E::OnlyExtremities { .. } => Some("drop_extremities"),
+        E::TemplateWithoutLabels | E::CloudWithoutLabels => Some("labels"),
+        E::NoCorrespondences { .. } => Some("prune_distance_factor"),
+        E::Diverged { .. } => Some("data_weight"),
+        E::ThreadPool { .. } => Some("threads"),
+        _ => None,
+    }
+}
+
+impl ToPyErr for bsv_core::scanner::ScanError {
+    fn to_py_err(&self) -> PyErr {
+        exception("ScanError", message(self), Vec::new())
+    }
+}
+
+impl ToPyErr for bsv_core::fuse::FuseError {
+    fn to_py_err(&self) -> PyErr {
+        exception("InputError", message(self), vec![("argument", Field::Str("views".into()))])
+    }
+}
+
+/// The embedded template failed to parse (a build defect, not user input).
+impl ToPyErr for PlyError {
+    fn to_py_err(&self) -> PyErr {
+        exception("MeshError", message(self), Vec::new())
+    }
+}
+
+/// Keyword parameters that do not deserialize (unknown name, wrong type): `parameter` names the key.
+pub fn parameter_error(kind: &'static str, parameter: Option<String>, e: &pythonize::PythonizeError) -> PyErr {
+    let class = if kind == "registration" { "RegistrationParameterError" } else { "InputError" };
+    let text = match &parameter {
+        Some(p) => format!("{kind} parameter {p}: {e}"),
+        None => format!("{kind} parameters: {e}"),
+    };
+    let mut fields = Vec::new();
+    if let Some(p) = parameter {
+        fields.push(("parameter", Field::Str(p.clone())));
+        if class == "InputError" {
+            fields.push(("argument", Field::Str(p)));
+        }
+    }
+    exception(class, text, fields)
+}
+
+/// `map_err` adapter: `.map_err(py_err)`.
+pub fn py_err<E: ToPyErr>(e: E) -> PyErr {
+    e.to_py_err()
 }

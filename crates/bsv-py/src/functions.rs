@@ -1,11 +1,13 @@
 //! The functions of `bsv._bsv` (see `python/bsv/_bsv.pyi`): conversion, one library call, conversion.
 
-use crate::convert::{cloud_from, cloud_to, mesh_from, mesh_to};
-use crate::errors::{format_err, input_err, mesh_err, register_err, scan_err, volume_err, write_err};
+use crate::classes::{to_py, PyVolumeReport};
+use crate::convert::{cloud_from, cloud_to, label_values, mesh_from, mesh_to, points_from, triangles_from};
+use crate::errors::{input_error, py_err};
 use bsv_core::io::{self, PlyEncoding};
 use bsv_core::scanner::{self, Condition, Rig};
 use bsv_core::template::{template, TemplateKind};
-use numpy::{PyReadonlyArray1, PyReadonlyArray2};
+use bsv_core::TriMesh;
+use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use std::path::PathBuf;
@@ -21,100 +23,124 @@ fn encoding(ascii: bool) -> PlyEncoding {
 /// Reads a PLY/OBJ mesh: `(vertices, faces, vertex_labels, face_labels)`.
 #[pyfunction]
 fn read_mesh<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyTuple>> {
-    let mesh = py.detach(|| io::read_mesh(&path)).map_err(format_err)?;
+    let mesh = py.detach(|| io::read_mesh(&path)).map_err(py_err)?;
     mesh_to(py, &mesh)
 }
 
 /// Reads a PLY point cloud: `(points, normals, colors, labels)`.
 #[pyfunction]
 fn read_point_cloud<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyTuple>> {
-    let cloud = py.detach(|| io::read_point_cloud(&path)).map_err(format_err)?;
+    let cloud = py.detach(|| io::read_point_cloud(&path)).map_err(py_err)?;
     cloud_to(py, &cloud)
 }
 
 /// Writes a mesh (PLY or OBJ by extension).
 #[pyfunction]
+#[pyo3(signature = (path, vertices, faces, vertex_labels=None, face_labels=None, ascii=false))]
 fn write_mesh(
     py: Python<'_>,
     path: PathBuf,
-    vertices: PyReadonlyArray2<'_, f64>,
-    faces: PyReadonlyArray2<'_, i64>,
-    vertex_labels: Option<PyReadonlyArray1<'_, u8>>,
-    face_labels: Option<PyReadonlyArray1<'_, u8>>,
+    vertices: &Bound<'_, PyAny>,
+    faces: &Bound<'_, PyAny>,
+    vertex_labels: Option<&Bound<'_, PyAny>>,
+    face_labels: Option<&Bound<'_, PyAny>>,
     ascii: bool,
 ) -> PyResult<()> {
     let mesh = mesh_from(vertices, faces, vertex_labels, face_labels)?;
-    py.detach(|| io::write_mesh_with(&path, &mesh, encoding(ascii))).map_err(write_err)
+    py.detach(|| io::write_mesh_with(&path, &mesh, encoding(ascii))).map_err(py_err)
 }
 
 /// Writes a point cloud (PLY).
 #[pyfunction]
+#[pyo3(signature = (path, points, normals=None, colors=None, labels=None, ascii=false))]
 fn write_point_cloud(
     py: Python<'_>,
     path: PathBuf,
-    points: PyReadonlyArray2<'_, f64>,
-    normals: Option<PyReadonlyArray2<'_, f64>>,
-    colors: Option<PyReadonlyArray2<'_, u8>>,
-    labels: Option<PyReadonlyArray1<'_, u8>>,
+    points: &Bound<'_, PyAny>,
+    normals: Option<&Bound<'_, PyAny>>,
+    colors: Option<&Bound<'_, PyAny>>,
+    labels: Option<&Bound<'_, PyAny>>,
     ascii: bool,
 ) -> PyResult<()> {
     let cloud = cloud_from(points, normals, colors, labels)?;
-    py.detach(|| io::write_point_cloud_with(&path, &cloud, encoding(ascii))).map_err(write_err)
+    py.detach(|| io::write_point_cloud_with(&path, &cloud, encoding(ascii))).map_err(py_err)
 }
 
-/// The mesh-check report as JSON.
+/// The mesh-check report (`bsv_core::check::MeshReport`) as a dict.
 #[pyfunction]
-fn check_mesh(vertices: PyReadonlyArray2<'_, f64>, faces: PyReadonlyArray2<'_, i64>) -> PyResult<String> {
+fn check_mesh<'py>(
+    py: Python<'py>,
+    vertices: &Bound<'py, PyAny>,
+    faces: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
     let mesh = mesh_from(vertices, faces, None, None)?;
-    let report = bsv_core::check::check_mesh(&mesh);
-    serde_json::to_string(&report).map_err(input_err)
+    to_py(py, &bsv_core::check::check_mesh(&mesh))
 }
 
-/// The volumes report (DESIGN.md "Formats") as JSON. `islands`: merge small label islands first
-/// (`SegmentOptions::fitted()`, the policy for registered meshes).
+/// The volumes report of a closed mesh. `labels` (per vertex or per face, told apart by length)
+/// overrides the mesh's own; `islands`: merge small label islands first (`SegmentOptions::fitted()`,
+/// the policy for registered meshes).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (vertices, faces, vertex_labels, face_labels, density, close_holes, islands=false))]
+#[pyo3(signature = (vertices, faces, vertex_labels=None, face_labels=None, labels=None, density=1000.0, close_holes=false, islands=false))]
 fn volumes(
     py: Python<'_>,
-    vertices: PyReadonlyArray2<'_, f64>,
-    faces: PyReadonlyArray2<'_, i64>,
-    vertex_labels: Option<PyReadonlyArray1<'_, u8>>,
-    face_labels: Option<PyReadonlyArray1<'_, u8>>,
+    vertices: &Bound<'_, PyAny>,
+    faces: &Bound<'_, PyAny>,
+    vertex_labels: Option<&Bound<'_, PyAny>>,
+    face_labels: Option<&Bound<'_, PyAny>>,
+    labels: Option<&Bound<'_, PyAny>>,
     density: f64,
     close_holes: bool,
     islands: bool,
-) -> PyResult<String> {
-    let mesh = mesh_from(vertices, faces, vertex_labels, face_labels)?;
+) -> PyResult<PyVolumeReport> {
+    let mut mesh = mesh_from(vertices, faces, vertex_labels, face_labels)?;
+    if let Some(l) = labels.filter(|l| !l.is_none()) {
+        let l = label_values(l, "labels")?;
+        let (nv, nf) = (mesh.vertices.len(), mesh.triangles.len());
+        if l.len() == nv {
+            mesh.vertex_labels = Some(l);
+        } else if l.len() == nf {
+            mesh.face_labels = Some(l);
+        } else {
+            return Err(input_error(
+                "labels",
+                None,
+                format!("labels has {} entries; expected one per vertex ({nv}) or per face ({nf})", l.len()),
+            ));
+        }
+    }
     let base = if islands { bsv_volume::SegmentOptions::fitted() } else { bsv_volume::SegmentOptions::default() };
     let opts = bsv_volume::SegmentOptions { close_holes, ..base };
-    let report = py.detach(|| bsv_volume::report_with(&mesh, density, &opts)).map_err(volume_err)?;
-    Ok(report.to_json())
+    let inner = py.detach(|| bsv_volume::report_with(&mesh, density, &opts)).map_err(py_err)?;
+    Ok(PyVolumeReport { inner })
 }
 
 /// The embedded template (9 segments, or 14 with `full`).
 #[pyfunction]
+#[pyo3(signature = (full=false))]
 fn default_template<'py>(py: Python<'py>, full: bool) -> PyResult<Bound<'py, PyTuple>> {
     let kind = if full { TemplateKind::Full } else { TemplateKind::Default };
-    let mesh = template(kind).map_err(mesh_err)?;
+    let mesh = template(kind).map_err(py_err)?;
     mesh_to(py, &mesh)
 }
 
 /// Virtual two-camera capture: the merged labelled cloud; optionally writes the capture files.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (vertices, faces, vertex_labels=None, face_labels=None, condition="noer", seed=0, images_dir=None))]
 fn scan<'py>(
     py: Python<'py>,
-    vertices: PyReadonlyArray2<'_, f64>,
-    faces: PyReadonlyArray2<'_, i64>,
-    vertex_labels: Option<PyReadonlyArray1<'_, u8>>,
-    face_labels: Option<PyReadonlyArray1<'_, u8>>,
+    vertices: &Bound<'py, PyAny>,
+    faces: &Bound<'py, PyAny>,
+    vertex_labels: Option<&Bound<'py, PyAny>>,
+    face_labels: Option<&Bound<'py, PyAny>>,
     condition: &str,
     seed: u64,
     images_dir: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let mesh = mesh_from(vertices, faces, vertex_labels, face_labels)?;
-    let condition: Condition = condition.parse().map_err(scan_err)?;
+    let condition: Condition = condition.parse().map_err(py_err)?;
     let s = py
         .detach(|| {
             let s = scanner::scan(&mesh, &Rig::paper_default(), condition, seed)?;
@@ -123,8 +149,55 @@ fn scan<'py>(
             }
             Ok::<_, scanner::ScanError>(s)
         })
-        .map_err(scan_err)?;
+        .map_err(py_err)?;
     cloud_to(py, &s.cloud)
+}
+
+/// Face labels from vertex labels: the one rule of `bsv_volume::face_labels_from_vertices` (the
+/// label shared by two corners; three different: the corner with the smallest vertex index).
+#[pyfunction]
+fn face_labels_from_vertices<'py>(
+    py: Python<'py>,
+    faces: &Bound<'py, PyAny>,
+    vertex_labels: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<u8>>> {
+    let vl = label_values(vertex_labels, "vertex_labels")?;
+    let t = triangles_from(faces, vl.len(), "faces")?;
+    Ok(PyArray1::from_vec(py, bsv_volume::face_labels_from_vertices(&t, &vl)))
+}
+
+/// Vertex labels from face labels: the one rule of `bsv_volume::vertex_labels_from_faces` (the most
+/// common label of the incident faces, ties to the smallest id; vertices on no face get 0).
+#[pyfunction]
+fn vertex_labels_from_faces<'py>(
+    py: Python<'py>,
+    n_vertices: usize,
+    faces: &Bound<'py, PyAny>,
+    face_labels: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<u8>>> {
+    let t = triangles_from(faces, n_vertices, "faces")?;
+    let fl = label_values(face_labels, "face_labels")?;
+    if fl.len() != t.len() {
+        return Err(input_error(
+            "face_labels",
+            None,
+            format!("face_labels has {} entries, expected {} (one per face)", fl.len(), t.len()),
+        ));
+    }
+    Ok(PyArray1::from_vec(py, bsv_volume::vertex_labels_from_faces(n_vertices, &t, &fl)))
+}
+
+/// Area-weighted unit vertex normals (`bsv_core::geometry::vertex_normals`; zero for isolated vertices).
+#[pyfunction]
+fn vertex_normals<'py>(
+    py: Python<'py>,
+    vertices: &Bound<'py, PyAny>,
+    faces: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let v = points_from(vertices, "vertices")?;
+    let t = triangles_from(faces, v.len(), "faces")?;
+    let mesh = TriMesh::new(v, t);
+    Ok(crate::convert::points_to(py, &bsv_core::geometry::vertex_normals(&mesh)))
 }
 
 /// Registers the functions on the module.
@@ -137,59 +210,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(volumes, m)?)?;
     m.add_function(wrap_pyfunction!(default_template, m)?)?;
     m.add_function(wrap_pyfunction!(scan, m)?)?;
-    m.add_function(wrap_pyfunction!(register_template, m)?)?;
+    m.add_function(wrap_pyfunction!(face_labels_from_vertices, m)?)?;
+    m.add_function(wrap_pyfunction!(vertex_labels_from_faces, m)?)?;
+    m.add_function(wrap_pyfunction!(vertex_normals, m)?)?;
     Ok(())
-}
-
-/// Registers a template onto a cloud: `(fitted vertices, vertex labels, result JSON {"summary", "log"})`.
-/// Head/hand/foot points are dropped by the library unless `params_json` sets
-/// `"drop_extremities": false` (the count is `summary["extremities_dropped"]`). The GIL is released while the
-/// solver runs; `progress` (if given) receives each iteration's log as JSON.
-#[pyfunction]
-#[allow(clippy::too_many_arguments)]
-#[pyo3(name = "register", signature = (template_vertices, template_faces, template_vertex_labels, template_face_labels, points, normals, labels, params_json, progress=None))]
-fn register_template<'py>(
-    py: Python<'py>,
-    template_vertices: PyReadonlyArray2<'_, f64>,
-    template_faces: PyReadonlyArray2<'_, i64>,
-    template_vertex_labels: Option<PyReadonlyArray1<'_, u8>>,
-    template_face_labels: Option<PyReadonlyArray1<'_, u8>>,
-    points: PyReadonlyArray2<'_, f64>,
-    normals: Option<PyReadonlyArray2<'_, f64>>,
-    labels: Option<PyReadonlyArray1<'_, u8>>,
-    params_json: &str,
-    progress: Option<Bound<'py, PyAny>>,
-) -> PyResult<Bound<'py, PyTuple>> {
-    let tmpl = mesh_from(template_vertices, template_faces, template_vertex_labels, template_face_labels)?;
-    let cloud = cloud_from(points, normals, None, labels)?;
-    let params: bsv_register::RegisterParams = serde_json::from_str(params_json).map_err(input_err)?;
-    let callback = progress.map(|p| p.unbind());
-    let mut py_error: Option<PyErr> = None;
-    let reg = py
-        .detach(|| {
-            bsv_register::register(&tmpl, &cloud, &params, &mut |it| {
-                if let (Some(cb), None) = (&callback, &py_error) {
-                    let line = serde_json::to_string(it).unwrap_or_default();
-                    Python::attach(|py| {
-                        if let Err(e) = cb.call1(py, (line,)) {
-                            py_error = Some(e);
-                        }
-                    });
-                }
-            })
-        })
-        .map_err(register_err)?;
-    if let Some(e) = py_error {
-        return Err(e);
-    }
-    let mut summary = serde_json::to_value(&reg).map_err(input_err)?;
-    let log = summary.as_object_mut().and_then(|o| o.remove("log")).unwrap_or_default();
-    if let Some(o) = summary.as_object_mut() {
-        o.insert("iterations".into(), reg.log.len().into());
-        o.insert("seconds".into(), reg.total_seconds.into());
-        o.insert("params".into(), serde_json::to_value(&params).map_err(input_err)?);
-    }
-    let result = serde_json::json!({ "summary": summary, "log": log }).to_string();
-    let vl = reg.mesh.vertex_labels.as_deref().map(|l| crate::convert::labels_to(py, l));
-    (crate::convert::points_to(py, &reg.mesh.vertices), vl, result).into_pyobject(py)
 }

@@ -1,18 +1,24 @@
-//! Python binding of cloud building (`bsv_core::fuse::build_cloud`): dicts of numpy images in,
-//! the cloud tuple and the report JSON out. Conversion only.
+//! Python binding of cloud building (`bsv_core::fuse::build_cloud`): dicts of numpy images and a
+//! dict of parameters in, the cloud tuple and the report dict out. Conversion only.
 
+use crate::classes::{from_kwargs, to_py};
 use crate::convert::{colors_to, labels_to, points_to};
-use crate::errors::{input_err, InputError};
+use crate::errors::{input_error, py_err};
 use bsv_core::camera::{Extrinsics, Intrinsics};
 use bsv_core::fuse::{self, DepthImage, DepthView, FuseParams};
 use numpy::{PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
+/// `InputError` about the views.
+fn views_error(message: String) -> PyErr {
+    input_error("views", None, message)
+}
+
 /// A required key of a view dict.
 fn item<'py>(d: &Bound<'py, PyDict>, key: &str, camera: &str) -> PyResult<Bound<'py, PyAny>> {
     d.get_item(key)?.filter(|v| !v.is_none()).ok_or_else(|| {
-        InputError::new_err(format!(
+        views_error(format!(
             "view `{camera}` has no `{key}`; a view is a dict with name, intrinsics, camera_to_world, depth, labels (and optional depth_scale, colors)"
         ))
     })
@@ -20,11 +26,11 @@ fn item<'py>(d: &Bound<'py, PyDict>, key: &str, camera: &str) -> PyResult<Bound<
 
 fn float(d: &Bound<'_, PyDict>, key: &str, camera: &str, default: Option<f64>) -> PyResult<f64> {
     match (d.get_item(key)?.filter(|v| !v.is_none()), default) {
-        (Some(v), _) => v.extract::<f64>().map_err(|_| {
-            InputError::new_err(format!("view `{camera}`: `{key}` must be a number, got {v}"))
-        }),
+        (Some(v), _) => {
+            v.extract::<f64>().map_err(|_| views_error(format!("view `{camera}`: `{key}` must be a number, got {v}")))
+        }
         (None, Some(x)) => Ok(x),
-        (None, None) => Err(InputError::new_err(format!("view `{camera}`: intrinsics lack `{key}`"))),
+        (None, None) => Err(views_error(format!("view `{camera}`: intrinsics lack `{key}`"))),
     }
 }
 
@@ -32,15 +38,21 @@ fn intrinsics_from(d: &Bound<'_, PyDict>, camera: &str) -> PyResult<Intrinsics> 
     let int = |key: &str| -> PyResult<u32> {
         let v = float(d, key, camera, None)?;
         if v.fract() != 0.0 || !(1.0..=f64::from(u32::MAX)).contains(&v) {
-            return Err(InputError::new_err(format!("view `{camera}`: intrinsics `{key}` = {v} is not a positive pixel count")));
+            return Err(views_error(format!(
+                "view `{camera}`: intrinsics `{key}` = {v} is not a positive pixel count"
+            )));
         }
         Ok(v as u32)
     };
     let mut k = [0.0f64; 5];
     if let Some(c) = d.get_item("coeffs")?.filter(|v| !v.is_none()) {
-        let c: Vec<f64> = c.extract().map_err(|_| InputError::new_err(format!("view `{camera}`: intrinsics `coeffs` must be 5 numbers")))?;
+        let c: Vec<f64> =
+            c.extract().map_err(|_| views_error(format!("view `{camera}`: intrinsics `coeffs` must be 5 numbers")))?;
         if c.len() != 5 {
-            return Err(InputError::new_err(format!("view `{camera}`: intrinsics `coeffs` has {} numbers, expected 5 (k1, k2, p1, p2, k3)", c.len())));
+            return Err(views_error(format!(
+                "view `{camera}`: intrinsics `coeffs` has {} numbers, expected 5 (k1, k2, p1, p2, k3)",
+                c.len()
+            )));
         }
         k.copy_from_slice(&c);
     } else {
@@ -65,7 +77,7 @@ fn intrinsics_from(d: &Bound<'_, PyDict>, camera: &str) -> PyResult<Intrinsics> 
 
 fn extrinsics_from(d: &Bound<'_, PyAny>, camera: &str) -> PyResult<Extrinsics> {
     let bad = || {
-        InputError::new_err(format!(
+        views_error(format!(
             "view `{camera}`: camera_to_world must be {{\"rotation\": 3x3, \"translation\": 3}} (metres, row-major)"
         ))
     };
@@ -86,7 +98,7 @@ fn extrinsics_from(d: &Bound<'_, PyAny>, camera: &str) -> PyResult<Extrinsics> {
 fn check_shape(shape: &[usize], intr: &Intrinsics, camera: &str, what: &str) -> PyResult<()> {
     let (h, w) = (intr.height as usize, intr.width as usize);
     if shape.len() < 2 || shape[0] != h || shape[1] != w {
-        return Err(InputError::new_err(format!(
+        return Err(views_error(format!(
             "view `{camera}`: {what} has shape {shape:?} but the intrinsics say (height {h}, width {w}); pass images aligned to the colour image"
         )));
     }
@@ -96,15 +108,15 @@ fn check_shape(shape: &[usize], intr: &Intrinsics, camera: &str, what: &str) -> 
 fn view_from(obj: &Bound<'_, PyAny>, index: usize) -> PyResult<DepthView> {
     let d = obj
         .cast::<PyDict>()
-        .map_err(|_| InputError::new_err(format!("views[{index}] must be a dict, got {}", obj.get_type())))?;
+        .map_err(|_| views_error(format!("views[{index}] must be a dict, got {}", obj.get_type())))?;
     let name: String = match d.get_item("name")? {
         Some(n) if !n.is_none() => n.extract()?,
         _ => format!("view {index}"),
     };
     let intr_obj = item(d, "intrinsics", &name)?;
-    let intr_dict = intr_obj
-        .cast::<PyDict>()
-        .map_err(|_| InputError::new_err(format!("view `{name}`: intrinsics must be a dict (width, height, fx, fy, cx, cy, coeffs)")))?;
+    let intr_dict = intr_obj.cast::<PyDict>().map_err(|_| {
+        views_error(format!("view `{name}`: intrinsics must be a dict (width, height, fx, fy, cx, cy, coeffs)"))
+    })?;
     let intrinsics = intrinsics_from(intr_dict, &name)?;
     let camera_to_world = extrinsics_from(&item(d, "camera_to_world", &name)?, &name)?;
 
@@ -112,33 +124,38 @@ fn view_from(obj: &Bound<'_, PyAny>, index: usize) -> PyResult<DepthView> {
     let depth = if let Ok(a) = depth_obj.extract::<PyReadonlyArray2<'_, u16>>() {
         check_shape(a.shape(), &intrinsics, &name, "depth")?;
         let scale = float(d, "depth_scale", &name, None).map_err(|_| {
-            InputError::new_err(format!("view `{name}`: a uint16 depth image needs `depth_scale` (metres per unit, from camera.json)"))
+            views_error(format!(
+                "view `{name}`: a uint16 depth image needs `depth_scale` (metres per unit, from camera.json)"
+            ))
         })?;
         DepthImage::Units { data: a.as_array().iter().copied().collect(), scale }
     } else if let Ok(a) = depth_obj.extract::<PyReadonlyArray2<'_, f32>>() {
         check_shape(a.shape(), &intrinsics, &name, "depth")?;
         DepthImage::Metres(a.as_array().iter().copied().collect())
     } else {
-        return Err(InputError::new_err(format!(
+        return Err(views_error(format!(
             "view `{name}`: depth must be a 2-D uint16 array (with depth_scale) or float32 array in metres"
         )));
     };
 
     let labels = item(d, "labels", &name)?
         .extract::<PyReadonlyArray2<'_, u8>>()
-        .map_err(|_| InputError::new_err(format!("view `{name}`: labels must be a 2-D uint8 array of segment ids")))?;
+        .map_err(|_| views_error(format!("view `{name}`: labels must be a 2-D uint8 array of segment ids")))?;
     check_shape(labels.shape(), &intrinsics, &name, "labels")?;
     let labels: Vec<u8> = labels.as_array().iter().copied().collect();
 
     let colors = match d.get_item("colors")?.filter(|v| !v.is_none()) {
         None => None,
         Some(c) => {
-            let a = c.extract::<PyReadonlyArray3<'_, u8>>().map_err(|_| {
-                InputError::new_err(format!("view `{name}`: colors must be an (H, W, 3) uint8 RGB array"))
-            })?;
+            let a = c
+                .extract::<PyReadonlyArray3<'_, u8>>()
+                .map_err(|_| views_error(format!("view `{name}`: colors must be an (H, W, 3) uint8 RGB array")))?;
             check_shape(a.shape(), &intrinsics, &name, "colors")?;
             if a.shape()[2] != 3 {
-                return Err(InputError::new_err(format!("view `{name}`: colors must have 3 channels (RGB), got {}", a.shape()[2])));
+                return Err(views_error(format!(
+                    "view `{name}`: colors must have 3 channels (RGB), got {}",
+                    a.shape()[2]
+                )));
             }
             let flat: Vec<u8> = a.as_array().iter().copied().collect();
             Some(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
@@ -147,17 +164,22 @@ fn view_from(obj: &Bound<'_, PyAny>, index: usize) -> PyResult<DepthView> {
     Ok(DepthView { name, intrinsics, camera_to_world, depth, labels, colors })
 }
 
-/// Builds the merged labelled world cloud from per-camera views:
-/// `(points, normals | None, colors | None, labels | None, report_json)`.
+/// Builds the merged labelled world cloud from per-camera views and `FuseParams` keywords:
+/// `(points, normals | None, colors | None, labels | None, report dict)`.
 #[pyfunction]
-fn build_cloud<'py>(py: Python<'py>, views: Vec<Bound<'py, PyAny>>, params_json: &str) -> PyResult<Bound<'py, PyTuple>> {
-    let params = FuseParams::from_json(params_json).map_err(input_err)?;
+#[pyo3(signature = (views, params=None))]
+fn build_cloud<'py>(
+    py: Python<'py>,
+    views: Vec<Bound<'py, PyAny>>,
+    params: Option<Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let params: FuseParams = from_kwargs("cloud-building", &params.unwrap_or_else(|| PyDict::new(py)))?;
     let views: Vec<DepthView> = views.iter().enumerate().map(|(i, v)| view_from(v, i)).collect::<PyResult<_>>()?;
-    let (cloud, report) = py.detach(|| fuse::build_cloud(&views, &params)).map_err(input_err)?;
+    let (cloud, report) = py.detach(|| fuse::build_cloud(&views, &params)).map_err(py_err)?;
     let n = cloud.normals.as_deref().map(|n| points_to(py, n));
     let c = cloud.colors.as_deref().map(|c| colors_to(py, c));
     let l = cloud.labels.as_deref().map(|l| labels_to(py, l));
-    (points_to(py, &cloud.points), n, c, l, report.to_json()).into_pyobject(py)
+    (points_to(py, &cloud.points), n, c, l, to_py(py, &report)?).into_pyobject(py)
 }
 
 /// Registers the cloud-builder functions on the module.

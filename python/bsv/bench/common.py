@@ -10,16 +10,12 @@ from typing import Any, Mapping, Optional
 
 import numpy as np
 
-from ..errors import BsvError
-from ..types import SEGMENT_IDS, Mesh, PointCloud
+from ..errors import BenchError
+from ..types import SEGMENT_IDS, TRUNK_LIMBS, Mesh, PointCloud
 
 #: Segment ids a lab's cloud keeps (DESIGN.md data flow step 4 drops head, hands and feet).
-KEEP_IDS: tuple[int, ...] = tuple(SEGMENT_IDS[n] for n in (
-    "torso", "upper_arm_l", "upper_arm_r", "forearm_l", "forearm_r", "thigh_l", "thigh_r", "shin_l", "shin_r"))
+KEEP_IDS: tuple[int, ...] = tuple(SEGMENT_IDS[n] for n in TRUNK_LIMBS)
 
-
-class BenchError(BsvError, RuntimeError):
-    """A benchmark could not run as asked (bad option, missing data or dependency); says what to do."""
 
 
 def rve(estimated: float, true: float) -> float:

@@ -19,16 +19,14 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from .. import _bsv
 from .. import volumes as _volumes
-from ..errors import BsvError
+from ..errors import FloorError
 from ..types import Mesh
 
 #: Half-width of the blending band in n . d (0.3: the blend spans normals within ~17 deg of lateral).
 DEFAULT_BAND: float = 0.3
 
-
-class FloorError(BsvError, ValueError):
-    """A capture folder lacks the per-camera extrinsics the floor needs."""
 
 
 @dataclass(frozen=True)
@@ -89,15 +87,8 @@ def read_camera_poses(capture_dir: str | Path) -> list[CameraPose]:
 
 
 def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Area-weighted unit vertex normals."""
-    v = np.asarray(vertices, dtype=np.float64)
-    f = np.asarray(faces, dtype=np.int64)
-    fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
-    n = np.zeros_like(v)
-    for k in range(3):
-        np.add.at(n, f[:, k], fn)
-    length = np.linalg.norm(n, axis=1, keepdims=True)
-    return n / np.where(length > 0, length, 1.0)
+    """Area-weighted unit vertex normals (Rust's ``bsv_core::geometry::vertex_normals``)."""
+    return _bsv.vertex_normals(vertices, faces)
 
 
 def _smoothstep(x: np.ndarray) -> np.ndarray:

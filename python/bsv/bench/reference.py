@@ -7,11 +7,10 @@ say so in the report). ``P2PV``: Point2PartVolume's accuracies (100 - RVE, %) on
 
 from __future__ import annotations
 
+from ..types import TRUNK_LIMBS
+
 #: The nine segments of trunk_limbs, in report order.
-SEGMENTS: tuple[str, ...] = (
-    "torso", "upper_arm_l", "upper_arm_r", "forearm_l", "forearm_r",
-    "thigh_l", "thigh_r", "shin_l", "shin_r",
-)
+SEGMENTS: tuple[str, ...] = TRUNK_LIMBS
 #: Every volume the synthetic benchmark records: segments, then aggregates.
 MEASURED: tuple[str, ...] = SEGMENTS + ("arm_l", "arm_r", "leg_l", "leg_r", "trunk_limbs")
 #: Report rows of the paper-style table.

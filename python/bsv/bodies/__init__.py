@@ -1,23 +1,24 @@
 """Synthetic MakeHuman bodies (CC0 assets): phenotype blending, dual-quaternion A-pose, 14-segment labels,
 ground-truth segment volumes, the stature/BMI solver, the synthetic cohort and the default templates.
 
-numpy only; reads the vendored asset ``assets/makehuman/body.npz`` (see scripts/make_assets.py).
+numpy, with the segment volumes and label rules from the extension; reads the vendored asset ``assets/makehuman/body.npz`` (see scripts/make_assets.py).
 """
 
 from __future__ import annotations
 
+from ..errors import LabelError
 from .asset import AssetError, asset_path, load_asset
 from .body import Body, SolveError, make_body, solve_stature_bmi
 from .cohort import Subject, cohort, iter_cohort, subject, volumes_json, write_cohort, write_subject
 from .collide import penetrations
-from .labels import PALETTE, LabelError, aggregates, segment_volumes, volume
+from .labels import PALETTE, segment_volumes, volume
 from .model import Phenotype, PhenotypeError, shape
 from .pose import Pose, PoseError
 from .template import templates, write_templates
 
 __all__ = [
     "AssetError", "Body", "LabelError", "PALETTE", "Phenotype", "PhenotypeError", "Pose", "PoseError",
-    "SolveError", "aggregates", "asset_path", "load_asset", "make_body", "segment_volumes", "shape",
+    "SolveError", "asset_path", "load_asset", "make_body", "segment_volumes", "shape",
     "solve_stature_bmi", "volume", "Subject", "cohort", "iter_cohort", "subject", "volumes_json", "write_cohort",
     "write_subject", "penetrations", "templates", "write_templates",
 ]

@@ -9,11 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import BsvError
+from ..errors import AssetError
 
-
-class AssetError(BsvError, RuntimeError):
-    """The MakeHuman asset is missing or malformed."""
 
 
 def asset_path() -> Path:

@@ -7,20 +7,14 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..types import SEGMENT_NAMES, Mesh
+from ..types import Mesh
 from .asset import Asset, load_asset
-from .errors import BsvError
-from .labels import aggregates, body_labels, segment_volumes, volume
+from ..errors import SolveError
+from .. import _bsv
+from .labels import body_labels, volume
 from .model import Phenotype, shape
 from .pose import Pose, pose_vertices
 
-
-class SolveError(BsvError, ValueError):
-    """The stature/BMI solver cannot reach the requested values (``reachable``: the attainable range)."""
-
-    def __init__(self, message: str, reachable: tuple[float, float] | None = None) -> None:
-        super().__init__(message)
-        self.reachable = reachable
 
 
 @lru_cache(maxsize=1)
@@ -57,8 +51,8 @@ class Body:
 
     def volumes_l(self) -> dict[str, float]:
         """Ground-truth volumes (litres) of every segment and the aggregates of DESIGN.md."""
-        seg = segment_volumes(self.vertices, self.faces, self.face_labels)
-        return aggregates({SEGMENT_NAMES[k]: v * 1e3 for k, v in seg.items()})
+        volumes: dict[str, float] = _bsv.volumes(self.vertices, self.faces, None, self.face_labels).volumes_l
+        return volumes
 
     def mesh(self) -> Mesh:
         """The body as a bsv.Mesh (vertex and face labels)."""

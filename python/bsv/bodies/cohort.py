@@ -22,7 +22,7 @@ import numpy as np
 
 from .body import Body, SolveError, make_body, solve_stature_bmi
 from .collide import penetrations
-from .errors import OutputExistsError
+from ..errors import OutputExistsError
 from .meshio import ply_bytes
 from .model import Phenotype
 from .pose import Pose

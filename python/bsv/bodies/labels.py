@@ -1,10 +1,10 @@
-"""Segment labels from skinning weights, segment closing by shared fan caps, and segment volumes (numpy).
+"""Segment labels from skinning weights, the segment boundaries, and segment volumes (from Rust).
 
 Every vertex belongs to the segment whose bones weigh most on it; a face to the segment with the
 largest summed weight over its corners; small islands are merged into their surroundings so each
-segment is one patch. Closing: the boundary between segments s and t is split into connected loops;
-each loop is capped by a fan to its centroid, and the same cap (with opposite orientation) closes the
-neighbour, so segment volumes add up to the volume of the whole mesh exactly.
+segment is one patch. Segment volumes are the Rust ones (``bsv_volume``: each boundary loop capped by
+a fan shared with the neighbour, so they add up to the whole); vertex labels from face labels use
+Rust's one rule.
 """
 
 from __future__ import annotations
@@ -13,33 +13,14 @@ import re
 
 import numpy as np
 
-from ..types import SEGMENT_IDS, SEGMENT_NAMES, TRUNK_LIMBS
+from .. import _bsv
+from ..types import PALETTE as _PALETTE
+from ..types import SEGMENT_IDS, SEGMENT_NAMES
 from .asset import Asset, load_asset
-from .errors import BsvError
 
-#: Palette colours (sRGB) per segment id, exactly crates/bsv-core/src/segment.rs PALETTE (what the Rust
-#: writers put in PLY files); used by the PLY writer here and by the report figures.
-PALETTE = np.array([
-    [200, 200, 200],  # 0 unlabelled
-    [255, 213, 170],  # 1 head
-    [70, 130, 180],   # 2 torso
-    [228, 26, 28],    # 3 upper_arm_l
-    [55, 126, 184],   # 4 upper_arm_r
-    [255, 127, 0],    # 5 forearm_l
-    [77, 175, 74],    # 6 forearm_r
-    [247, 129, 191],  # 7 hand_l
-    [152, 78, 163],   # 8 hand_r
-    [166, 86, 40],    # 9 thigh_l
-    [27, 158, 119],   # 10 thigh_r
-    [255, 255, 51],   # 11 shin_l
-    [102, 194, 165],  # 12 shin_r
-    [153, 153, 153],  # 13 foot_l
-    [31, 120, 180],   # 14 foot_r
-], dtype=np.uint8)
-
-
-class LabelError(BsvError, ValueError):
-    """A labelled mesh cannot be split into closed segments."""
+#: Palette colours (sRGB) per segment id: Rust's ``bsv_core::PALETTE`` (what the Rust writers put in PLY
+#: files); used by the report figures.
+PALETTE = _PALETTE
 
 
 def bone_segment(name: str) -> int:
@@ -137,10 +118,9 @@ def clean_islands(faces: np.ndarray, labels: np.ndarray, max_iter: int = 20) -> 
 
 
 def vertex_labels_from_faces(n: int, faces: np.ndarray, face_labels: np.ndarray) -> np.ndarray:
-    """Each vertex takes the most common label of its faces (ties -> the lower id)."""
-    cnt = np.zeros((n, 15), dtype=np.int64)
-    np.add.at(cnt, (faces.ravel(), np.repeat(face_labels, 3)), 1)
-    return np.argmax(cnt, axis=1).astype(np.uint8)
+    """Each vertex takes the most common label of its faces (ties -> the lower id): Rust's one rule,
+    ``bsv_volume::vertex_labels_from_faces``."""
+    return _bsv.vertex_labels_from_faces(n, faces, face_labels)
 
 
 def body_labels(faces: np.ndarray, asset: Asset | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -181,14 +161,11 @@ def boundary_loops(faces: np.ndarray, face_labels: np.ndarray) -> list[tuple[int
     return out
 
 
-def check_loops(loops: list[tuple[int, int, np.ndarray]]) -> None:
-    """Raise LabelError unless every boundary component is a closed cycle (in-degree = out-degree)."""
-    for s, t, ed in loops:
-        out_d = np.bincount(ed[:, 0], minlength=ed.max() + 1)
-        in_d = np.bincount(ed[:, 1], minlength=ed.max() + 1)
-        if not np.array_equal(out_d, in_d):
-            raise LabelError(f"boundary between {SEGMENT_NAMES[s]} and {SEGMENT_NAMES[t]} is not a closed "
-                             "loop (three segments meet at a vertex); relabel so each boundary is a loop")
+def segment_volumes(vertices: np.ndarray, faces: np.ndarray, face_labels: np.ndarray) -> dict[int, float]:
+    """Volume (m^3) of each segment present, closed by fan caps shared with its neighbours: the Rust
+    segment volumes (``bsv_volume``, triple junctions included), by segment id."""
+    litres = _bsv.volumes(vertices, faces, None, face_labels).volumes_l
+    return {i: litres[n] / 1e3 for i, n in SEGMENT_NAMES.items() if i != 0 and n in litres}
 
 
 def _tet_volumes(v: np.ndarray, f: np.ndarray, origin: np.ndarray) -> np.ndarray:
@@ -196,40 +173,10 @@ def _tet_volumes(v: np.ndarray, f: np.ndarray, origin: np.ndarray) -> np.ndarray
     return np.einsum("ij,ij->i", a, np.cross(b, c)) / 6.0
 
 
-def segment_volumes(vertices: np.ndarray, faces: np.ndarray, face_labels: np.ndarray) -> dict[int, float]:
-    """Volume (m^3) of each segment present, closed by fan caps shared with its neighbours."""
-    v = np.asarray(vertices, dtype=np.float64)
-    origin = v.mean(axis=0)
-    tv = _tet_volumes(v, faces, origin)
-    vol = np.bincount(face_labels, weights=tv, minlength=15)
-    loops = boundary_loops(faces, face_labels)
-    check_loops(loops)
-    for s, t, ed in loops:
-        c = v[np.unique(ed)].mean(axis=0) - origin
-        a, b = v[ed[:, 0]] - origin, v[ed[:, 1]] - origin
-        # the cap closes s with triangles (b, a, c): the edge reversed, as a neighbour face would be
-        cap = np.einsum("ij,ij->i", b, np.cross(a, np.broadcast_to(c, a.shape))).sum() / 6.0
-        vol[s] += cap
-        vol[t] -= cap
-    present = np.unique(face_labels)
-    return {int(k): float(vol[k]) for k in present}
-
-
-def aggregates(seg_litres: dict[str, float]) -> dict[str, float]:
-    """Add trunk_limbs, whole, arm_l/r, leg_l/r to a {segment name: litres} dict (absent parts skipped)."""
-    out = dict(seg_litres)
-    out["whole"] = float(sum(seg_litres.values()))
-    if all(k in seg_litres for k in TRUNK_LIMBS):
-        out["trunk_limbs"] = float(sum(seg_litres[k] for k in TRUNK_LIMBS))
-    for side in ("l", "r"):
-        if f"upper_arm_{side}" in seg_litres and f"forearm_{side}" in seg_litres:
-            out[f"arm_{side}"] = seg_litres[f"upper_arm_{side}"] + seg_litres[f"forearm_{side}"]
-        if f"thigh_{side}" in seg_litres and f"shin_{side}" in seg_litres:
-            out[f"leg_{side}"] = seg_litres[f"thigh_{side}"] + seg_litres[f"shin_{side}"]
-    return out
-
-
 def volume(vertices: np.ndarray, faces: np.ndarray) -> float:
-    """Divergence-theorem volume (m^3) of a closed, outward triangle mesh."""
+    """Divergence-theorem volume (m^3) of a closed, outward triangle mesh (about the vertex mean).
+
+    Kept in numpy on purpose: the stature/BMI solver evaluates it in its loop, and the cohort's
+    bodies (their bytes) depend on this exact summation order."""
     v = np.asarray(vertices, dtype=np.float64)
     return float(_tet_volumes(v, faces, v.mean(axis=0)).sum())

@@ -1,4 +1,9 @@
-"""Labelled mesh writers (PLY binary little-endian with palette colours, OBJ with segment groups), numpy bulk I/O."""
+"""Labelled mesh writers of the bodies' files (PLY binary little-endian with palette colours, OBJ with
+segment groups), numpy bulk I/O.
+
+Kept beside the Rust writers (``bsv.write_mesh``) on purpose: these are the exact bytes of the
+committed templates and of the cohort (its determinism tests compare bytes), and the Rust PLY writer
+has another header comment and per-face colours. Reading goes through the Rust reader."""
 
 from __future__ import annotations
 
@@ -44,20 +49,13 @@ def write_ply(path: str | Path, vertices: np.ndarray, faces: np.ndarray, vertex_
 
 
 def read_ply(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Read back a PLY written by write_ply: (vertices, faces, vertex labels, face labels)."""
-    data = Path(path).read_bytes()
-    end = data.index(b"end_header\n") + len(b"end_header\n")
-    head = data[:end].decode("ascii").splitlines()
-    nv = int(next(h for h in head if h.startswith("element vertex")).split()[-1])
-    nf = int(next(h for h in head if h.startswith("element face")).split()[-1])
-    if "format binary_little_endian 1.0" not in head or "property double x" not in head:
-        raise ValueError(f"{path}: not a PLY written by bsv.bodies (binary little-endian, double x y z)")
-    vt = np.dtype([("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("rgb", "u1", (3,)), ("label", "u1")])
-    ft = np.dtype([("n", "u1"), ("idx", "<i4", (3,)), ("label", "u1")])
-    va = np.frombuffer(data, vt, nv, end)
-    fa = np.frombuffer(data, ft, nf, end + nv * vt.itemsize)
-    v = np.stack([va["x"], va["y"], va["z"]], 1)
-    return v, fa["idx"].astype(np.int64), va["label"].copy(), fa["label"].copy()
+    """Read back a labelled PLY (the Rust reader, ``bsv.read_mesh``): (vertices, faces, vertex labels, face labels)."""
+    from .. import read_mesh
+
+    m = read_mesh(path)
+    if m.vertex_labels is None or m.face_labels is None:
+        raise ValueError(f"{path}: not a labelled PLY (vertex and face `label` properties)")
+    return m.vertices, m.faces, m.vertex_labels, m.face_labels
 
 
 def obj_text(vertices: np.ndarray, faces: np.ndarray, face_labels: np.ndarray, comment: str = "") -> str:

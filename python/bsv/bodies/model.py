@@ -14,16 +14,13 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .asset import Asset, AssetError, load_asset
-from .errors import BsvError
+from ..errors import PhenotypeError
 
 GENDERS = ("female", "male")
 AGES = ("child", "young", "old")
 RACES = ("african", "asian", "caucasian")
 LEVELS = ("min", "average", "max")
 
-
-class PhenotypeError(BsvError, ValueError):
-    """A phenotype or local-modifier value is out of range or unknown."""
 
 
 @dataclass(frozen=True)

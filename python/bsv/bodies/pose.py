@@ -15,11 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .asset import Asset, load_asset
-from .errors import BsvError
+from ..errors import PoseError
 
-
-class PoseError(BsvError, ValueError):
-    """A pose angle is out of its allowed range."""
 
 
 @dataclass(frozen=True)

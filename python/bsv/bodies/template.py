@@ -15,7 +15,7 @@ import numpy as np
 
 from ..types import SEGMENT_IDS, Mesh
 from .body import make_body
-from .errors import BsvError, OutputExistsError
+from ..errors import OutputExistsError, TemplateError
 from .labels import vertex_labels_from_faces
 from .meshio import obj_text, ply_bytes
 from .model import Phenotype
@@ -23,9 +23,6 @@ from .pose import Pose
 
 REMOVED = ("head", "hand_l", "hand_r", "foot_l", "foot_r")
 
-
-class TemplateError(BsvError, RuntimeError):
-    """A template could not be built watertight."""
 
 
 def boundary_cycles(faces: np.ndarray) -> list[np.ndarray]:

@@ -43,18 +43,16 @@ from typing import Any, Iterator, Optional, Sequence, Union
 
 import numpy as np
 
+from ..types import SEGMENT_IDS as _SEGMENT_IDS
+from ..types import SEGMENT_NAMES as _SEGMENT_NAMES
 from .errors import LandmarkMissingError, PersonNotFoundError, SegmentationError
 
 PathLike = Union[str, Path]
 
-#: Segment ids of DESIGN.md (0 = unlabelled).
-SEGMENT_IDS: dict[str, int] = {
-    "head": 1, "torso": 2, "upper_arm_l": 3, "upper_arm_r": 4, "forearm_l": 5, "forearm_r": 6,
-    "hand_l": 7, "hand_r": 8, "thigh_l": 9, "thigh_r": 10, "shin_l": 11, "shin_r": 12, "foot_l": 13,
-    "foot_r": 14,
-}
+#: Segment ids of DESIGN.md without 0 (the table of ``bsv_core::Segment``, via :mod:`bsv.types`).
+SEGMENT_IDS: dict[str, int] = {n: i for n, i in _SEGMENT_IDS.items() if i != 0}
 #: Segment names by id (index 0 = "unlabelled").
-SEGMENT_NAMES: tuple[str, ...] = ("unlabelled",) + tuple(SEGMENT_IDS)
+SEGMENT_NAMES: tuple[str, ...] = tuple(_SEGMENT_NAMES.values())
 
 #: MediaPipe's 33 pose landmark names (index = MediaPipe's index).
 POSE_NAMES: tuple[str, ...] = (

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Callable, Optional
+from collections.abc import Callable
 
 USAGE = """usage: bsv <command> [options]
 
@@ -52,11 +52,10 @@ def _capture_main(argv: list[str]) -> int:
 def _cohort_main(argv: list[str]) -> int:
     from .bodies.cohort import main
 
-    main(argv)
-    return 0
+    return main(argv)
 
 
-def _route(name: str) -> Optional[Callable[[list[str]], Optional[int]]]:
+def _route(name: str) -> Callable[[list[str]], int | None] | None:
     if name == "demo":
         from .pipeline import main_demo
 
@@ -80,7 +79,7 @@ def _route(name: str) -> Optional[Callable[[list[str]], Optional[int]]]:
     return None
 
 
-def main(argv: Optional[list[str]] = None) -> int:
+def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``bsv`` console script; returns the exit status."""
     args = list(sys.argv[1:] if argv is None else argv)
     if not args or args[0] in ("-h", "--help", "help"):
@@ -95,16 +94,9 @@ def main(argv: Optional[list[str]] = None) -> int:
     if handler is None:
         print(f"bsv: unknown command {args[0]!r}\n\n{USAGE}", file=sys.stderr)
         return 2
-    from . import BsvError
+    from .exitcodes import run_command
 
-    try:
-        return int(handler(args[1:]) or 0)
-    except BsvError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 1
-    except FileExistsError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 1
+    return run_command(f"bsv {args[0]}", lambda: handler(args[1:]))
 
 
 if __name__ == "__main__":

@@ -17,18 +17,18 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Optional, Sequence, Union
+from typing import Any, Union
 
 import numpy as np
 
 from . import _bsv
 from .errors import OutputExistsError
-from .frontend.errors import CalibrationFileError, CaptureError, FrontendError, SegmentationError
-from .types import SEGMENT_NAMES, TRUNK_LIMBS, Mesh, PointCloud, Registration
+from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
+from .types import TRUNK_LIMBS, Mesh, PointCloud, Registration
 
 PathLike = Union[str, Path]
 
@@ -57,7 +57,7 @@ class ProcessResult:
     timings: dict[str, float]
     files: dict[str, Path] = field(default_factory=dict)
     #: Ground truth and comparison rows, filled by :func:`demo`.
-    truth: Optional[dict[str, float]] = None
+    truth: dict[str, float] | None = None
     comparison: list[dict[str, Any]] = field(default_factory=list)
 
     @property
@@ -109,7 +109,7 @@ def _camera_dirs(capture_dir: Path, cameras: Sequence[str]) -> dict[str, Path]:
     return dirs
 
 
-def _calibration(calibration: Optional[PathLike], capture_dir: Path, cameras: Sequence[str],
+def _calibration(calibration: PathLike | None, capture_dir: Path, cameras: Sequence[str],
                  intrinsics: dict[str, Any]) -> dict[str, dict[str, Any]]:
     """Camera-to-world extrinsics per camera from calibration.json, or by calibrating from a folder of
     marker images (``<folder>/<camera>/*.png``)."""
@@ -219,7 +219,7 @@ def _check_outputs(out: Path, overwrite: bool, cameras: Sequence[str] = ("front"
 
 def process(
     capture_dir: PathLike,
-    calibration: Optional[PathLike],
+    calibration: PathLike | None,
     out_dir: PathLike,
     *,
     segmentation: str = "camera",
@@ -232,9 +232,9 @@ def process(
     sor_k: int = 600,
     sor_std_ratio: float = 0.05,
     density: float = 1000.0,
-    segment_params: Optional[dict[str, Any]] = None,
+    segment_params: dict[str, Any] | None = None,
     title: str = "BSV report",
-    truth: Optional[dict[str, float]] = None,
+    truth: dict[str, float] | None = None,
     **register_params: Any,
 ) -> ProcessResult:
     """Segmentation, cloud, registration and volumes of a capture folder (``CAPTURE_DIR/<camera>/`` with
@@ -395,7 +395,7 @@ def _register_args(values: Sequence[str]) -> dict[str, Any]:
     return out
 
 
-def main_process(argv: Optional[Sequence[str]] = None) -> int:
+def main_process(argv: Sequence[str] | None = None) -> int:
     """``bsv process CAPTURE_DIR --calibration calibration.json -o OUT``."""
     ap = argparse.ArgumentParser(prog="bsv process", description="Volumes and report of a two-camera capture.")
     ap.add_argument("capture_dir", help="capture folder with <camera>/color.png, depth.png, camera.json")
@@ -415,27 +415,28 @@ def main_process(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--quiet", action="store_true", help="no progress output")
     a = ap.parse_args(list(argv) if argv is not None else None)
     from . import read_mesh
+    from .exitcodes import run_command
 
-    try:
+    def run() -> int:
         res = process(a.capture_dir, a.calibration, a.out, segmentation=a.segmentation,
                       template=read_mesh(a.template) if a.template else None, progress=not a.quiet,
                       overwrite=a.overwrite, keep_extremities=a.keep_extremities, sor=a.sor, sor_k=a.sor_k,
                       sor_std_ratio=a.sor_std, **_register_args(a.param))
-    except OutputExistsError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
-    except FrontendError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 1
+        _print_process(res)
+        return 0
+
+    return run_command("bsv process", run)
+
+
+def _print_process(res: Any) -> None:
     v = res.volumes.get("volumes_l", {})
     for name in (*TRUNK_LIMBS, "trunk_limbs"):
         if name in v:
             print(f"{name:<14}{v[name]:>9.3f} L")
     print(f"report: {res.files['report']}")
-    return 0
 
 
-def main_demo(argv: Optional[Sequence[str]] = None) -> int:
+def main_demo(argv: Sequence[str] | None = None) -> int:
     """``bsv demo [-o OUT] [--seed N] [--condition l515]``."""
     ap = argparse.ArgumentParser(prog="bsv demo", description="The whole chain on a synthetic subject, no camera.")
     ap.add_argument("-o", "--out", default="bsv-demo", help="output folder (default ./bsv-demo)")
@@ -449,19 +450,29 @@ def main_demo(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT")
     ap.add_argument("--quiet", action="store_true", help="only the final table")
     a = ap.parse_args(list(argv) if argv is not None else None)
-    try:
+    from .exitcodes import run_command
+
+    def run() -> int:
         res = demo(a.out, seed=a.seed, subject=a.subject, condition=a.condition, segmentation=a.segmentation,
                    progress=not a.quiet, overwrite=a.overwrite, **_register_args(a.param))
-    except OutputExistsError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
-    except FrontendError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 1
-    if a.quiet:
-        print(comparison_table(res.comparison))
-    return 0
+        if a.quiet:
+            print(comparison_table(res.comparison))
+        return 0
+
+    return run_command("bsv demo", run)
 
 
-__all__ = ["DEMO_OUTPUT", "OUTPUTS", "SEGMENTATION_DIR", "ProcessResult", "output_files", "build_cloud", "compare", "comparison_table", "demo", "main_demo",
-           "main_process", "process"]
+__all__ = [
+    "DEMO_OUTPUT",
+    "OUTPUTS",
+    "SEGMENTATION_DIR",
+    "ProcessResult",
+    "build_cloud",
+    "compare",
+    "comparison_table",
+    "demo",
+    "main_demo",
+    "main_process",
+    "output_files",
+    "process",
+]

@@ -5,10 +5,9 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from typing import Any, Optional, Sequence
+from collections.abc import Sequence
+from typing import Any
 
-from ..errors import OutputExistsError
-from .common import BenchError
 from .reference import CONDITIONS
 
 
@@ -81,13 +80,14 @@ def parser() -> argparse.ArgumentParser:
     return ap
 
 
-def main(argv: Optional[Sequence[str]] = None) -> int:
+def main(argv: Sequence[str] | None = None) -> int:
     """Runs ``bsv bench ...``; returns the process exit code (0 ok, 1 some run failed, 2 bad usage or
     outputs already in --out without --overwrite)."""
     args = parser().parse_args(list(sys.argv[1:] if argv is None else argv))
     params = dict(args.param)
     methods = ("bsv",) + ((args.peer,) if args.peer else ())
-    try:
+
+    def run() -> int:
         from .output import check_outputs
 
         check_outputs(args.out, args.overwrite)  # before any work: a run can take an hour
@@ -116,15 +116,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             runs, summary = run_faust(args.root, args.out, scans=args.scans, conditions=args.conditions,
                                       seed=args.seed, methods=methods, params=params, progress=not args.quiet,
                                       overwrite=args.overwrite)
-    except OutputExistsError as exc:
-        print(f"bsv bench {args.command}: {exc}", file=sys.stderr)
-        return 2
-    except BenchError as exc:
-        print(f"bsv bench {args.command}: {exc}", file=sys.stderr)
-        return 2
-    _print_summary(summary)
-    print(f"wrote {args.out}/report.md, results.json, results.csv")
-    return 0 if all(r.ok for r in runs) else 1
+        _print_summary(summary)
+        print(f"wrote {args.out}/report.md, results.json, results.csv")
+        return 0 if all(r.ok for r in runs) else 1
+
+    from ..exitcodes import run_command
+
+    return run_command(f"bsv bench {args.command}", run)
 
 
 def _print_summary(summary: dict) -> None:

@@ -14,15 +14,15 @@ whose thighs enter each other, has its arms raised / legs spread step by step un
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Iterator
 
 import numpy as np
 
+from ..errors import OutputExistsError
 from .body import Body, SolveError, make_body, solve_stature_bmi
 from .collide import penetrations
-from ..errors import OutputExistsError
 from .meshio import ply_bytes
 from .model import Phenotype
 from .pose import Pose
@@ -199,9 +199,9 @@ def write_cohort(out_dir: str | Path, n: int, seed: int = 0, local: bool = True,
     return paths
 
 
-def main(argv: list[str] | None = None) -> None:
-    """``python -m bsv.bodies.cohort OUT_DIR N [SEED] [--no-local] [--overwrite]``: write a cohort (exits
-    with status 2 and a message if files exist and --overwrite is not given)."""
+def main(argv: list[str] | None = None) -> int:
+    """``python -m bsv.bodies.cohort OUT_DIR N [SEED] [--no-local] [--overwrite]``: write a cohort; returns
+    the exit status (2 and a message if files exist and --overwrite is not given, see bsv.exitcodes)."""
     import argparse
 
     ap = argparse.ArgumentParser(description="Write a synthetic MakeHuman cohort (PLY + ground-truth JSON).")
@@ -211,16 +211,16 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--no-local", action="store_true", help="macro phenotypes only (no local modifiers)")
     ap.add_argument("--overwrite", action="store_true", help="replace subject files and cohort.json already in OUT_DIR")
     args = ap.parse_args(argv)
-    try:
-        written = write_cohort(args.out_dir, args.n, args.seed, not args.no_local, overwrite=args.overwrite)
-    except OutputExistsError as exc:
-        import sys
+    from ..exitcodes import run_command
 
-        print(f"error: {exc}", file=sys.stderr)
-        raise SystemExit(2) from exc
-    for ply, js in written:
-        print(ply, js)
+    def run() -> int:
+        written = write_cohort(args.out_dir, args.n, args.seed, not args.no_local, overwrite=args.overwrite)
+        for ply, js in written:
+            print(ply, js)
+        return 0
+
+    return run_command("bsv cohort", run)
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

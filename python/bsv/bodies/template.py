@@ -8,14 +8,13 @@ Run ``python -m bsv.bodies.template OUT_DIR --overwrite`` (or scripts/make_asset
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import numpy as np
 
+from ..errors import OutputExistsError, TemplateError
 from ..types import SEGMENT_IDS, Mesh
 from .body import make_body
-from ..errors import OutputExistsError, TemplateError
 from .labels import vertex_labels_from_faces
 from .meshio import obj_text, ply_bytes
 from .model import Phenotype
@@ -187,14 +186,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("out_dir", nargs="?", default=str(Path(__file__).resolve().parents[3] / "assets" / "template"))
     ap.add_argument("--overwrite", action="store_true", help="replace template files already in OUT_DIR")
     args = ap.parse_args(argv)
-    try:
+    from ..exitcodes import run_command
+
+    def run() -> int:
         counts = write_templates(args.out_dir, overwrite=args.overwrite)
-    except OutputExistsError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    for k, (nv, nf) in counts.items():
-        print(f"{k}: {nv} vertices, {nf} triangles")
-    return 0
+        for k, (nv, nf) in counts.items():
+            print(f"{k}: {nv} vertices, {nf} triangles")
+        return 0
+
+    return run_command("bsv template", run)
 
 
 if __name__ == "__main__":

@@ -77,6 +77,7 @@ impl CellMaps {
 }
 
 #[inline]
+#[rustfmt::skip]
 fn outer(a: [f64; 3], b: [f64; 3]) -> Matrix3<f64> {
     Matrix3::new(
         a[0] * b[0], a[0] * b[1], a[0] * b[2],

@@ -1,4 +1,4 @@
-//! Cotangent weights and the cotangent Laplacian of a triangle mesh.
+//! Cotangent weights of a triangle mesh (the global solver assembles the Laplacian from them).
 //!
 //! `w_ij = (cot a_ij + cot b_ij) / 2`, with `a_ij`, `b_ij` the angles opposite edge ij in its two
 //! triangles (one triangle on a boundary edge). Safeguards:

@@ -18,9 +18,9 @@
 //! 4. [`Registrar::finish`] -> [`Registration`]: the inscribed-mesh [`surface_correction`], the
 //!    final distances and the labels.
 //!
-//! Energies, weights and units are documented on [`RegisterParams`] (module `params.rs`) and in
-//! `local.rs`. Errors are typed per stage ([`RegisterError`]).
-//! (measured: benchmarks/BENCH.md, section Registration)
+//! Energies, weights and units are documented on [`EnergyParams`] and in
+//! `local.rs`. Errors are typed per stage ([`RegisterError`]). What each stage of the pipeline
+//! gains on the synthetic cohort: (measured: benchmarks/BENCH.md, section Registration).
 
 mod articulate;
 mod correspond;

@@ -3,7 +3,7 @@
 use crate::schedule::CorrespondenceKind;
 use serde::{Deserialize, Serialize};
 
-/// Energy terms (m^2, see the module docs) at one point of an iteration.
+/// Energy terms (m^2, see [`crate::EnergyParams`]) at one point of an iteration.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Energy {
     /// ARAP/affine term.

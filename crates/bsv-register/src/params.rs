@@ -3,40 +3,7 @@
 //! [`ArticulationParams`]); the groups are flattened in the serde form, so JSON and keyword
 //! arguments use the flat names (`alpha`, `data_weight`, `prealign`, ...).
 //!
-//! # Units and weights
-//! Geometry is in metres. The energy minimised is (see `local.rs` for the derivation)
-//!
-//! ```text
-//! E = E_arap + E_reg + E_data
-//! E_arap = sum_i w_c sum_{j in N(i)} w_ij |(p'_i - p'_j) - T_i (p_i - p_j)|^2     (m^2)
-//! E_reg  = lambda sum_i |T_i - R_i|_F^2,   lambda = alpha * 1e-6 * w_c * A / N      (m^2)
-//! E_data = sum_i d_i |p'_i - q_i|^2                                                (m^2)
-//! ```
-//! with `w_ij` the (dimensionless) cotangent weights, `w_c` = [`EnergyParams::cell_weight`],
-//! `A` the TOTAL area of the pre-aligned template (m^2), `N` its vertex count, `q_i` the
-//! correspondence target and `d_i` = [`EnergyParams::data_weight`] (0 without correspondence).
-//!
-//! How this relates to the paper (`lambda_paper = alpha * A`, `w_i = 1e-2`, `alpha = 1e6`): read
-//! literally in any unit, the paper's ratio of regularization to ARAP stiffness per cell is
-//! `alpha * N / w_c` (about 1e12 for a body template), i.e. T_i would be a rotation and no cell could
-//! ever scale. We keep the paper's structure (one global weight proportional to the total area A,
-//! so shrinking triangles cannot lower it) and its numbers, but make the weight dimensionless and
-//! resolution-independent: `lambda = (alpha / 1e6) * w_c * A / N`, so at the default alpha = 1e6 the
-//! penalty for leaving the nearest rotation equals the ARAP stiffness of an average cell
-//! (`w_c * A / N`, about a quarter of `w_c * tr(P_i)` on a regular mesh). alpha = 1e8 is practically
-//! classic ARAP (T_i = R_i); alpha = 0 lets every cell be any affine map.
-//!
-//! On gappy clouds alpha = 0 does not collapse in this engine (contrary to the paper's "collapses
-//! within 5 iterations"): with free affine cells the ARAP term is still an affine-invariant
-//! smoothness term, and m2p gives every vertex a target. The regularization's role here is
-//! stiffness: larger alpha keeps cells closer to rotations and shrinks the unseen sides more
-//! (tests/gaps.rs `alpha_sweep_on_the_gap_torso`). The default 1e6 is kept as the paper's value; the
-//! body cohort was tuned with it. (measured: benchmarks/BENCH.md, section Registration)
-//!
-//! The data weight `d` is dimensionless in the same sense as `w_c`: the diagonal of the ARAP system
-//! is `2 w_c sum_j w_ij ~ 7 w_c` on a regular mesh, so the default `d = 1`, `w_c = 1e-2` makes a
-//! vertex follow its target ~14 times more than its neighbours, while the Laplacian still averages
-//! sampling noise over a few rings.
+//! The energy, its units and weights are documented on [`EnergyParams`].
 
 use crate::error::ParameterError;
 use crate::schedule::Schedule;
@@ -78,11 +45,46 @@ pub enum LabelSource {
     Template,
 }
 
-/// The energy's weights (see the module docs): read by the local model and the global solver.
+/// The energy's weights: read by the local model and the global solver.
+///
+/// # Units and weights
+/// Geometry is in metres. The energy minimised is (see `local.rs` for the derivation)
+///
+/// ```text
+/// E = E_arap + E_reg + E_data
+/// E_arap = sum_i w_c sum_{j in N(i)} w_ij |(p'_i - p'_j) - T_i (p_i - p_j)|^2     (m^2)
+/// E_reg  = lambda sum_i |T_i - R_i|_F^2,   lambda = alpha * 1e-6 * w_c * A / N      (m^2)
+/// E_data = sum_i d_i |p'_i - q_i|^2                                                (m^2)
+/// ```
+/// with `w_ij` the (dimensionless) cotangent weights, `w_c` = [`Self::cell_weight`],
+/// `A` the TOTAL area of the pre-aligned template (m^2), `N` its vertex count, `q_i` the
+/// correspondence target and `d_i` = [`Self::data_weight`] (0 without correspondence).
+///
+/// How this relates to the paper (`lambda_paper = alpha * A`, `w_i = 1e-2`, `alpha = 1e6`): read
+/// literally in any unit, the paper's ratio of regularization to ARAP stiffness per cell is
+/// `alpha * N / w_c` (about 1e12 for a body template), i.e. T_i would be a rotation and no cell could
+/// ever scale. We keep the paper's structure (one global weight proportional to the total area A,
+/// so shrinking triangles cannot lower it) and its numbers, but make the weight dimensionless and
+/// resolution-independent: `lambda = (alpha / 1e6) * w_c * A / N`, so at the default alpha = 1e6 the
+/// penalty for leaving the nearest rotation equals the ARAP stiffness of an average cell
+/// (`w_c * A / N`, about a quarter of `w_c * tr(P_i)` on a regular mesh). alpha = 1e8 is practically
+/// classic ARAP (T_i = R_i); alpha = 0 lets every cell be any affine map.
+///
+/// On gappy clouds alpha = 0 does not collapse in this engine (contrary to the paper's "collapses
+/// within 5 iterations"): with free affine cells the ARAP term is still an affine-invariant
+/// smoothness term, and m2p gives every vertex a target. The regularization's role here is
+/// stiffness: larger alpha keeps cells closer to rotations and shrinks the unseen sides more
+/// (tests/gaps.rs `alpha_sweep_on_the_gap_torso`). The default 1e6 is kept as the paper's value; the
+/// body cohort was tuned with it. (measured: benchmarks/BENCH.md, section Registration)
+///
+/// The data weight `d` is dimensionless in the same sense as `w_c`: the diagonal of the ARAP system
+/// is `2 w_c sum_j w_ij ~ 7 w_c` on a regular mesh, so the default `d = 1`, `w_c = 1e-2` makes a
+/// vertex follow its target ~14 times more than its neighbours, while the Laplacian still averages
+/// sampling noise over a few rings.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct EnergyParams {
-    /// Regularization strength (dimensionless, see the module docs). Default 1e6 (the paper's number):
+    /// Regularization strength (dimensionless, see above). Default 1e6 (the paper's number):
     /// leaving the nearest rotation costs as much as the ARAP stiffness of an average cell.
     /// 0 = free affine cells.
     pub alpha: f64,

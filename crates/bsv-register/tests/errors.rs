@@ -5,8 +5,9 @@ mod common;
 use bsv_core::shapes::{cuboid, icosphere};
 use bsv_core::PointCloud;
 use bsv_register::{
-    register, ArticulationParams, ControlFlow, EnergyParams, InputError, IterationLog, LabelSource, NumericError,
-    OutlierParams, ParameterError, RegisterError, RegisterParams, Schedule,
+    prepare, register, register_in, ArticulationParams, ControlFlow, EnergyParams, InputError, IterationLog,
+    LabelSource, NumericError, OutlierParams, ParameterError, RegisterError, RegisterParams, Registrar, ResourceError,
+    Schedule, PARAMETER_NAMES,
 };
 use common::*;
 
@@ -196,4 +197,92 @@ fn labels_come_from_the_cloud_or_the_template() {
     assert!(reg.mesh.face_labels.is_none());
     let reg = run(&template, &cloud, &RegisterParams { labels: LabelSource::Template, ..Default::default() });
     assert_eq!(reg.mesh.vertex_labels, template.vertex_labels);
+}
+
+#[test]
+fn the_progress_callback_can_stop_the_fit() {
+    let template = icosphere(0.2, 3);
+    let cloud = cloud_of(&icosphere(0.2, 5), 5_000, 4);
+    let mut seen = 0;
+    let mut stop_after_three = |l: &IterationLog| {
+        seen += 1;
+        if l.iteration == 2 {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    };
+    let e = register(&template, &cloud, &RegisterParams::default(), &mut stop_after_three).unwrap_err();
+    assert_eq!(e, RegisterError::Stopped { iteration: 2 });
+    assert_eq!(seen, 3);
+    assert_eq!(e.parameter(), None);
+}
+
+#[test]
+fn the_stages_compose_to_register_in_the_callers_pool() {
+    let template = icosphere(0.2, 3);
+    let cloud = cloud_of(&icosphere(0.21, 5), 5_000, 6);
+    let params = RegisterParams { threads: 1, ..Default::default() };
+    let whole = run(&template, &cloud, &params);
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let mut sink = |_: &IterationLog| ControlFlow::Continue(());
+    let inside = register_in(&pool, &template, &cloud, &params, &mut sink).unwrap();
+    assert_eq!(inside.mesh.vertices, whole.mesh.vertices);
+    // By hand: prepare, build the registrar once, step to the end, finish.
+    let prepared = prepare(&template, &cloud, &params).unwrap();
+    assert_eq!(prepared.rest().len(), template.vertices.len());
+    let mut fit = Registrar::new(&pool, prepared, &params).unwrap();
+    let mut steps = 0;
+    while let Some(entry) = fit.step().unwrap() {
+        assert_eq!(entry.iteration, steps);
+        steps += 1;
+    }
+    assert!(fit.is_done() && steps == params.schedule.total_iterations() && fit.log().len() == steps);
+    let staged = fit.finish().unwrap();
+    assert_eq!(staged.mesh.vertices, whole.mesh.vertices);
+    assert_eq!(staged.rms_points_to_mesh_mm, whole.rms_points_to_mesh_mm);
+}
+
+#[test]
+fn remedies_name_parameters_never_front_ends() {
+    let names = PARAMETER_NAMES;
+    let errors: Vec<RegisterError> = vec![
+        InputError::EmptyCloud { min: 100 }.into(),
+        InputError::OnlyExtremities { n: 5 }.into(),
+        InputError::TooFewPoints { n: 5, min: 100 }.into(),
+        InputError::NonFinitePoint { index: 0, point: [f64::NAN; 3] }.into(),
+        InputError::CloudLooksLikeMillimetres { extent_m: 1800.0, limit_m: 5.0 }.into(),
+        InputError::CloudTooSmall { extent_m: 0.001, limit_m: 0.05 }.into(),
+        InputError::EmptyTemplate { vertices: 0, triangles: 0 }.into(),
+        InputError::BadTriangleIndex { triangle: 0, vertex: 9, n_vertices: 4 }.into(),
+        InputError::NonFiniteTemplateVertex { index: 0, point: [f64::NAN; 3] }.into(),
+        InputError::NonManifoldTemplate { a: 0, b: 1, faces: 1, count: 3 }.into(),
+        InputError::DegenerateTemplate { triangle: 0, count: 1 }.into(),
+        InputError::TemplateWithoutLabels.into(),
+        InputError::CloudWithoutLabels.into(),
+        InputError::LengthMismatch { what: "cloud labels", got: 1, expected: 2 }.into(),
+        ParameterError::BadSchedule { text: "x".into(), reason: "y".into() }.into(),
+        ParameterError::BadParameter { name: "cell_weight", value: -1.0, hint: "must be > 0" }.into(),
+        NumericError::NoCorrespondences { iteration: 1 }.into(),
+        NumericError::Solver { reason: "x".into() }.into(),
+        NumericError::Diverged { iteration: 1 }.into(),
+        NumericError::Index { reason: "x".into() }.into(),
+        ResourceError::ThreadPool { threads: 3, reason: "x".into() }.into(),
+        RegisterError::Stopped { iteration: 1 },
+    ];
+    for e in &errors {
+        let msg = e.to_string();
+        assert!(!msg.contains("--") && !msg.contains("bsv.") && !msg.contains("Python"), "{msg}");
+        for p in e.parameters() {
+            assert!(names.contains(p), "{p} is not a registration parameter");
+            assert!(msg.contains(p), "{msg} does not name {p}");
+        }
+        assert_eq!(e.parameter(), e.parameters().first().copied());
+    }
+    let params = |i: usize| errors[i].parameters();
+    assert_eq!(params(1), ["drop_extremities"]);
+    assert_eq!(params(15), ["cell_weight"]);
+    assert_eq!(params(16), ["prune_distance_factor", "prune_normal_angle_deg"]);
+    assert_eq!(params(18), ["data_weight", "alpha"]);
+    assert_eq!(params(20), ["threads"]);
 }

@@ -1,9 +1,12 @@
 //! `bsv-cli register`: fit the template to a cloud, write the fitted mesh, report volumes.
 
 use crate::output::{check_writable, write_json, CliError};
-use bsv_core::io;
 use bsv_core::template::{template, TemplateKind};
-use bsv_register::{register, IterationLog, LabelSource, PrealignMode, RegisterParams, Schedule};
+use bsv_core::{io, TriMesh};
+use bsv_register::{
+    register, ControlFlow, InputError, IterationLog, LabelSource, PrealignMode, RegisterError, RegisterParams,
+    Registration, Schedule,
+};
 use bsv_volume::{report_with, SegmentOptions};
 use std::path::PathBuf;
 
@@ -59,14 +62,11 @@ pub struct Args {
 }
 
 fn params_from(a: &Args, cloud_labelled: bool) -> Result<RegisterParams, CliError> {
-    let mut p = RegisterParams {
-        schedule: a.schedule.parse::<Schedule>()?,
-        threads: a.threads,
-        drop_extremities: !a.keep_extremities,
-        ..Default::default()
-    };
+    let schedule = a.schedule.parse::<Schedule>().map_err(|e| with_flags(&RegisterError::from(e)))?;
+    let mut p = RegisterParams { schedule, threads: a.threads, ..Default::default() };
+    p.outliers.drop_extremities = !a.keep_extremities;
     if let Some(alpha) = a.alpha {
-        p.alpha = alpha;
+        p.energy.alpha = alpha;
     }
     p.labels = match a.labels.as_deref() {
         Some("template") => LabelSource::Template,
@@ -75,13 +75,39 @@ fn params_from(a: &Args, cloud_labelled: bool) -> Result<RegisterParams, CliErro
         None => LabelSource::Template,
     };
     if let Some(mode) = a.prealign.as_deref() {
-        p.prealign = match mode {
+        p.prealignment.prealign = match mode {
             "isotropic" => PrealignMode::Isotropic,
             "per_axis" => PrealignMode::PerAxis,
             _ => PrealignMode::Auto,
         };
     }
     Ok(p)
+}
+
+/// The `bsv-cli register` flag that sets a registration parameter, where there is one.
+fn flag_of(parameter: &str) -> Option<&'static str> {
+    Some(match parameter {
+        "alpha" => "--alpha",
+        "schedule" => "--schedule",
+        "labels" => "--labels",
+        "prealign" => "--prealign",
+        "threads" => "--threads",
+        "drop_extremities" => "--keep-extremities",
+        _ => return None,
+    })
+}
+
+/// The error's message with the flags of this command that carry out its remedy.
+fn with_flags(e: &RegisterError) -> String {
+    let mut flags: Vec<&str> = e.parameters().iter().filter_map(|p| flag_of(p)).collect();
+    if let RegisterError::Input(InputError::CloudLooksLikeMillimetres { .. }) = e {
+        flags.insert(0, "--units mm");
+    }
+    if flags.is_empty() {
+        e.to_string()
+    } else {
+        format!("{e} (bsv-cli: {})", flags.join(", "))
+    }
 }
 
 fn print_iteration(it: &IterationLog, timings: bool) {
@@ -102,43 +128,8 @@ fn print_iteration(it: &IterationLog, timings: bool) {
     println!();
 }
 
-/// Runs `register`.
-pub fn run(a: Args) -> Result<(), CliError> {
-    for out in a.output.iter().chain(a.json.iter()) {
-        check_writable(out, a.force)?;
-    }
-    let mut cloud = io::read_point_cloud(&a.cloud)?;
-    if a.units == "mm" {
-        cloud.points.iter_mut().for_each(|p| *p = p.map(|v| v / 1000.0));
-    }
-    let labelled = cloud.labels.as_ref().is_some_and(|l| l.iter().any(|&v| v != 0));
-    if !labelled {
-        println!("the cloud has no segment labels: volumes come from the template's labels");
-        cloud.labels = None;
-    }
-    let (tmpl, tmpl_name) = match &a.template {
-        Some(p) => (io::read_mesh(p)?, p.display().to_string()),
-        None => {
-            let kind = TemplateKind::parse(&a.template_kind).unwrap_or_default();
-            (template(kind)?, format!("embedded {kind:?} template"))
-        }
-    };
-    let params = params_from(&a, labelled)?;
-    println!(
-        "registering {} ({} points) with {tmpl_name} ({} vertices), schedule {}",
-        a.cloud.display(),
-        cloud.len(),
-        tmpl.n_vertices(),
-        params.schedule
-    );
-    let quiet = a.quiet;
-    let timings = a.timings;
-    let reg = register(&tmpl, &cloud, &params, &mut |it| {
-        if !quiet {
-            print_iteration(it, timings);
-        }
-    })
-    .map_err(|e| format!("{}: {e}", a.cloud.display()))?;
+/// The lines after the fit: dropped extremities, time and distances (and the time split).
+fn print_summary(reg: &Registration, timings: bool) {
     if reg.extremities_dropped > 0 {
         println!(
             "dropped {} head/hand/foot points (labels 1, 7, 8, 13, 14); --keep-extremities keeps them",
@@ -165,6 +156,52 @@ pub fn run(a: Args) -> Result<(), CliError> {
             sum(|l| l.timings.solve)
         );
     }
+}
+
+/// The template (TEMPLATE, or the embedded one of --template-kind) and how to name it.
+fn read_template(a: &Args) -> Result<(TriMesh, String), CliError> {
+    Ok(match &a.template {
+        Some(p) => (io::read_mesh(p)?, p.display().to_string()),
+        None => {
+            let kind = TemplateKind::parse(&a.template_kind).unwrap_or_default();
+            (template(kind)?, format!("embedded {kind:?} template"))
+        }
+    })
+}
+
+/// Runs `register`.
+pub fn run(a: Args) -> Result<(), CliError> {
+    for out in a.output.iter().chain(a.json.iter()) {
+        check_writable(out, a.force)?;
+    }
+    let mut cloud = io::read_point_cloud(&a.cloud)?;
+    if a.units == "mm" {
+        cloud.points.iter_mut().for_each(|p| *p = p.map(|v| v / 1000.0));
+    }
+    let labelled = cloud.labels.as_ref().is_some_and(|l| l.iter().any(|&v| v != 0));
+    if !labelled {
+        println!("the cloud has no segment labels: volumes come from the template's labels");
+        cloud.labels = None;
+    }
+    let (tmpl, tmpl_name) = read_template(&a)?;
+    let params = params_from(&a, labelled)?;
+    println!(
+        "registering {} ({} points) with {tmpl_name} ({} vertices), schedule {}",
+        a.cloud.display(),
+        cloud.len(),
+        tmpl.n_vertices(),
+        params.schedule
+    );
+    let quiet = a.quiet;
+    let timings = a.timings;
+    let reg = register(&tmpl, &cloud, &params, &mut |it| {
+        if !quiet {
+            print_iteration(it, timings);
+        }
+        ControlFlow::Continue(())
+    })
+    .map_err(|e| format!("{}: {}", a.cloud.display(), with_flags(&e)))?;
+    print_summary(&reg, timings);
     let opts = SegmentOptions::fitted();
     let mut report = report_with(&reg.mesh, a.density, &opts)?;
     let mut summary = serde_json::to_value(&reg)?;

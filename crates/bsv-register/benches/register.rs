@@ -6,7 +6,7 @@
 use bsv_core::geometry::face_normals;
 use bsv_core::shapes::{ellipsoid, sample_surface};
 use bsv_core::PointCloud;
-use bsv_register::{register, IterationLog, RegisterParams};
+use bsv_register::{register, ControlFlow, IterationLog, RegisterParams};
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::time::Duration;
 
@@ -25,12 +25,11 @@ fn setup() -> (bsv_core::TriMesh, PointCloud) {
 fn bench(c: &mut Criterion) {
     let (template, cloud) = setup();
     let params = RegisterParams::default();
-    let mut sink = |_: &IterationLog| {};
+    let mut sink = |_: &IterationLog| ControlFlow::Continue(());
     let reg = register(&template, &cloud, &params, &mut sink).expect("registration");
     let n = reg.log.len() as f64;
     let sum = |f: &dyn Fn(&IterationLog) -> f64| reg.log.iter().map(f).sum::<f64>();
-    let (corr, local, solve) =
-        (sum(&|l| l.timings.correspond), sum(&|l| l.timings.local), sum(&|l| l.timings.solve));
+    let (corr, local, solve) = (sum(&|l| l.timings.correspond), sum(&|l| l.timings.local), sum(&|l| l.timings.solve));
     println!(
         "template {} vertices, cloud {} points, {} iterations, threads {}",
         template.n_vertices(),
@@ -61,7 +60,10 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("register");
     g.sample_size(10).measurement_time(Duration::from_secs(8)).warm_up_time(Duration::from_secs(1));
     g.bench_function("10k_template_200k_cloud_20_iterations", |b| {
-        b.iter(|| register(&template, &cloud, &params, &mut |_: &IterationLog| {}).expect("registration"))
+        b.iter(|| {
+            register(&template, &cloud, &params, &mut |_: &IterationLog| ControlFlow::Continue(()))
+                .expect("registration")
+        })
     });
     g.finish();
 }

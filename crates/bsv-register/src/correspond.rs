@@ -44,6 +44,16 @@ pub struct Residual {
     pub normal_part: [f64; 3],
 }
 
+/// The points a vertex collected in a p2m iteration: count, sum of the offsets, their scatter
+/// (upper triangle) and the sum of their normal parts (given normals only).
+#[derive(Clone, Copy)]
+struct Acc {
+    n: u32,
+    s: [f64; 3],
+    ss: [f64; 6],
+    np: [f64; 3],
+}
+
 /// A residual per vertex: `Some` with a data term, `None` without.
 pub type Targets = Vec<Option<Residual>>;
 
@@ -132,6 +142,7 @@ pub fn build_tree(points: &[[f64; 3]]) -> Result<ImmutableKdTree<f64, 3>, String
 
 /// Unit normal (smallest-eigenvalue eigenvector) of the scatter matrix `c` (centred), or `None`
 /// when the patch is degenerate (fewer than 3 independent points).
+#[allow(clippy::neg_cmp_op_on_partial_ord, reason = "a NaN eigenvalue must count as degenerate")]
 pub fn pca_normal(c: &Matrix3<f64>) -> Option<[f64; 3]> {
     let e = SymmetricEigen::new(*c);
     let (mut kmin, mut kmax) = (0, 0);
@@ -232,7 +243,11 @@ impl CloudIndex {
 
     /// Nearest vertex of every cloud point, restricted to the vertices of the point's segment when
     /// label-aware matching is on and `vertex_labels` is given: (vertex index, squared distance).
-    fn points_to_vertices(&self, vertices: &[[f64; 3]], vertex_labels: Option<&[u8]>) -> Result<Vec<(u32, f64)>, String> {
+    fn points_to_vertices(
+        &self,
+        vertices: &[[f64; 3]],
+        vertex_labels: Option<&[u8]>,
+    ) -> Result<Vec<(u32, f64)>, String> {
         let (Some(vl), Some(labels)) = (vertex_labels.filter(|_| !self.by_label.is_empty()), &self.labels) else {
             let tree = build_tree(vertices)?;
             return Ok(nearest_batch(&tree, &self.points));
@@ -264,11 +279,6 @@ impl CloudIndex {
             }
         }
         Ok(out)
-    }
-
-    /// The cloud points.
-    pub fn points(&self) -> &[[f64; 3]] {
-        &self.points
     }
 
     /// Nearest cloud point of each query: (index, squared distance).
@@ -382,20 +392,18 @@ impl CloudIndex {
         let rms = rms_of(nn.iter().map(|r| r.1));
         let mut d2: Vec<f64> = nn.iter().map(|r| r.1).collect();
         let lim2 = pruning.limit2(&mut d2);
+        let accs = self.accumulate(&nn, vertices, lim2);
+        Ok((self.patch_targets(&accs, normals, pruning), rms))
+    }
+
+    /// Per vertex, the count, sum, scatter (and with given normals, the sum of the normal parts)
+    /// of the offsets to the cloud points `nn` sends to it, without those longer than `sqrt(lim2)`.
+    fn accumulate(&self, nn: &[(u32, f64)], vertices: &[[f64; 3]], lim2: f64) -> Vec<Acc> {
         let n = vertices.len();
-        // Accumulate count, sum, and the scatter about the vertex (for the patch normal).
-        #[derive(Clone, Copy)]
-        struct Acc {
-            n: u32,
-            s: [f64; 3],
-            ss: [f64; 6],
-            np: [f64; 3],
-        }
         let zero = Acc { n: 0, s: [0.0; 3], ss: [0.0; 6], np: [0.0; 3] };
         let given = self.given_normals.as_deref();
         let chunk = 16384;
-        let accs = nn
-            .par_chunks(chunk)
+        nn.par_chunks(chunk)
             .enumerate()
             .fold(
                 || vec![zero; n],
@@ -410,12 +418,12 @@ impl CloudIndex {
                         a.n += 1;
                         if let Some(g) = given {
                             let pr = project(g[idx], d);
-                            for x in 0..3 {
-                                a.np[x] += pr[x];
+                            for (np, p) in a.np.iter_mut().zip(pr) {
+                                *np += p;
                             }
                         }
-                        for x in 0..3 {
-                            a.s[x] += d[x];
+                        for (s, x) in a.s.iter_mut().zip(d) {
+                            *s += x;
                         }
                         a.ss[0] += d[0] * d[0];
                         a.ss[1] += d[0] * d[1];
@@ -444,10 +452,15 @@ impl CloudIndex {
                     }
                     a
                 },
-            );
+            )
+    }
+
+    /// The target of every vertex from its accumulated points (`None` without points or when the
+    /// patch normal fails the angle test against the vertex normal).
+    fn patch_targets(&self, accs: &[Acc], normals: &[[f64; 3]], pruning: &Pruning) -> Targets {
+        let given = self.given_normals.as_deref();
         let use_normals = pruning.min_cos > -1.0;
-        let targets = accs
-            .par_iter()
+        accs.par_iter()
             .enumerate()
             .map(|(v, a)| {
                 if a.n == 0 {
@@ -475,8 +488,7 @@ impl CloudIndex {
                 };
                 Some(Residual { offset: mean, normal_part })
             })
-            .collect();
-        Ok((targets, rms))
+            .collect()
     }
 
     /// RMS (m) of the distances from each cloud point to its nearest vertex.

@@ -1,4 +1,4 @@
-//! Cotangent weights and the cotangent Laplacian of a triangle mesh.
+//! Cotangent weights of a triangle mesh (the global solver assembles the Laplacian from them).
 //!
 //! `w_ij = (cot a_ij + cot b_ij) / 2`, with `a_ij`, `b_ij` the angles opposite edge ij in its two
 //! triangles (one triangle on a boundary edge). Safeguards:
@@ -9,8 +9,6 @@
 //!   positive semi-definite with the constants as its only null space on a connected mesh, and
 //!   adding any positive data weight makes it SPD. (Obtuse pairs would give negative weights, which
 //!   also break the ARAP local step's covariances.)
-
-use faer::sparse::{SparseColMat, Triplet};
 
 /// Largest magnitude a single cotangent may take.
 pub const COT_CLAMP: f64 = 1e3;
@@ -30,6 +28,7 @@ pub struct CotanWeights {
 }
 
 /// Cotangent of the angle at `o` in triangle (o, a, b), clamped; `None` for a degenerate triangle.
+#[allow(clippy::neg_cmp_op_on_partial_ord, reason = "a NaN area must count as degenerate")]
 fn cot_at(o: [f64; 3], a: [f64; 3], b: [f64; 3]) -> Option<f64> {
     let u = [a[0] - o[0], a[1] - o[1], a[2] - o[2]];
     let v = [b[0] - o[0], b[1] - o[1], b[2] - o[2]];
@@ -51,8 +50,8 @@ impl CotanWeights {
         for t in triangles {
             for k in 0..3 {
                 let (o, a, b) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-                let w = cot_at(vertices[o as usize], vertices[a as usize], vertices[b as usize])
-                    .map_or(0.0, |c| 0.5 * c);
+                let w =
+                    cot_at(vertices[o as usize], vertices[a as usize], vertices[b as usize]).map_or(0.0, |c| 0.5 * c);
                 half.push((a.min(b), a.max(b), w));
             }
         }
@@ -107,22 +106,5 @@ impl CotanWeights {
     pub fn row(&self, i: usize) -> (&[u32], &[f64]) {
         let r = self.offsets[i]..self.offsets[i + 1];
         (&self.neighbors[r.clone()], &self.weights[r])
-    }
-
-    /// The cotangent Laplacian `L` (`L_ii = sum_j w_ij`, `L_ij = -w_ij`) times `scale`, both
-    /// triangles stored, as a faer sparse matrix.
-    pub fn laplacian(&self, scale: f64) -> Result<SparseColMat<usize, f64>, String> {
-        let n = self.n_vertices();
-        let mut trip = Vec::with_capacity(self.neighbors.len() + n);
-        for i in 0..n {
-            let (nb, w) = self.row(i);
-            let mut diag = 0.0;
-            for (&j, &wij) in nb.iter().zip(w) {
-                trip.push(Triplet::new(i, j as usize, -scale * wij));
-                diag += wij;
-            }
-            trip.push(Triplet::new(i, i, scale * diag));
-        }
-        SparseColMat::try_new_from_triplets(n, n, &trip).map_err(|e| format!("{e:?}"))
     }
 }

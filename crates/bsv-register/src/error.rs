@@ -1,10 +1,67 @@
-//! The typed errors of a registration: every variant says what was wrong and what to do.
+//! The typed errors of a registration, one enum per stage (parry's style): bad input
+//! ([`InputError`]), bad parameters ([`ParameterError`]), numerical failures during the fit
+//! ([`NumericError`]) and resources ([`ResourceError`]), joined in [`RegisterError`].
+//!
+//! Every message says what was wrong and what to do. A remedy names registration parameters
+//! ("registration parameter data_weight"), never a front end's flags or calls: the front ends add
+//! those, using [`RegisterError::parameters`] to find the parameters a remedy points to.
 
+use crate::params::PARAMETER_NAMES;
 use thiserror::Error;
 
-/// Why a registration could not run (bad cloud, bad template, bad parameters, numerical failure).
+/// Why a registration could not run or did not finish.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum RegisterError {
+    /// The cloud or the template is unusable (checked before the fit).
+    #[error(transparent)]
+    Input(#[from] InputError),
+    /// A registration parameter is invalid.
+    #[error(transparent)]
+    Parameter(#[from] ParameterError),
+    /// The fit failed numerically.
+    #[error(transparent)]
+    Numeric(#[from] NumericError),
+    /// A resource (thread pool) could not be had.
+    #[error(transparent)]
+    Resource(#[from] ResourceError),
+    /// The progress callback returned `ControlFlow::Break` after iteration `iteration`.
+    #[error("the registration was stopped after iteration {iteration} (the progress callback asked to stop)")]
+    Stopped {
+        /// The global index of the last iteration that ran (0-based).
+        iteration: usize,
+    },
+}
+
+impl RegisterError {
+    /// The registration parameters a remedy in the message points to (first the main one), empty
+    /// when the remedy is not a parameter. Every name is a key of `RegisterParams`' serde form.
+    pub fn parameters(&self) -> &'static [&'static str] {
+        match self {
+            RegisterError::Input(e) => e.parameters(),
+            RegisterError::Parameter(e) => e.parameters(),
+            RegisterError::Numeric(e) => e.parameters(),
+            RegisterError::Resource(e) => e.parameters(),
+            RegisterError::Stopped { .. } => &[],
+        }
+    }
+
+    /// The parameter a remedy points to first, if any (see [`Self::parameters`]).
+    pub fn parameter(&self) -> Option<&'static str> {
+        self.parameters().first().copied()
+    }
+}
+
+/// The one-element slice of [`PARAMETER_NAMES`] holding `name` (empty when it is not one).
+fn named(name: &str) -> &'static [&'static str] {
+    match PARAMETER_NAMES.iter().position(|&n| n == name) {
+        Some(i) => &PARAMETER_NAMES[i..i + 1],
+        None => &[],
+    }
+}
+
+/// A bad cloud or template (found by the checks before the fit).
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum InputError {
     /// The point cloud holds no point at all.
     #[error("point cloud is empty: capture or load a cloud with at least {min} points")]
     EmptyCloud {
@@ -13,13 +70,13 @@ pub enum RegisterError {
     },
     /// Every point of the (labelled) cloud is a head, hand or foot point, dropped by
     /// `drop_extremities`.
-    #[error("all {n} cloud points are labelled head/hand/foot and were dropped (drop_extremities): check the cloud's labels, or keep them (registration parameter drop_extremities = false; Python: bsv.register(..., drop_extremities=False); bsv-cli: --keep-extremities)")]
+    #[error("all {n} cloud points are labelled head/hand/foot and were dropped: check the cloud's labels, or keep them (registration parameter drop_extremities = false)")]
     OnlyExtremities {
         /// Points in the cloud before dropping.
         n: usize,
     },
     /// The point cloud holds too few points to register anything.
-    #[error("point cloud has only {n} points: a registration needs at least {min}; check the capture or the cleaning step")]
+    #[error("point cloud has only {n} points: a registration needs at least {min} (registration parameter min_points); check the capture or the cleaning step")]
     TooFewPoints {
         /// Points found.
         n: usize,
@@ -27,7 +84,9 @@ pub enum RegisterError {
         min: usize,
     },
     /// A cloud point has a NaN or infinite coordinate.
-    #[error("cloud point {index} is not finite ({point:?}): drop NaN/inf points (invalid depth pixels) before registering")]
+    #[error(
+        "cloud point {index} is not finite ({point:?}): drop NaN/inf points (invalid depth pixels) before registering"
+    )]
     NonFinitePoint {
         /// Index of the first bad point.
         index: usize,
@@ -35,7 +94,7 @@ pub enum RegisterError {
         point: [f64; 3],
     },
     /// The cloud is far larger than a human body in metres.
-    #[error("point cloud extent {extent_m:.1} (max axis) is larger than {limit_m} m: it looks like millimetres; divide the coordinates by 1000 (bsv-cli: --units mm)")]
+    #[error("point cloud extent {extent_m:.1} (max axis) is larger than {limit_m} m (registration parameter max_extent_m): it looks like millimetres; divide the coordinates by 1000")]
     CloudLooksLikeMillimetres {
         /// Largest robust bounding-box side, in the cloud's units.
         extent_m: f64,
@@ -43,7 +102,7 @@ pub enum RegisterError {
         limit_m: f64,
     },
     /// The cloud is far smaller than a human segment in metres.
-    #[error("point cloud extent {extent_m:.4} (max axis) is smaller than {limit_m} m: the cloud is too small or not in metres (kilometres? scaled?); convert it to metres")]
+    #[error("point cloud extent {extent_m:.4} (max axis) is smaller than {limit_m} m (registration parameter min_extent_m): the cloud is too small or not in metres (kilometres? scaled?); convert it to metres")]
     CloudTooSmall {
         /// Largest robust bounding-box side.
         extent_m: f64,
@@ -97,12 +156,12 @@ pub enum RegisterError {
         count: usize,
     },
     /// Template labels were requested but the template carries none.
-    #[error("labels = template was requested but the template has no vertex labels: use a labelled template (OBJ groups / PLY label) or labels = cloud")]
+    #[error("registration parameter labels = template was requested but the template has no vertex labels: use a labelled template (OBJ groups / PLY label) or labels = cloud")]
     TemplateWithoutLabels,
     /// Labels from the cloud were requested but the cloud carries none. Not returned by
     /// [`crate::register`], which falls back to the template's labels (see
     /// [`crate::RegisterParams::labels`]); kept for callers that require cloud labels.
-    #[error("labels = cloud was requested but the cloud has no labels: pass a labelled cloud or use labels = template")]
+    #[error("registration parameter labels = cloud was requested but the cloud has no labels: pass a labelled cloud or use labels = template")]
     CloudWithoutLabels,
     /// A per-element attribute has the wrong length.
     #[error("{what} has {got} entries but {expected} were expected: the input arrays do not match")]
@@ -114,8 +173,34 @@ pub enum RegisterError {
         /// The expected length.
         expected: usize,
     },
-    /// The schedule string cannot be parsed.
-    #[error("bad schedule {text:?}: {reason}; expected comma-separated KIND:COUNT with KIND m2p or p2m, e.g. \"m2p:5,p2m:5,m2p:10\"")]
+}
+
+impl InputError {
+    /// See [`RegisterError::parameters`].
+    pub fn parameters(&self) -> &'static [&'static str] {
+        match self {
+            InputError::OnlyExtremities { .. } => named("drop_extremities"),
+            InputError::TooFewPoints { .. } => named("min_points"),
+            InputError::CloudLooksLikeMillimetres { .. } => named("max_extent_m"),
+            InputError::CloudTooSmall { .. } => named("min_extent_m"),
+            InputError::TemplateWithoutLabels | InputError::CloudWithoutLabels => named("labels"),
+            InputError::EmptyCloud { .. }
+            | InputError::NonFinitePoint { .. }
+            | InputError::EmptyTemplate { .. }
+            | InputError::BadTriangleIndex { .. }
+            | InputError::NonFiniteTemplateVertex { .. }
+            | InputError::NonManifoldTemplate { .. }
+            | InputError::DegenerateTemplate { .. }
+            | InputError::LengthMismatch { .. } => &[],
+        }
+    }
+}
+
+/// A registration parameter out of its valid range, or a schedule that does not parse.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum ParameterError {
+    /// The schedule string cannot be parsed (or has no iteration).
+    #[error("bad schedule {text:?} (registration parameter schedule): {reason}; expected comma-separated KIND:COUNT with KIND m2p or p2m, e.g. \"m2p:5,p2m:5,m2p:10\"")]
     BadSchedule {
         /// The text given.
         text: String,
@@ -123,40 +208,101 @@ pub enum RegisterError {
         reason: String,
     },
     /// A numeric parameter is out of its valid range.
-    #[error("parameter {name} = {value} is invalid: {hint}")]
+    #[error("registration parameter {name} = {value} is invalid: {hint}")]
     BadParameter {
-        /// Parameter name.
+        /// Parameter name (a key of `RegisterParams`' serde form).
         name: &'static str,
         /// Value given.
         value: f64,
         /// The valid range.
         hint: &'static str,
     },
+}
+
+impl ParameterError {
+    /// See [`RegisterError::parameters`].
+    pub fn parameters(&self) -> &'static [&'static str] {
+        match self {
+            ParameterError::BadSchedule { .. } => named("schedule"),
+            ParameterError::BadParameter { name, .. } => named(name),
+        }
+    }
+}
+
+/// A numerical failure during the fit.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum NumericError {
     /// No correspondence survived the pruning in an iteration.
-    #[error("iteration {iteration}: no correspondence survived the pruning; the template and the cloud do not overlap (check units and frame, or loosen the pruning: registration parameters prune_distance_factor / prune_normal_angle_deg, Python: bsv.register(..., prune_distance_factor=..., prune_normal_angle_deg=...))")]
+    #[error("iteration {iteration}: no correspondence survived the pruning; the template and the cloud do not overlap (check units and frame, or loosen the pruning: registration parameters prune_distance_factor / prune_normal_angle_deg)")]
     NoCorrespondences {
         /// The global iteration index.
         iteration: usize,
     },
     /// The linear system could not be factorized or solved.
-    #[error("linear solver failed: {0}; the template is probably degenerate (run the mesh check) or the weights are invalid")]
-    Solver(String),
-    /// A spatial index (k-d tree over the cloud or the fitted vertices) could not be built or
-    /// queried.
-    #[error("spatial index (k-d tree) failed: {0}; the cloud probably holds very many identical points: remove duplicates (e.g. voxel-downsample the cloud) and retry")]
-    Index(String),
+    #[error("linear solver failed: {reason}; the template is probably degenerate (run the mesh check) or the weights are invalid")]
+    Solver {
+        /// What the solver reported.
+        reason: String,
+    },
     /// The fit produced non-finite vertices.
-    #[error("iteration {iteration}: the fit diverged (non-finite vertices); lower the registration parameter data_weight or raise alpha (Python: bsv.register(..., data_weight=..., alpha=...); bsv-cli: --alpha)")]
+    #[error("iteration {iteration}: the fit diverged (non-finite vertices); lower the registration parameter data_weight or raise alpha")]
     Diverged {
         /// The global iteration index.
         iteration: usize,
     },
+    /// A spatial index (k-d tree over the cloud or the fitted vertices) could not be built or
+    /// queried.
+    #[error("spatial index (k-d tree) failed: {reason}; the cloud probably holds very many identical points: remove duplicates (e.g. voxel-downsample the cloud) and retry")]
+    Index {
+        /// What the k-d tree reported.
+        reason: String,
+    },
+}
+
+/// The pruning parameters named by [`NumericError::NoCorrespondences`].
+const PRUNING: [&str; 2] = ["prune_distance_factor", "prune_normal_angle_deg"];
+/// The parameters named by [`NumericError::Diverged`].
+const STIFFNESS: [&str; 2] = ["data_weight", "alpha"];
+
+impl NumericError {
+    /// See [`RegisterError::parameters`].
+    pub fn parameters(&self) -> &'static [&'static str] {
+        match self {
+            NumericError::NoCorrespondences { .. } => &PRUNING,
+            NumericError::Diverged { .. } => &STIFFNESS,
+            NumericError::Solver { .. } | NumericError::Index { .. } => &[],
+        }
+    }
+
+    /// A solver failure (the solver reports text).
+    pub(crate) fn solver(reason: String) -> NumericError {
+        NumericError::Solver { reason }
+    }
+
+    /// A k-d tree failure (kiddo reports text).
+    pub(crate) fn index(reason: String) -> NumericError {
+        NumericError::Index { reason }
+    }
+}
+
+/// A resource the registration could not get.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum ResourceError {
     /// The thread pool could not be built.
-    #[error("could not build a thread pool of {threads} threads: {reason}")]
+    #[error("could not build a thread pool of {threads} threads (registration parameter threads): {reason}")]
     ThreadPool {
         /// Requested threads.
         threads: usize,
         /// The error text.
         reason: String,
     },
+}
+
+impl ResourceError {
+    /// See [`RegisterError::parameters`].
+    pub fn parameters(&self) -> &'static [&'static str] {
+        match self {
+            ResourceError::ThreadPool { .. } => named("threads"),
+        }
+    }
 }

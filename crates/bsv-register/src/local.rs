@@ -3,7 +3,7 @@
 //! # Energy
 //! With rest positions `p` (the pre-aligned template), current positions `p'`, rest edges
 //! `e_ij = p_i - p_j`, current edges `e'_ij = p'_i - p'_j`, cotangent weights `w_ij`, cell weight
-//! `w_c` and `lambda = alpha * 1e-6 * w_c * A / N` (see `params.rs`):
+//! `w_c` and `lambda = alpha * 1e-6 * w_c * A / N` (see `EnergyParams` in `params.rs`):
 //!
 //! ```text
 //! E(p', T, R) = sum_i [ w_c sum_j w_ij |e'_ij - T_i e_ij|^2 + lambda |T_i - R_i|_F^2 ] + sum_i d_i |p'_i - q_i|^2
@@ -77,6 +77,7 @@ impl CellMaps {
 }
 
 #[inline]
+#[rustfmt::skip]
 fn outer(a: [f64; 3], b: [f64; 3]) -> Matrix3<f64> {
     Matrix3::new(
         a[0] * b[0], a[0] * b[1], a[0] * b[2],

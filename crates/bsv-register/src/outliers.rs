@@ -98,7 +98,8 @@ mod tests {
 
     #[test]
     fn far_and_extreme_points_are_dropped_without_overflow() {
-        let mut pts: Vec<[f64; 3]> = (0..10_000).map(|i| [(i % 100) as f64 * 0.003, (i / 100) as f64 * 0.003, 0.0]).collect();
+        let mut pts: Vec<[f64; 3]> =
+            (0..10_000).map(|i| [(i % 100) as f64 * 0.003, (i / 100) as f64 * 0.003, 0.0]).collect();
         let n = pts.len();
         pts.push([1e19, 0.0, 0.0]);
         pts.push([-1e19, 0.0, 0.0]);

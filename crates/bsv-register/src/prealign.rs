@@ -29,9 +29,9 @@
 //! at 45 degrees with an axis-aligned cube template go from 2.5 % to under 1 % volume error
 //! (tests/gaps.rs).
 
-use crate::error::RegisterError;
 use crate::correspond::{build_tree, nearest_batch};
-use crate::params::{PrealignMode, RegisterParams, YawMode};
+use crate::error::InputError;
+use crate::params::{CheckParams, PrealignMode, PrealignParams, YawMode};
 use bsv_core::geometry::{cross, dot, sub, Aabb};
 use bsv_core::topology::edge_map;
 use bsv_core::{PointCloud, TriMesh};
@@ -67,14 +67,14 @@ impl Similarity {
 
 /// Turns `p` by `angle` radians about the vertical through `pivot` (the sense of
 /// `bsv_core::shapes::rotate_y`: x' = c x + s z, z' = -s x + c z).
-pub fn rotate_about_y(p: [f64; 3], pivot: [f64; 3], angle: f64) -> [f64; 3] {
+pub(crate) fn rotate_about_y(p: [f64; 3], pivot: [f64; 3], angle: f64) -> [f64; 3] {
     let (s, c) = angle.sin_cos();
     let (x, z) = (p[0] - pivot[0], p[2] - pivot[2]);
     [pivot[0] + c * x + s * z, p[1], pivot[2] - s * x + c * z]
 }
 
 /// A bounding box from per-axis quantiles `q` and `1 - q` (plain min/max for q = 0).
-pub fn robust_aabb(points: &[[f64; 3]], q: f64) -> Option<Aabb> {
+pub(crate) fn robust_aabb(points: &[[f64; 3]], q: f64) -> Option<Aabb> {
     if points.is_empty() {
         return None;
     }
@@ -101,69 +101,69 @@ pub fn robust_aabb(points: &[[f64; 3]], q: f64) -> Option<Aabb> {
     Some(Aabb { min, max })
 }
 
-/// Checks a cloud: not empty, enough points, finite, attribute lengths, plausible metres.
-pub fn check_cloud(cloud: &PointCloud, params: &RegisterParams) -> Result<Aabb, RegisterError> {
+/// Checks a cloud: not empty, enough points, finite, attribute lengths, plausible metres; returns
+/// its robust bounding box (quantile `bbox_quantile`).
+pub(crate) fn check_cloud(cloud: &PointCloud, params: &CheckParams, bbox_quantile: f64) -> Result<Aabb, InputError> {
     let n = cloud.points.len();
     let min = params.min_points.max(1);
     if n == 0 {
-        return Err(RegisterError::EmptyCloud { min });
+        return Err(InputError::EmptyCloud { min });
     }
     if let Some(index) = cloud.points.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
-        return Err(RegisterError::NonFinitePoint { index, point: cloud.points[index] });
+        return Err(InputError::NonFinitePoint { index, point: cloud.points[index] });
     }
     if n < min {
-        return Err(RegisterError::TooFewPoints { n, min });
+        return Err(InputError::TooFewPoints { n, min });
     }
     if let Some(l) = &cloud.normals {
         if l.len() != n {
-            return Err(RegisterError::LengthMismatch { what: "cloud normals", got: l.len(), expected: n });
+            return Err(InputError::LengthMismatch { what: "cloud normals", got: l.len(), expected: n });
         }
     }
     if let Some(l) = &cloud.labels {
         if l.len() != n {
-            return Err(RegisterError::LengthMismatch { what: "cloud labels", got: l.len(), expected: n });
+            return Err(InputError::LengthMismatch { what: "cloud labels", got: l.len(), expected: n });
         }
     }
-    let bbox = robust_aabb(&cloud.points, params.bbox_quantile)
-        .ok_or(RegisterError::EmptyCloud { min })?;
+    let bbox = robust_aabb(&cloud.points, bbox_quantile).ok_or(InputError::EmptyCloud { min })?;
     let ext = bbox.extent();
     let largest = ext[0].max(ext[1]).max(ext[2]);
     if largest > params.max_extent_m {
-        return Err(RegisterError::CloudLooksLikeMillimetres { extent_m: largest, limit_m: params.max_extent_m });
+        return Err(InputError::CloudLooksLikeMillimetres { extent_m: largest, limit_m: params.max_extent_m });
     }
     if largest < params.min_extent_m {
-        return Err(RegisterError::CloudTooSmall { extent_m: largest, limit_m: params.min_extent_m });
+        return Err(InputError::CloudTooSmall { extent_m: largest, limit_m: params.min_extent_m });
     }
     Ok(bbox)
 }
 
 /// Checks a template: not empty, indices in range, finite, closed 2-manifold edges, no zero-area
 /// triangle, label lengths. Returns its (plain) bounding box.
-pub fn check_template(template: &TriMesh) -> Result<Aabb, RegisterError> {
+pub(crate) fn check_template(template: &TriMesh) -> Result<Aabb, InputError> {
     let nv = template.vertices.len();
     let nt = template.triangles.len();
     if nv < 4 || nt < 4 {
-        return Err(RegisterError::EmptyTemplate { vertices: nv, triangles: nt });
+        return Err(InputError::EmptyTemplate { vertices: nv, triangles: nt });
     }
     if let Some(index) = template.vertices.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
-        return Err(RegisterError::NonFiniteTemplateVertex { index, point: template.vertices[index] });
+        return Err(InputError::NonFiniteTemplateVertex { index, point: template.vertices[index] });
     }
     for (t, tri) in template.triangles.iter().enumerate() {
         if let Some(&v) = tri.iter().find(|&&v| v as usize >= nv) {
-            return Err(RegisterError::BadTriangleIndex { triangle: t, vertex: v, n_vertices: nv });
+            return Err(InputError::BadTriangleIndex { triangle: t, vertex: v, n_vertices: nv });
         }
     }
     if let Some(l) = &template.vertex_labels {
         if l.len() != nv {
-            return Err(RegisterError::LengthMismatch { what: "template vertex labels", got: l.len(), expected: nv });
+            return Err(InputError::LengthMismatch { what: "template vertex labels", got: l.len(), expected: nv });
         }
     }
     if let Some(l) = &template.face_labels {
         if l.len() != nt {
-            return Err(RegisterError::LengthMismatch { what: "template face labels", got: l.len(), expected: nt });
+            return Err(InputError::LengthMismatch { what: "template face labels", got: l.len(), expected: nt });
         }
     }
-    let bbox = Aabb::of_points(&template.vertices).ok_or(RegisterError::EmptyTemplate { vertices: nv, triangles: nt })?;
+    let bbox = Aabb::of_points(&template.vertices).ok_or(InputError::EmptyTemplate { vertices: nv, triangles: nt })?;
     let diag2 = dot(bbox.extent(), bbox.extent());
     let mut degenerate = template.triangles.iter().enumerate().filter(|(_, tri)| {
         let [a, b, c] = tri.map(|v| template.vertices[v as usize]);
@@ -171,7 +171,7 @@ pub fn check_template(template: &TriMesh) -> Result<Aabb, RegisterError> {
         dot(n, n).sqrt() <= 1e-12 * diag2
     });
     if let Some((first, _)) = degenerate.next() {
-        return Err(RegisterError::DegenerateTemplate { triangle: first, count: 1 + degenerate.count() });
+        return Err(InputError::DegenerateTemplate { triangle: first, count: 1 + degenerate.count() });
     }
     let edges = edge_map(&template.triangles);
     let mut bad: Vec<((u32, u32), usize)> =
@@ -179,13 +179,13 @@ pub fn check_template(template: &TriMesh) -> Result<Aabb, RegisterError> {
     if !bad.is_empty() {
         bad.sort_unstable();
         let ((a, b), faces) = bad[0];
-        return Err(RegisterError::NonManifoldTemplate { a, b, faces, count: bad.len() });
+        return Err(InputError::NonManifoldTemplate { a, b, faces, count: bad.len() });
     }
     Ok(bbox)
 }
 
 /// The pre-alignment similarity from the template's and the cloud's robust boxes.
-pub fn similarity(template_box: &Aabb, cloud_box: &Aabb, params: &RegisterParams) -> Similarity {
+pub(crate) fn similarity(template_box: &Aabb, cloud_box: &Aabb, params: &PrealignParams) -> Similarity {
     let te = template_box.extent();
     let ce = cloud_box.extent();
     let td = template_box.diagonal().max(f64::MIN_POSITIVE);
@@ -215,9 +215,9 @@ pub fn similarity(template_box: &Aabb, cloud_box: &Aabb, params: &RegisterParams
 
 /// Smallest yaw difference (degrees, modulo 90) between the template's and the cloud's footprint
 /// rectangles for which [`prealign`] tries a rotation.
-pub const YAW_MIN_DEG: f64 = 10.0;
+pub(crate) const YAW_MIN_DEG: f64 = 10.0;
 /// A non-zero yaw is kept when its cloud-to-template RMS is below this fraction of yaw 0's.
-pub const YAW_MIN_GAIN: f64 = 0.8;
+pub(crate) const YAW_MIN_GAIN: f64 = 0.8;
 /// Points used for the footprint and the RMS check (a regular subsample).
 const YAW_SAMPLES: usize = 2000;
 
@@ -247,7 +247,7 @@ fn footprint_area(points: &[[f64; 3]], angle: f64, q: f64, buf: &mut Vec<f64>) -
 }
 
 /// Direction (radians, in [0, pi/2)) of the smallest-area horizontal bounding rectangle.
-pub fn footprint_angle(points: &[[f64; 3]], q: f64) -> f64 {
+pub(crate) fn footprint_angle(points: &[[f64; 3]], q: f64) -> f64 {
     if points.is_empty() {
         return 0.0;
     }
@@ -267,12 +267,12 @@ pub fn footprint_angle(points: &[[f64; 3]], q: f64) -> f64 {
 /// The pre-alignment: the yaw search of [`YawMode::Auto`] (module docs) followed by the
 /// [`similarity`] of the (turned) template's box onto the cloud's. `Err` only when a k-d tree
 /// cannot be built.
-pub fn prealign(
+pub(crate) fn prealign(
     template: &[[f64; 3]],
     template_box: &Aabb,
     cloud: &[[f64; 3]],
     cloud_box: &Aabb,
-    params: &RegisterParams,
+    params: &PrealignParams,
 ) -> Result<Similarity, String> {
     let base = similarity(template_box, cloud_box, params);
     if params.prealign_yaw == YawMode::Off || template.is_empty() || cloud.is_empty() {

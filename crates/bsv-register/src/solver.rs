@@ -74,11 +74,6 @@ impl GlobalSolver {
         Ok(GlobalSolver { n, col_ptr, row_idx, base, values, diag_pos, symbolic, factor, cached_d: None, buffer })
     }
 
-    /// Number of unknown vertices.
-    pub fn n(&self) -> usize {
-        self.n
-    }
-
     /// Makes the numeric factor match the data weights `d` (refactorizes only when `d` changed).
     /// Returns whether a numeric factorization ran.
     pub fn set_data_weights(&mut self, d: &[f64]) -> Result<bool, String> {

@@ -4,7 +4,7 @@
 #![allow(clippy::unwrap_used)]
 mod common;
 use bsv_core::shapes::{ellipsoid, icosphere};
-use bsv_register::{IterationLog, RegisterParams, Schedule};
+use bsv_register::{ControlFlow, EnergyParams, IterationLog, RegisterParams, Schedule};
 use common::*;
 
 #[test]
@@ -15,14 +15,15 @@ fn energy_monotone_within_every_iteration() {
     for alpha in [1e6, 1e4, 1e8] {
         for tw in [0.0, 1.0] {
             let params = RegisterParams {
-                alpha,
-                tangential_weight: tw,
-                tangential_weight_p2m: tw,
+                energy: EnergyParams { alpha, tangential_weight: tw, tangential_weight_p2m: tw, ..Default::default() },
                 schedule: Schedule::parse("m2p:4,p2m:4,m2p:4").unwrap(),
                 ..Default::default()
             };
             let mut logs: Vec<IterationLog> = Vec::new();
-            let mut cb = |l: &IterationLog| logs.push(l.clone());
+            let mut cb = |l: &IterationLog| {
+                logs.push(l.clone());
+                ControlFlow::Continue(())
+            };
             bsv_register::register(&template, &cloud, &params, &mut cb).unwrap();
             assert_eq!(logs.len(), 12);
             for l in &logs {

@@ -2,7 +2,7 @@
 
 mod common;
 use bsv_core::shapes::{capsule, ellipsoid, icosphere};
-use bsv_register::{PrealignMode, RegisterParams};
+use bsv_register::{EnergyParams, PrealignMode, PrealignParams, RegisterParams};
 use common::*;
 
 #[test]
@@ -35,7 +35,10 @@ fn sphere_to_ellipsoid_stretched_15_percent() {
     for p in &mut ideal.vertices {
         p[0] *= 1.15;
     }
-    let params = RegisterParams { prealign: PrealignMode::Isotropic, ..Default::default() };
+    let params = RegisterParams {
+        prealignment: PrealignParams { prealign: PrealignMode::Isotropic, ..Default::default() },
+        ..Default::default()
+    };
     let reg = run(&template, &cloud, &params);
     let max = reg.mesh.vertices.iter().map(|&p| ellipsoid_distance(p, radii)).fold(0.0, f64::max);
     let err = rel_pct(volume(&reg.mesh), volume(&ideal));
@@ -65,8 +68,11 @@ fn straight_capsule_to_bent_capsule() {
     // A pose change, not a change of proportions: the paper's isotropic pre-alignment.
     // Bending stretches the outer side and compresses the inner one: vertices need the p2m
     // tangential (Lloyd) pull to spread evenly again (with 0: -0.57 % volume, same surface error).
-    let params =
-        RegisterParams { prealign: PrealignMode::Isotropic, tangential_weight_p2m: 1.0, ..Default::default() };
+    let params = RegisterParams {
+        prealignment: PrealignParams { prealign: PrealignMode::Isotropic, ..Default::default() },
+        energy: EnergyParams { tangential_weight_p2m: 1.0, ..Default::default() },
+        ..Default::default()
+    };
     let reg = run(&template, &cloud, &params);
     let max = reg.mesh.vertices.iter().map(|&p| bent_capsule_distance(p, r, length, radius)).fold(0.0, f64::max);
     let err = rel_pct(volume(&reg.mesh), volume(&ideal));
@@ -85,7 +91,10 @@ fn template_rescaled_per_axis() {
     }
     let cloud = cloud_of(&truth, 100_000, 4);
     for mode in [PrealignMode::PerAxis, PrealignMode::Isotropic] {
-        let params = RegisterParams { prealign: mode, ..Default::default() };
+        let params = RegisterParams {
+            prealignment: PrealignParams { prealign: mode, ..Default::default() },
+            ..Default::default()
+        };
         let reg = run(&template, &cloud, &params);
         let radii = [0.12 * s[0], 0.3 * s[1], 0.09 * s[2]];
         let max_surface = reg

@@ -1,11 +1,11 @@
 //! Front/back clouds with lateral gaps: boxes of the paper's sizes at 45 degrees and a torso-like
 //! ellipsoid; an alpha sweep on the gap torso (the issue expected alpha = 0 to degrade; in this
-//! engine it does not, see `alpha_sweep_on_the_gap_torso` and the table in `params.rs`).
+//! engine it does not, see `alpha_sweep_on_the_gap_torso` and the table in benchmarks/BENCH.md, section Registration).
 
 mod common;
 use bsv_core::shapes::{ellipsoid, rotate_y, subdivided_cuboid};
 use bsv_core::TriMesh;
-use bsv_register::RegisterParams;
+use bsv_register::{EnergyParams, RegisterParams};
 use common::*;
 
 /// Registers `template` to the gappy sampling of `truth` and returns the volume error in percent.
@@ -16,7 +16,7 @@ fn gap_case(name: &str, template: &TriMesh, truth: &TriMesh, params: &RegisterPa
     let err = rel_pct(volume(&reg.mesh), volume(truth));
     println!(
         "{name}: alpha {:e}: {} of {} points kept, prealign {:?} {:?} yaw {:.2} deg, volume error {:.3} %, rms m2p {:.2} mm p2m {:.2} mm",
-        params.alpha,
+        params.energy.alpha,
         cloud.len(),
         before,
         reg.prealign.mode,
@@ -78,7 +78,13 @@ fn torso_ellipsoid_with_gaps() {
     assert!(good.abs() < 1.0, "torso: volume error {good:.3} %");
     // alpha = 0 (free affine cells): with the point-to-plane data term of the defaults the cells
     // have nothing pulling them together, and the result stays close; the numbers are printed.
-    let free = gap_case("torso", &template, &truth, &RegisterParams { alpha: 0.0, ..Default::default() }, 0.0);
+    let free = gap_case(
+        "torso",
+        &template,
+        &truth,
+        &RegisterParams { energy: EnergyParams { alpha: 0.0, ..Default::default() }, ..Default::default() },
+        0.0,
+    );
     assert!(free.is_finite());
 }
 
@@ -89,7 +95,7 @@ fn torso_ellipsoid_with_gaps() {
 /// a target, so nothing collapses; the regularization only adds stiffness, and a stiffer fit
 /// shrinks the gap sides more. This test pins that behaviour (no collapse at alpha = 0, and the
 /// practically rigid-cell alpha = 1e8 measurably more biased than alpha = 0 in point-to-point
-/// mode) and prints the table documented in `params.rs`.
+/// mode) and prints the table of benchmarks/BENCH.md, section Registration.
 #[test]
 fn alpha_sweep_on_the_gap_torso() {
     let template = ellipsoid([0.15, 0.28, 0.11], 4);
@@ -99,7 +105,10 @@ fn alpha_sweep_on_the_gap_torso() {
     let mut p2p = Vec::new();
     for (mode, tw) in [("point-to-plane", 0.0), ("point-to-point", 1.0)] {
         for alpha in [0.0, 1e4, 1e6, 1e8] {
-            let params = RegisterParams { alpha, tangential_weight: tw, ..Default::default() };
+            let params = RegisterParams {
+                energy: EnergyParams { alpha, tangential_weight: tw, ..Default::default() },
+                ..Default::default()
+            };
             let reg = run(&template, &cloud, &params);
             let err = rel_pct(volume(&reg.mesh), volume(&truth));
             let max = reg.mesh.vertices.iter().map(|&p| ellipsoid_distance(p, radii)).fold(0.0, f64::max);

@@ -4,7 +4,7 @@
 use bsv_core::geometry::{cross, face_normals, normalize, signed_volume, sub};
 use bsv_core::shapes::sample_surface;
 use bsv_core::{PointCloud, TriMesh};
-use bsv_register::{register, IterationLog, RegisterParams, Registration};
+use bsv_register::{register, ControlFlow, IterationLog, RegisterParams, Registration};
 
 /// A cloud of `n` uniform samples of `mesh`, with the face normals of the samples.
 pub fn cloud_of(mesh: &TriMesh, n: usize, seed: u64) -> PointCloud {
@@ -33,7 +33,7 @@ pub fn rel_pct(est: f64, truth: f64) -> f64 {
 
 /// Runs a registration and collects the log.
 pub fn run(template: &TriMesh, cloud: &PointCloud, params: &RegisterParams) -> Registration {
-    let mut sink = |_: &IterationLog| {};
+    let mut sink = |_: &IterationLog| ControlFlow::Continue(());
     register(template, cloud, params, &mut sink).expect("registration")
 }
 

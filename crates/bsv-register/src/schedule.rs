@@ -1,0 +1,131 @@
+//! The correspondence schedule: which way nearest neighbours are taken in each iteration.
+
+use crate::error::ParameterError;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// Which way nearest neighbours are taken in an iteration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CorrespondenceKind {
+    /// Mesh-to-point: each vertex to its nearest cloud point.
+    M2p,
+    /// Point-to-mesh: each cloud point to its nearest vertex; a vertex's target is the mean.
+    P2m,
+}
+
+impl fmt::Display for CorrespondenceKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            CorrespondenceKind::M2p => "m2p",
+            CorrespondenceKind::P2m => "p2m",
+        })
+    }
+}
+
+/// One stage of the schedule: `iterations` iterations with correspondences of `kind`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Stage {
+    /// Correspondence direction.
+    pub kind: CorrespondenceKind,
+    /// Number of iterations (correspondences + local + global step each).
+    pub iterations: usize,
+}
+
+/// The correspondence schedule, e.g. `m2p:5,p2m:5,m2p:10` (the paper's).
+///
+/// Serialises as that string (so JSON/Python users write `"schedule": "m2p:10,p2m:5"`);
+/// deserialises from the string or from the older list form
+/// `[{"kind": "m2p", "iterations": 5}, ...]`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Schedule(pub Vec<Stage>);
+
+impl Serialize for Schedule {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_str(self)
+    }
+}
+
+/// The accepted serialised forms of a [`Schedule`].
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum ScheduleRepr {
+    /// `"m2p:5,p2m:5,m2p:10"`.
+    Text(String),
+    /// `[{"kind": "m2p", "iterations": 5}, ...]`.
+    Stages(Vec<Stage>),
+}
+
+impl<'de> Deserialize<'de> for Schedule {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        match ScheduleRepr::deserialize(deserializer).map_err(|_| {
+            serde::de::Error::custom(
+                "schedule must be a string like \"m2p:5,p2m:5,m2p:10\" (or a list of {kind, iterations})",
+            )
+        })? {
+            ScheduleRepr::Text(text) => Schedule::parse(&text).map_err(serde::de::Error::custom),
+            ScheduleRepr::Stages(stages) => Ok(Schedule(stages)),
+        }
+    }
+}
+
+/// The paper's schedule: 5 m2p, 5 p2m, 10 m2p.
+pub const DEFAULT_SCHEDULE: &str = "m2p:5,p2m:5,m2p:10";
+
+impl Schedule {
+    /// Parses `KIND:COUNT[,KIND:COUNT...]` (KIND `m2p` or `p2m`, case-insensitive, spaces allowed).
+    pub fn parse(text: &str) -> Result<Schedule, ParameterError> {
+        let bad = |reason: String| ParameterError::BadSchedule { text: text.to_string(), reason };
+        let mut stages = Vec::new();
+        for (k, part) in text.split(',').enumerate() {
+            let part = part.trim();
+            if part.is_empty() {
+                return Err(bad(format!("stage {} is empty", k + 1)));
+            }
+            let (kind, count) = part.split_once(':').ok_or_else(|| bad(format!("stage {:?} has no ':'", part)))?;
+            let kind = match kind.trim().to_ascii_lowercase().as_str() {
+                "m2p" => CorrespondenceKind::M2p,
+                "p2m" => CorrespondenceKind::P2m,
+                other => return Err(bad(format!("unknown kind {:?}", other))),
+            };
+            let iterations: usize = count
+                .trim()
+                .parse()
+                .map_err(|_| bad(format!("count {:?} is not a non-negative integer", count.trim())))?;
+            stages.push(Stage { kind, iterations });
+        }
+        if stages.iter().all(|s| s.iterations == 0) {
+            return Err(bad("the schedule has no iteration".to_string()));
+        }
+        Ok(Schedule(stages))
+    }
+
+    /// Total number of iterations.
+    pub fn total_iterations(&self) -> usize {
+        self.0.iter().map(|s| s.iterations).sum()
+    }
+}
+
+impl Default for Schedule {
+    fn default() -> Self {
+        Schedule(vec![
+            Stage { kind: CorrespondenceKind::M2p, iterations: 5 },
+            Stage { kind: CorrespondenceKind::P2m, iterations: 5 },
+            Stage { kind: CorrespondenceKind::M2p, iterations: 10 },
+        ])
+    }
+}
+
+impl fmt::Display for Schedule {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let parts: Vec<String> = self.0.iter().map(|s| format!("{}:{}", s.kind, s.iterations)).collect();
+        f.write_str(&parts.join(","))
+    }
+}
+
+impl std::str::FromStr for Schedule {
+    type Err = ParameterError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Schedule::parse(s)
+    }
+}

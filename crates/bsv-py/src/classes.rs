@@ -67,7 +67,7 @@ impl PyRegisterParams {
     fn new(py: Python<'_>, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
         let empty = PyDict::new(py);
         let inner: bsv_register::RegisterParams = from_kwargs("registration", kwargs.unwrap_or(&empty))?;
-        inner.validate().map_err(py_err)?;
+        inner.validate().map_err(|e| py_err(bsv_register::RegisterError::from(e)))?;
         Ok(PyRegisterParams { inner })
     }
 

@@ -167,46 +167,29 @@ impl ToPyErr for VolumeError {
 impl ToPyErr for RegisterError {
     fn to_py_err(&self) -> PyErr {
         let (class, mut fields) = register_class(self);
-        fields.extend(register_parameter(self).map(|p| ("parameter", Field::Str(p.into()))));
+        fields.extend(self.parameter().map(|p| ("parameter", Field::Str(p.into()))));
         exception(class, message(self), fields)
     }
 }
 
 /// The class of a registration error (one per stage) and its index fields.
-// After the bsv-register split (RegisterError::{Input, Parameter, Numeric, Resource, Stopped}) this
-// becomes a match on the outer variant.
 fn register_class(e: &RegisterError) -> (&'static str, Vec<(&'static str, Field)>) {
-    use RegisterError as E;
+    use bsv_register::{InputError as I, NumericError as N};
     match e {
-        E::BadSchedule { .. } | E::BadParameter { .. } => ("RegistrationParameterError", Vec::new()),
-        E::NoCorrespondences { iteration } | E::Diverged { iteration } => {
+        RegisterError::Parameter(_) => ("RegistrationParameterError", Vec::new()),
+        RegisterError::Numeric(N::NoCorrespondences { iteration } | N::Diverged { iteration }) => {
             ("RegistrationNumericError", vec![("iteration", Field::Int(*iteration))])
         }
-        E::Solver(_) | E::Index(_) => ("RegistrationNumericError", Vec::new()),
-        E::ThreadPool { .. } => ("RegistrationResourceError", Vec::new()),
-        E::NonFinitePoint { index, .. } | E::NonFiniteTemplateVertex { index, .. } => {
+        RegisterError::Numeric(_) => ("RegistrationNumericError", Vec::new()),
+        RegisterError::Resource(_) => ("RegistrationResourceError", Vec::new()),
+        RegisterError::Stopped { iteration } => ("RegistrationStopped", vec![("iteration", Field::Int(*iteration))]),
+        RegisterError::Input(I::NonFinitePoint { index, .. } | I::NonFiniteTemplateVertex { index, .. }) => {
             ("RegistrationInputError", vec![("index", Field::Int(*index))])
         }
-        E::BadTriangleIndex { triangle, .. } | E::DegenerateTemplate { triangle, .. } => {
+        RegisterError::Input(I::BadTriangleIndex { triangle, .. } | I::DegenerateTemplate { triangle, .. }) => {
             ("RegistrationInputError", vec![("index", Field::Int(*triangle))])
         }
-        _ => ("RegistrationInputError", Vec::new()),
-    }
-}
-
-/// The registration parameter whose change is the remedy.
-// After the bsv-register split: `e.parameter()`.
-fn register_parameter(e: &RegisterError) -> Option<&'static str> {
-    use RegisterError as E;
-    match e {
-        E::BadParameter { name, .. } => Some(name),
-        E::BadSchedule { .. } => Some("schedule"),
-        E::OnlyExtremities { .. } => Some("drop_extremities"),
-        E::TemplateWithoutLabels | E::CloudWithoutLabels => Some("labels"),
-        E::NoCorrespondences { .. } => Some("prune_distance_factor"),
-        E::Diverged { .. } => Some("data_weight"),
-        E::ThreadPool { .. } => Some("threads"),
-        _ => None,
+        RegisterError::Input(_) => ("RegistrationInputError", Vec::new()),
     }
 }
 

@@ -6,7 +6,7 @@
 use crate::classes::{to_py, PyRegisterParams, PyRegistration, PyVolumeReport};
 use crate::convert::{cloud_from, labels_to, mesh_from, points_to};
 use crate::errors::py_err;
-use bsv_register::IterationLog;
+use bsv_register::{ControlFlow, IterationLog};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -61,9 +61,13 @@ pub fn register<'py>(
     let p = &params.get().inner;
     let mut state = Progress { callback: progress.map(Bound::unbind), error: None };
     let fitted = py.detach(|| {
-        // With bsv-register's ControlFlow progress: `if state.iteration(it) { Continue(()) } else { Break(()) }`.
+        // A raising callback or Ctrl-C stops the fit after the current iteration.
         let reg = bsv_register::register(&tmpl, &cloud, p, &mut |it| {
-            state.iteration(it);
+            if state.iteration(it) {
+                ControlFlow::Continue(())
+            } else {
+                ControlFlow::Break(())
+            }
         });
         // The fitted mesh is measured as the Python API always did: vertex labels only, islands merged.
         reg.map(|mut reg| {

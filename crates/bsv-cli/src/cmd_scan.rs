@@ -2,7 +2,7 @@
 
 use crate::output::{check_writable, CliError};
 use bsv_core::io;
-use bsv_core::scanner::{scan, write_capture, Condition, Rig};
+use bsv_capture::scanner::{scan, write_capture, Condition, Rig};
 use std::path::PathBuf;
 
 /// Arguments of `scan`.

@@ -3,7 +3,7 @@
 use crate::convert::{cloud_from, cloud_to, mesh_from, mesh_to};
 use crate::errors::{format_err, input_err, mesh_err, register_err, scan_err, volume_err, write_err};
 use bsv_core::io::{self, PlyEncoding};
-use bsv_core::scanner::{self, Condition, Rig};
+use bsv_capture::scanner::{self, Condition, Rig};
 use bsv_core::template::{template, TemplateKind};
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;

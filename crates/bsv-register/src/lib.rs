@@ -198,7 +198,7 @@ fn register_in_pool(
         }
         Some(labels) if params.drop_extremities && labels.iter().any(is_extremity) => {
             let mut c = cloud.clone();
-            extremities_dropped = bsv_core::clean::drop_segments(&mut c, &bsv_core::EXTREMITIES);
+            extremities_dropped = c.drop_segments(&bsv_core::EXTREMITIES);
             if c.points.is_empty() {
                 return Err(RegisterError::OnlyExtremities { n: extremities_dropped });
             }

@@ -13,7 +13,8 @@ use std::path::Path;
 
 use crate::{PointCloud, TriMesh};
 
-pub use error::{AttributeError, ReadError, WriteError};
+pub use error::{ReadError, WriteError};
+pub use validate::AttributeError;
 pub use ply::PlyEncoding;
 
 /// File formats known by extension.

@@ -5,9 +5,9 @@
 
 #![allow(clippy::unwrap_used)]
 
-use bsv_core::camera::{Extrinsics, Intrinsics};
-use bsv_core::fuse::{build_cloud, ColorMode, DepthImage, DepthView, FuseError, FuseParams};
-use bsv_core::scanner::{scan, write_capture, CameraView, Condition, Rig, DEPTH_SCALE};
+use bsv_capture::camera::{Extrinsics, Intrinsics};
+use bsv_capture::fuse::{build_cloud, ColorMode, DepthImage, DepthView, FuseError, FuseParams};
+use bsv_capture::scanner::{scan, write_capture, CameraView, Condition, Rig, DEPTH_SCALE};
 use bsv_core::shapes;
 
 

@@ -10,8 +10,8 @@
 
 use crate::camera::{CameraError, Extrinsics, Intrinsics};
 use crate::clean::{statistical_outliers, CleanError, SorParams};
-use crate::geometry::{cross, dot, norm, scale, sub};
-use crate::{PointCloud, Segment, EXTREMITIES, SEGMENT_COUNT};
+use bsv_core::geometry::{cross, dot, norm, scale, sub};
+use bsv_core::{PointCloud, Segment, EXTREMITIES, SEGMENT_COUNT};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;

@@ -1,11 +1,12 @@
 //! Benchmark: virtual scan of a ~27k-triangle body-sized mesh (both cameras, each condition) and
 //! statistical outlier removal of 300k points. Prints a table of medians of 5 runs.
-//! Run: `cargo run -p bsv-core --release --example scan_bench [-- --naive] [-- --images DIR]`.
+//! Run: `cargo run -p bsv-capture --release --example scan_bench [-- --naive] [-- --images DIR]`.
 
 #![allow(clippy::unwrap_used)]
 
-use bsv_core::clean::{mean_knn_distances, mean_knn_distances_naive, statistical_outliers, SorParams};
-use bsv_core::scanner::{scan, write_capture, Condition, Rig};
+use bsv_capture::clean::{mean_knn_distances, mean_knn_distances_naive, statistical_outliers, SorParams};
+use bsv_capture::scanner::{scan, write_capture, Condition, Rig};
+use bsv_capture::sample::sample_surface;
 use bsv_core::shapes;
 use std::time::Instant;
 
@@ -71,7 +72,7 @@ fn main() {
     }
     let mut ell = shapes::ellipsoid([0.2, 0.85, 0.14], 6);
     shapes::translate(&mut ell, [0.0, 0.9, 0.0]);
-    let (points, _) = shapes::sample_surface(&ell, 300_000, 1);
+    let (points, _) = sample_surface(&ell, 300_000, 1);
     let (t, res) = time(5, || statistical_outliers(&points, SorParams::default()).expect("sor"));
     let kept = res.keep.iter().filter(|&&k| k).count();
     println!("| SOR k=600 std 0.05 (exact, bounded radius) | {} pts (kept {kept}) | {t:.3} |", points.len());

@@ -5,7 +5,7 @@
 //! address pixel centres: pixel (u, v) = column u, row v, the image spans [-0.5, width - 0.5].
 //! Depth means z along the optical axis (as RealSense depth images), not distance along the ray.
 
-use crate::geometry::{add, cross, dot, norm, normalize, scale, sub};
+use bsv_core::geometry::{add, cross, dot, norm, normalize, scale, sub};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 

@@ -5,8 +5,8 @@
 #![allow(clippy::unwrap_used)]
 
 use bsv_capture::clean::{mean_knn_distances, mean_knn_distances_naive, statistical_outliers, SorParams};
-use bsv_capture::scanner::{scan, write_capture, Condition, Rig};
 use bsv_capture::sample::sample_surface;
+use bsv_capture::scanner::{scan, write_capture, Condition, Rig};
 use bsv_core::shapes;
 use std::time::Instant;
 
@@ -39,8 +39,6 @@ fn time<T>(runs: usize, mut f: impl FnMut() -> T) -> (f64, T) {
     (median(times), last.expect("runs >= 1"))
 }
 
-
-
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let mesh = shapes::capsule_body(true, false);
@@ -51,11 +49,7 @@ fn main() {
     let sor_only = args.iter().any(|a| a == "--sor-only");
     for c in Condition::ALL.into_iter().filter(|_| !sor_only) {
         let (t, s) = time(5, || scan(&mesh, &rig, c, 1).expect("scan"));
-        println!(
-            "| scan {c}, 2 cameras 768x1024 | {} tris -> {} pts | {t:.3} |",
-            mesh.triangles.len(),
-            s.cloud.len()
-        );
+        println!("| scan {c}, 2 cameras 768x1024 | {} tris -> {} pts | {t:.3} |", mesh.triangles.len(), s.cloud.len());
         if let Some(i) = args.iter().position(|a| a == "--images") {
             if let Some(dir) = args.get(i + 1) {
                 write_capture(&s, &std::path::Path::new(dir).join(c.name())).expect("write");
@@ -87,6 +81,9 @@ fn main() {
         let (t2, naive) = time(1, || mean_knn_distances_naive(&points, 600).expect("naive"));
         let fast = mean_knn_distances(&points, 600).expect("fast");
         let maxdiff = fast.iter().zip(&naive).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-        println!("| SOR k=600 plain kiddo nearest_n (1 run) | {} pts (max diff {maxdiff:.1e}) | {t2:.3} |", points.len());
+        println!(
+            "| SOR k=600 plain kiddo nearest_n (1 run) | {} pts (max diff {maxdiff:.1e}) | {t2:.3} |",
+            points.len()
+        );
     }
 }

@@ -30,7 +30,9 @@ pub enum CleanError {
         point: [f64; 3],
     },
     /// The k-d tree could not be built.
-    #[error("statistical outlier removal: building the k-d tree failed ({0}); the cloud may be too large (> 4e9 points)")]
+    #[error(
+        "statistical outlier removal: building the k-d tree failed ({0}); the cloud may be too large (> 4e9 points)"
+    )]
     Tree(String),
     /// Non-positive or non-finite voxel size.
     #[error("voxel down-sampling: voxel size {0} must be a positive finite length in metres")]

@@ -14,8 +14,8 @@ mod rig;
 
 pub use capture::{write_capture, CaptureCamera, DEPTH_SCALE};
 pub use rig::{
-    Condition, DepthNoise, ExtrinsicError, ExtrinsicSigma, Rig, RigCamera, PAPER_CAMERA_DISTANCE,
-    PAPER_CAMERA_HEIGHT, PAPER_HEIGHT, PAPER_HFOV_DEG, PAPER_VFOV_DEG, PAPER_WIDTH,
+    Condition, DepthNoise, ExtrinsicError, ExtrinsicSigma, Rig, RigCamera, PAPER_CAMERA_DISTANCE, PAPER_CAMERA_HEIGHT,
+    PAPER_HEIGHT, PAPER_HFOV_DEG, PAPER_VFOV_DEG, PAPER_WIDTH,
 };
 
 use crate::camera::{CameraError, Extrinsics, Intrinsics};
@@ -282,9 +282,8 @@ pub fn scan(mesh: &TriMesh, rig: &Rig, condition: Condition, seed: u64) -> Resul
             pixels,
         });
     }
-    cloud.colors = Some(
-        cloud_labels.iter().map(|&l| Segment::from_id(l).unwrap_or(Segment::Unlabelled).color()).collect(),
-    );
+    cloud.colors =
+        Some(cloud_labels.iter().map(|&l| Segment::from_id(l).unwrap_or(Segment::Unlabelled).color()).collect());
     cloud.labels = Some(cloud_labels);
     Ok(Scan { condition, seed, cloud, views })
 }

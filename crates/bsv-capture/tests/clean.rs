@@ -4,8 +4,8 @@
 #![allow(clippy::unwrap_used)]
 
 use bsv_capture::clean::{
-    mean_knn_distances, mean_knn_distances_naive, remove_statistical_outliers,
-    statistical_outliers, voxel_downsample, CleanError, SorParams,
+    mean_knn_distances, mean_knn_distances_naive, remove_statistical_outliers, statistical_outliers, voxel_downsample,
+    CleanError, SorParams,
 };
 use bsv_capture::sample::sample_surface;
 use bsv_core::{shapes, PointCloud};
@@ -13,10 +13,8 @@ use rand::{Rng, SeedableRng};
 
 /// Brute-force mean distance to the k nearest points (itself included).
 fn brute(points: &[[f64; 3]], i: usize, k: usize) -> f64 {
-    let mut d: Vec<f64> = points
-        .iter()
-        .map(|q| ((0..3).map(|a| (q[a] - points[i][a]).powi(2)).sum::<f64>()).sqrt())
-        .collect();
+    let mut d: Vec<f64> =
+        points.iter().map(|q| ((0..3).map(|a| (q[a] - points[i][a]).powi(2)).sum::<f64>()).sqrt()).collect();
     d.sort_by(f64::total_cmp);
     d[..k].iter().sum::<f64>() / k as f64
 }

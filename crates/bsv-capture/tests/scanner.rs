@@ -13,8 +13,6 @@ use parry3d_f64::query::PointQueryWithLocation;
 use parry3d_f64::shape::TrianglePointLocation;
 use rand::SeedableRng;
 
-
-
 fn front_only() -> Rig {
     let mut rig = Rig::paper_default();
     rig.cameras.truncate(1);
@@ -270,7 +268,10 @@ fn bad_inputs_are_rejected_clearly() {
     assert!(matches!(scan(&TriMesh::default(), &rig, Condition::NoEr, 0), Err(ScanError::EmptyMesh)));
     let mut bad = b.clone();
     bad.triangles[3][1] = 99;
-    assert!(matches!(scan(&bad, &rig, Condition::NoEr, 0), Err(ScanError::Mesh(MeshInvariant::IndexOutOfRange { face: 3, index: 99, .. }))));
+    assert!(matches!(
+        scan(&bad, &rig, Condition::NoEr, 0),
+        Err(ScanError::Mesh(MeshInvariant::IndexOutOfRange { face: 3, index: 99, .. }))
+    ));
     let mut bad = b.clone();
     bad.face_labels = Some(vec![1; 5]);
     assert!(scan(&bad, &rig, Condition::NoEr, 0).unwrap_err().to_string().contains("face_labels"));

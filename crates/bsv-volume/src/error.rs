@@ -21,7 +21,9 @@ pub enum VolumeError {
         position: [f64; 3],
     },
     /// A triangle uses the same vertex twice.
-    #[error("triangle {face} uses vertex {vertex} twice (degenerate face); remove degenerate faces (mesh repair) first")]
+    #[error(
+        "triangle {face} uses vertex {vertex} twice (degenerate face); remove degenerate faces (mesh repair) first"
+    )]
     DegenerateFace {
         /// Triangle index.
         face: usize,
@@ -74,7 +76,9 @@ pub enum VolumeError {
         position: [f64; 3],
     },
     /// A label array does not match the element count.
-    #[error("{what} labels have {got} entries but the mesh has {expected} {what}s; relabel the mesh or drop the labels")]
+    #[error(
+        "{what} labels have {got} entries but the mesh has {expected} {what}s; relabel the mesh or drop the labels"
+    )]
     LabelCountMismatch {
         /// "vertex" or "face".
         what: &'static str,

@@ -51,10 +51,12 @@ pub fn merge_small_islands(mesh: &TriMesh, face_labels: &mut [u8], opts: &Island
     }
     let adj = FaceAdjacency::build(&mesh.triangles[..m]);
     let areas: Vec<f64> = (0..m)
-        .map(|t| if mesh.triangles[t].iter().all(|&v| (v as usize) < mesh.vertices.len()) {
-            0.5 * bsv_core::geometry::norm(face_cross(mesh, t))
-        } else {
-            0.0
+        .map(|t| {
+            if mesh.triangles[t].iter().all(|&v| (v as usize) < mesh.vertices.len()) {
+                0.5 * bsv_core::geometry::norm(face_cross(mesh, t))
+            } else {
+                0.0
+            }
         })
         .collect();
     // Each merge joins an island to a neighbour, so the number of patches falls: this terminates.

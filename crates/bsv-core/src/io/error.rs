@@ -60,7 +60,9 @@ pub enum WriteError {
         source: std::io::Error,
     },
     /// The extension is not one we write.
-    #[error("cannot write {path}: unsupported extension {extension:?}; supported extensions are {SUPPORTED_EXTENSIONS}")]
+    #[error(
+        "cannot write {path}: unsupported extension {extension:?}; supported extensions are {SUPPORTED_EXTENSIONS}"
+    )]
     UnsupportedExtension {
         /// The file.
         path: PathBuf,

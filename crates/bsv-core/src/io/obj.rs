@@ -58,7 +58,9 @@ pub enum ObjError {
         message: String,
     },
     /// A NaN or infinite coordinate.
-    #[error("line {line}: vertex {vertex} has a non-finite coordinate ({value}); remove NaN/inf vertices and export again")]
+    #[error(
+        "line {line}: vertex {vertex} has a non-finite coordinate ({value}); remove NaN/inf vertices and export again"
+    )]
     NonFinite {
         /// 1-based line number.
         line: usize,
@@ -107,7 +109,11 @@ fn lines(bytes: &[u8]) -> impl Iterator<Item = (usize, Cow<'_, str>)> {
     })
 }
 
-fn parse_vertex(line_no: usize, vertex: usize, mut words: std::str::SplitAsciiWhitespace<'_>) -> Result<[f64; 3], ObjError> {
+fn parse_vertex(
+    line_no: usize,
+    vertex: usize,
+    mut words: std::str::SplitAsciiWhitespace<'_>,
+) -> Result<[f64; 3], ObjError> {
     let mut p = [0.0; 3];
     for (k, c) in p.iter_mut().enumerate() {
         let w = words.next().ok_or_else(|| ObjError::BadVertex {
@@ -179,14 +185,22 @@ pub fn parse(bytes: &[u8]) -> Result<(TriMesh, ObjReport), ObjError> {
                         }
                         i if i < 0 => {
                             if n + i < 0 {
-                                return Err(ObjError::IndexOutOfRange { line: line_no, index: i, vertex_count: vertices.len() });
+                                return Err(ObjError::IndexOutOfRange {
+                                    line: line_no,
+                                    index: i,
+                                    vertex_count: vertices.len(),
+                                });
                             }
                             n + i
                         }
                         i => i - 1,
                     };
                     let Ok(r) = u32::try_from(resolved) else {
-                        return Err(ObjError::IndexOutOfRange { line: line_no, index: i, vertex_count: vertices.len() });
+                        return Err(ObjError::IndexOutOfRange {
+                            line: line_no,
+                            index: i,
+                            vertex_count: vertices.len(),
+                        });
                     };
                     if resolved >= n {
                         forward.push((line_no, i, r));

@@ -185,7 +185,9 @@ impl View<'_> {
         self.validate()?;
         if let Some(t) = self.triangles {
             if self.points.len() > i32::MAX as usize && !t.is_empty() {
-                return Err(MeshInvariant::IndexOutOfRange { face: 0, index: u32::MAX, n_vertices: self.points.len() }.into());
+                return Err(
+                    MeshInvariant::IndexOutOfRange { face: 0, index: u32::MAX, n_vertices: self.points.len() }.into()
+                );
             }
         }
         Ok(())
@@ -206,7 +208,6 @@ impl View<'_> {
         let _ = self.write_to(encoding, &mut out);
         Ok(out)
     }
-
 }
 
 /// Records per encoded block.

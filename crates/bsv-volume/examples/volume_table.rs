@@ -8,6 +8,7 @@ use bsv_volume::{report, segment_volumes, DEFAULT_DENSITY_KG_M3};
 use std::time::Instant;
 
 /// A capsule limb at `x` (vertical), split at `split` (height) into `lower` and `upper` segments.
+#[allow(clippy::too_many_arguments)] // an example's plain helper: a parameter struct would only hide the shape
 fn limb(
     m: &mut TriMesh,
     labels: &mut Vec<u8>,

@@ -95,7 +95,7 @@ pub(crate) fn prepare(mesh: &TriMesh, close: bool) -> Result<(Cow<'_, TriMesh>, 
         }
         if let Some(fl) = &mut out.face_labels {
             let lab = majority(&face_votes);
-            fl.extend(std::iter::repeat(lab).take(n));
+            fl.extend(std::iter::repeat_n(lab, n));
         }
         if let Some(vl) = &mut out.vertex_labels {
             vl.push(majority(&vertex_votes));

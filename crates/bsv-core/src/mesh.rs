@@ -2,8 +2,8 @@
 
 use thiserror::Error;
 
-/// A broken invariant of an in-memory triangle mesh. Every crate reports it with this type (the
-/// writers, the volume code, the scanner, the registration wrap it and add their remedy).
+/// A broken invariant of an in-memory triangle mesh, the one error type for it (the
+/// PLY/OBJ writers, the volume code and the scanner wrap it and add their remedy).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Error)]
 pub enum MeshInvariant {
     /// A triangle refers to a vertex that does not exist.

@@ -33,7 +33,10 @@ fn label_counts(labels: &[u8]) -> Vec<(String, usize)> {
         .enumerate()
         .filter(|(_, &c)| c > 0)
         .map(|(id, &c)| {
-            let name = u8::try_from(id).ok().and_then(Segment::from_id).map_or_else(|| format!("id {id}"), |s| s.name().to_string());
+            let name = u8::try_from(id)
+                .ok()
+                .and_then(Segment::from_id)
+                .map_or_else(|| format!("id {id}"), |s| s.name().to_string());
             (name, c)
         })
         .collect()
@@ -66,7 +69,8 @@ fn read_file(path: &Path) -> Result<(PointCloud, Option<Result<TriMesh, ReadErro
             Ok((data.into_cloud(), mesh))
         }
         Format::Obj => {
-            let points = obj::parse_points(&bytes).map_err(|source| ReadError::Obj { path: path.to_path_buf(), source })?;
+            let points =
+                obj::parse_points(&bytes).map_err(|source| ReadError::Obj { path: path.to_path_buf(), source })?;
             let mesh = obj_has_faces(&bytes).then(|| {
                 obj::parse(&bytes).map(|(m, _)| m).map_err(|source| ReadError::Obj { path: path.to_path_buf(), source })
             });
@@ -97,7 +101,10 @@ pub fn run(a: Args) -> Result<(), CliError> {
         println!("  normals: {}, colours: {}", cloud.normals.is_some(), cloud.colors.is_some());
         if let Some(b) = bbox {
             let e = b.extent();
-            println!("  bounding box: min {:.4?} max {:.4?} (extent {:.3} x {:.3} x {:.3} m)", b.min, b.max, e[0], e[1], e[2]);
+            println!(
+                "  bounding box: min {:.4?} max {:.4?} (extent {:.3} x {:.3} x {:.3} m)",
+                b.min, b.max, e[0], e[1], e[2]
+            );
             if e.iter().fold(0.0f64, |m, v| m.max(*v)) > 5.0 {
                 println!("  note: larger than 5 m: is it in millimetres? BSV expects metres");
             }

@@ -1,8 +1,8 @@
 //! `bsv-cli scan`: virtual two-camera capture of a labelled mesh.
 
 use crate::output::{check_writable, CliError};
+use bsv_capture::scanner::{scan, write_capture, Condition, Rig};
 use bsv_core::io;
-use bsv_core::scanner::{scan, write_capture, Condition, Rig};
 use std::path::PathBuf;
 
 /// Arguments of `scan`.

@@ -28,6 +28,11 @@ pub fn run(a: Args) -> Result<(), CliError> {
     check_writable(&a.output, a.force)?;
     let mesh = template(kind)?;
     io::write_mesh(&a.output, &mesh)?;
-    println!("{kind:?} template ({} vertices, {} triangles) written to {}", mesh.n_vertices(), mesh.n_triangles(), a.output.display());
+    println!(
+        "{kind:?} template ({} vertices, {} triangles) written to {}",
+        mesh.n_vertices(),
+        mesh.n_triangles(),
+        a.output.display()
+    );
     Ok(())
 }

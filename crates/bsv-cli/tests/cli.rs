@@ -55,7 +55,9 @@ fn bad_inputs_fail_with_clear_messages() {
     assert!(!o.status.success());
     assert!(text(&o).contains("empty.ply"), "{}", text(&o));
     // A cloud in millimetres.
-    let mut ply = String::from("ply\nformat ascii 1.0\nelement vertex 400\nproperty float x\nproperty float y\nproperty float z\nend_header\n");
+    let mut ply = String::from(
+        "ply\nformat ascii 1.0\nelement vertex 400\nproperty float x\nproperty float y\nproperty float z\nend_header\n",
+    );
     for i in 0..400 {
         ply.push_str(&format!("{} {} {}\n", (i % 20) as f64 * 30.0, (i / 20) as f64 * 90.0, (i % 7) as f64 * 10.0));
     }
@@ -75,7 +77,8 @@ fn bad_inputs_fail_with_clear_messages() {
 fn info_reports_unreadable_faces() {
     let d = tmpdir("info");
     // A tetrahedron whose last face refers to a vertex that does not exist.
-    std::fs::write(d.join("bad.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 9\n").unwrap();
+    std::fs::write(d.join("bad.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 9\n")
+        .unwrap();
     let o = bsv(&["info", "bad.obj"], &d);
     assert!(o.status.success(), "{}", text(&o));
     assert!(text(&o).contains("4 vertices/points"), "{}", text(&o));
@@ -88,7 +91,8 @@ fn info_reports_unreadable_faces() {
     assert!(!o.status.success());
     assert!(!text(&o).contains("has no faces"), "{}", text(&o));
     // The same mesh with a valid last face is a mesh.
-    std::fs::write(d.join("ok.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n").unwrap();
+    std::fs::write(d.join("ok.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+        .unwrap();
     let o = bsv(&["info", "ok.obj", "--json"], &d);
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(j.get("mesh").is_some() && j.get("mesh_error").is_none(), "{j}");

@@ -120,7 +120,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     rows.push(Row { name: "cloud_1m", op: "fsread", path: cloud_path.clone(), bytes: size(&cloud_path), seconds: t });
     let (t, r) = time(runs, || read_point_cloud(&float_path));
     assert_eq!(r?.len(), c.len());
-    rows.push(Row { name: "cloud_1m_float", op: "read", path: float_path.clone(), bytes: size(&float_path), seconds: t });
+    rows.push(Row {
+        name: "cloud_1m_float",
+        op: "read",
+        path: float_path.clone(),
+        bytes: size(&float_path),
+        seconds: t,
+    });
     let (t, r) = time(runs, || write_mesh(&mesh_path, &m));
     r?;
     rows.push(Row { name: "mesh_100k", op: "write", path: mesh_path.clone(), bytes: size(&mesh_path), seconds: t });

@@ -99,7 +99,9 @@ pub enum MeshCheckError {
         edges: usize,
     },
     /// Closed and consistent but inside-out.
-    #[error("{what} is inside-out (signed volume {volume:.6} m^3 <= 0); run `bsv-cli info --repair` to orient it outward")]
+    #[error(
+        "{what} is inside-out (signed volume {volume:.6} m^3 <= 0); run `bsv-cli info --repair` to orient it outward"
+    )]
     Inward {
         /// The mesh's role.
         what: String,
@@ -150,7 +152,13 @@ impl fmt::Display for MeshReport {
         writeln!(f, "watertight:             {}", yes(self.is_watertight))?;
         writeln!(f, "consistently oriented:  {}", yes(self.is_consistently_oriented))?;
         match self.signed_volume {
-            Some(v) => writeln!(f, "signed volume:          {:.6} m^3 ({:.3} L){}", v, v * 1000.0, if v < 0.0 { " (inside-out)" } else { "" })?,
+            Some(v) => writeln!(
+                f,
+                "signed volume:          {:.6} m^3 ({:.3} L){}",
+                v,
+                v * 1000.0,
+                if v < 0.0 { " (inside-out)" } else { "" }
+            )?,
             None => writeln!(f, "signed volume:          n/a (not closed and consistently oriented)")?,
         }
         writeln!(f, "boundary edges:         {} in {} loop(s)", self.boundary_edges, self.boundary_loops)?;
@@ -262,7 +270,8 @@ pub fn check_mesh(mesh: &TriMesh) -> MeshReport {
     }
     let unreferenced_vertices = used.iter().filter(|&&u| !u).count();
     // Edges of the valid triangles without repeated indices (a repeated index has no proper edges).
-    let proper: Vec<[u32; 3]> = valid.iter().copied().filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]).collect();
+    let proper: Vec<[u32; 3]> =
+        valid.iter().copied().filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]).collect();
     let edges = edge_map(&proper);
     let mut boundary_edges = 0;
     let mut non_manifold_edges = 0;
@@ -278,10 +287,13 @@ pub fn check_mesh(mesh: &TriMesh) -> MeshReport {
     let loops = if boundary_edges > 0 { boundary_loops(&proper).len() } else { 0 };
     let non_manifold_vertices = count_non_manifold_vertices(n, &proper);
     let components = face_components(&valid).1;
-    let area = valid.iter().map(|&[a, b, c]| {
-        let (a, b, c) = (mesh.vertices[a as usize], mesh.vertices[b as usize], mesh.vertices[c as usize]);
-        0.5 * norm(cross(sub(b, a), sub(c, a)))
-    }).sum();
+    let area = valid
+        .iter()
+        .map(|&[a, b, c]| {
+            let (a, b, c) = (mesh.vertices[a as usize], mesh.vertices[b as usize], mesh.vertices[c as usize]);
+            0.5 * norm(cross(sub(b, a), sub(c, a)))
+        })
+        .sum();
     let is_watertight = !proper.is_empty() && invalid_faces == 0 && boundary_edges == 0 && non_manifold_edges == 0;
     let is_consistently_oriented = inconsistent_edges == 0;
     let signed_volume = (is_watertight && is_consistently_oriented).then(|| signed_volume(&mesh.vertices, &valid));

@@ -1,5 +1,7 @@
 //! The point cloud type shared by every crate.
 
+use crate::Segment;
+
 /// A point cloud in metres with optional normals, colours and segment labels.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct PointCloud {
@@ -50,5 +52,16 @@ impl PointCloud {
         if let Some(l) = self.labels.as_mut() {
             filter(l, &mask);
         }
+    }
+
+    /// Removes the points whose label is one of `segments` (no-op for an unlabelled cloud), with their
+    /// attributes; returns the number removed.
+    pub fn drop_segments(&mut self, segments: &[Segment]) -> usize {
+        let Some(labels) = self.labels.clone() else {
+            return 0;
+        };
+        let before = self.len();
+        self.retain_indices(|i| !segments.iter().any(|s| s.id() == labels[i]));
+        before - self.len()
     }
 }

@@ -72,9 +72,9 @@ impl Aabb {
         let first = *it.next()?;
         let mut b = Aabb { min: first, max: first };
         for p in it {
-            for k in 0..3 {
-                b.min[k] = b.min[k].min(p[k]);
-                b.max[k] = b.max[k].max(p[k]);
+            for (k, &v) in p.iter().enumerate() {
+                b.min[k] = b.min[k].min(v);
+                b.max[k] = b.max[k].max(v);
             }
         }
         let finite = b.min.iter().chain(b.max.iter()).all(|v| v.is_finite())

@@ -1,4 +1,32 @@
-//! The triangle mesh type shared by every crate.
+//! The triangle mesh type shared by every crate, and the one error for a broken mesh invariant.
+
+use thiserror::Error;
+
+/// A broken invariant of an in-memory triangle mesh, the one error type for it (the
+/// PLY/OBJ writers, the volume code and the scanner wrap it and add their remedy).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Error)]
+pub enum MeshInvariant {
+    /// A triangle refers to a vertex that does not exist.
+    #[error("triangle {face} refers to vertex {index} but there are only {n_vertices} vertices")]
+    IndexOutOfRange {
+        /// Triangle index.
+        face: usize,
+        /// The bad vertex index.
+        index: u32,
+        /// Number of vertices.
+        n_vertices: usize,
+    },
+}
+
+/// Checks that every triangle index is below `n_vertices`; the first bad triangle is reported.
+pub fn check_indices(triangles: &[[u32; 3]], n_vertices: usize) -> Result<(), MeshInvariant> {
+    for (face, t) in triangles.iter().enumerate() {
+        if let Some(&index) = t.iter().find(|&&i| i as usize >= n_vertices) {
+            return Err(MeshInvariant::IndexOutOfRange { face, index, n_vertices });
+        }
+    }
+    Ok(())
+}
 
 /// A triangle mesh in metres (f64 vertices, u32 triangles) with optional segment labels.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -33,5 +61,10 @@ impl TriMesh {
     pub fn triangle_points(&self, t: usize) -> [[f64; 3]; 3] {
         let [a, b, c] = self.triangles[t];
         [self.vertices[a as usize], self.vertices[b as usize], self.vertices[c as usize]]
+    }
+
+    /// Checks that every triangle refers to an existing vertex (see [`check_indices`]).
+    pub fn check_indices(&self) -> Result<(), MeshInvariant> {
+        check_indices(&self.triangles, self.vertices.len())
     }
 }

@@ -55,13 +55,7 @@ pub const TRUNK_LIMBS: [Segment; 9] = [
 ];
 
 /// Segment ids that the cloud pipeline drops (head, hands, feet).
-pub const EXTREMITIES: [Segment; 5] = [
-    Segment::Head,
-    Segment::HandL,
-    Segment::HandR,
-    Segment::FootL,
-    Segment::FootR,
-];
+pub const EXTREMITIES: [Segment; 5] = [Segment::Head, Segment::HandL, Segment::HandR, Segment::FootL, Segment::FootR];
 
 impl Segment {
     /// Every labelled segment (ids 1..=14), in id order.
@@ -118,9 +112,7 @@ impl Segment {
 
     /// The segment whose canonical name is `name` (exact, lower case).
     pub fn from_name(name: &str) -> Option<Segment> {
-        std::iter::once(Segment::Unlabelled)
-            .chain(Segment::ALL)
-            .find(|s| s.name() == name)
+        std::iter::once(Segment::Unlabelled).chain(Segment::ALL).find(|s| s.name() == name)
     }
 
     /// The palette colour (sRGB) used when writing labelled PLY files.
@@ -163,19 +155,19 @@ impl fmt::Display for Segment {
 pub const PALETTE: [[u8; 3]; SEGMENT_COUNT] = [
     [200, 200, 200],
     [255, 213, 170],
-    [ 70, 130, 180],
-    [228,  26,  28],
-    [ 55, 126, 184],
-    [255, 127,   0],
-    [ 77, 175,  74],
+    [70, 130, 180],
+    [228, 26, 28],
+    [55, 126, 184],
+    [255, 127, 0],
+    [77, 175, 74],
     [247, 129, 191],
-    [152,  78, 163],
-    [166,  86,  40],
-    [ 27, 158, 119],
-    [255, 255,  51],
-    [ 102, 194, 165],
+    [152, 78, 163],
+    [166, 86, 40],
+    [27, 158, 119],
+    [255, 255, 51],
+    [102, 194, 165],
     [153, 153, 153],
-    [ 31, 120, 180],
+    [31, 120, 180],
 ];
 
 /// A named sum of segments reported next to the segments (DESIGN.md "Aggregates").
@@ -197,14 +189,8 @@ pub enum Aggregate {
 
 impl Aggregate {
     /// Every aggregate, in report order.
-    pub const ALL: [Aggregate; 6] = [
-        Aggregate::TrunkLimbs,
-        Aggregate::Whole,
-        Aggregate::ArmL,
-        Aggregate::ArmR,
-        Aggregate::LegL,
-        Aggregate::LegR,
-    ];
+    pub const ALL: [Aggregate; 6] =
+        [Aggregate::TrunkLimbs, Aggregate::Whole, Aggregate::ArmL, Aggregate::ArmR, Aggregate::LegL, Aggregate::LegR];
 
     /// The key used in JSON and Python.
     pub fn name(self) -> &'static str {

@@ -1,8 +1,8 @@
-//! Analytic shapes with known volumes (tests, benchmarks, examples) and uniform surface sampling.
+//! Analytic shapes with known volumes (tests, benchmarks, examples). Surface sampling is
+//! `bsv_capture::sample::sample_surface`.
 
-use crate::geometry::{add, cross, norm, normalize, scale, sub};
+use crate::geometry::{add, normalize, scale};
 use crate::TriMesh;
-use rand::{Rng, SeedableRng};
 use std::collections::HashMap;
 
 /// An axis-aligned box centred at the origin with edge lengths `size`, 12 outward triangles.
@@ -18,12 +18,18 @@ pub fn cuboid(size: [f64; 3]) -> TriMesh {
         })
         .collect();
     let triangles = vec![
-        [0, 2, 3], [0, 3, 1], // z-
-        [4, 5, 7], [4, 7, 6], // z+
-        [0, 1, 5], [0, 5, 4], // y-
-        [2, 6, 7], [2, 7, 3], // y+
-        [0, 4, 6], [0, 6, 2], // x-
-        [1, 3, 7], [1, 7, 5], // x+
+        [0, 2, 3],
+        [0, 3, 1], // z-
+        [4, 5, 7],
+        [4, 7, 6], // z+
+        [0, 1, 5],
+        [0, 5, 4], // y-
+        [2, 6, 7],
+        [2, 7, 3], // y+
+        [0, 4, 6],
+        [0, 6, 2], // x-
+        [1, 3, 7],
+        [1, 7, 5], // x+
     ];
     TriMesh::new(vertices, triangles)
 }
@@ -69,18 +75,43 @@ pub fn subdivided_cuboid(size: [f64; 3], n: usize) -> TriMesh {
 pub fn icosphere(r: f64, level: u32) -> TriMesh {
     let t = (1.0 + 5f64.sqrt()) / 2.0;
     let mut vertices: Vec<[f64; 3]> = [
-        [-1.0, t, 0.0], [1.0, t, 0.0], [-1.0, -t, 0.0], [1.0, -t, 0.0],
-        [0.0, -1.0, t], [0.0, 1.0, t], [0.0, -1.0, -t], [0.0, 1.0, -t],
-        [t, 0.0, -1.0], [t, 0.0, 1.0], [-t, 0.0, -1.0], [-t, 0.0, 1.0],
+        [-1.0, t, 0.0],
+        [1.0, t, 0.0],
+        [-1.0, -t, 0.0],
+        [1.0, -t, 0.0],
+        [0.0, -1.0, t],
+        [0.0, 1.0, t],
+        [0.0, -1.0, -t],
+        [0.0, 1.0, -t],
+        [t, 0.0, -1.0],
+        [t, 0.0, 1.0],
+        [-t, 0.0, -1.0],
+        [-t, 0.0, 1.0],
     ]
     .iter()
     .map(|&p| scale(normalize(p), r))
     .collect();
     let mut triangles: Vec<[u32; 3]> = vec![
-        [0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11],
-        [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8],
-        [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9],
-        [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1],
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
     ];
     for _ in 0..level {
         let mut mid: HashMap<(u32, u32), u32> = HashMap::new();
@@ -175,37 +206,6 @@ pub fn translate(mesh: &mut TriMesh, t: [f64; 3]) {
     }
 }
 
-/// `n` points drawn uniformly on the surface (area-weighted), with the index of the face each lies on.
-/// Deterministic for a seed.
-pub fn sample_surface(mesh: &TriMesh, n: usize, seed: u64) -> (Vec<[f64; 3]>, Vec<u32>) {
-    let mut cdf = Vec::with_capacity(mesh.n_triangles());
-    let mut acc = 0.0;
-    for t in 0..mesh.n_triangles() {
-        let [a, b, c] = mesh.triangle_points(t);
-        acc += 0.5 * norm(cross(sub(b, a), sub(c, a)));
-        cdf.push(acc);
-    }
-    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
-    let mut points = Vec::with_capacity(n);
-    let mut faces = Vec::with_capacity(n);
-    if acc <= 0.0 {
-        return (points, faces);
-    }
-    for _ in 0..n {
-        let x = rng.random::<f64>() * acc;
-        let t = cdf.partition_point(|&v| v < x).min(cdf.len() - 1);
-        let (mut u, mut v) = (rng.random::<f64>(), rng.random::<f64>());
-        if u + v > 1.0 {
-            u = 1.0 - u;
-            v = 1.0 - v;
-        }
-        let [a, b, c] = mesh.triangle_points(t);
-        points.push(add(a, add(scale(sub(b, a), u), scale(sub(c, a), v))));
-        faces.push(t as u32);
-    }
-    (points, faces)
-}
-
 /// Appends `part` to `mesh`, every new face labelled `label` (face labels are created if absent).
 pub fn append_labelled(mesh: &mut TriMesh, part: TriMesh, label: u8) {
     let off = mesh.vertices.len() as u32;
@@ -264,16 +264,5 @@ mod tests {
         let exact = std::f64::consts::PI * 0.01 * 0.5 + 4.0 / 3.0 * std::f64::consts::PI * 0.001;
         let v = signed_volume(&cap.vertices, &cap.triangles);
         assert!(v > 0.0 && (v - exact).abs() / exact < 0.01, "{v} {exact}");
-    }
-
-    #[test]
-    fn sampling_is_deterministic_and_on_surface() {
-        let c = cuboid([1.0, 1.0, 1.0]);
-        let (p, f) = sample_surface(&c, 1000, 7);
-        assert_eq!(p, sample_surface(&c, 1000, 7).0);
-        assert_eq!(f.len(), 1000);
-        for q in p {
-            assert!(q.iter().any(|v| (v.abs() - 0.5).abs() < 1e-12));
-        }
     }
 }

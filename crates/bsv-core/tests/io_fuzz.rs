@@ -23,10 +23,11 @@ fn valid_cloud_ply(encoding: PlyEncoding) -> Vec<u8> {
 
 /// A PLY with lists in unusual places (vertex list property, unknown list element, ushort counts).
 fn odd_ply() -> Vec<u8> {
-    let mut b = b"ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty list ushort char tags\n\
+    let mut b =
+        b"ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty list ushort char tags\n\
 property float y\nproperty float z\nelement material 1\nproperty list uint uchar name\nelement face 1\n\
 property list ushort uint vertex_index\nproperty short label\nend_header\n"
-        .to_vec();
+            .to_vec();
     for i in 0..3u16 {
         b.extend((i as f32).to_be_bytes());
         b.extend(2u16.to_be_bytes());
@@ -52,9 +53,10 @@ fn assert_consistent_ply(bytes: &[u8]) {
     if let Ok(d) = ply::parse(bytes) {
         let n = d.points.len();
         assert!(d.points.iter().all(|p| p.iter().all(|c| c.is_finite())));
-        for l in [d.normals.as_ref().map(Vec::len), d.colors.as_ref().map(Vec::len), d.vertex_labels.as_ref().map(Vec::len)]
-            .into_iter()
-            .flatten()
+        for l in
+            [d.normals.as_ref().map(Vec::len), d.colors.as_ref().map(Vec::len), d.vertex_labels.as_ref().map(Vec::len)]
+                .into_iter()
+                .flatten()
         {
             assert_eq!(l, n);
         }
@@ -66,7 +68,8 @@ fn assert_consistent_ply(bytes: &[u8]) {
         }
         assert!(d.vertex_labels.iter().flatten().chain(d.face_labels.iter().flatten()).all(|&l| l <= 14));
         // Whatever was read can be written back and read again identically.
-        let again = ply::parse(&ply::to_bytes(&d, PlyEncoding::BinaryLittleEndian).expect("re-encode")).expect("re-read");
+        let again =
+            ply::parse(&ply::to_bytes(&d, PlyEncoding::BinaryLittleEndian).expect("re-encode")).expect("re-read");
         assert_eq!(again.points, d.points);
         assert_eq!(again.triangles, d.triangles);
     }
@@ -134,8 +137,22 @@ fn header_mutation() -> impl Strategy<Value = (usize, &'static str)> {
     (
         any::<usize>(),
         prop::sample::select(vec![
-            "0", "9", "99999999999", "18446744073709551615", "-1", "list", "uchar", "double", "char", "\n", " ",
-            "element", "property", "end_header\n", "face", "vertex",
+            "0",
+            "9",
+            "99999999999",
+            "18446744073709551615",
+            "-1",
+            "list",
+            "uchar",
+            "double",
+            "char",
+            "\n",
+            " ",
+            "element",
+            "property",
+            "end_header\n",
+            "face",
+            "vertex",
         ]),
     )
 }

@@ -15,10 +15,7 @@ f -5 -4 -1\nf 2/1 3/2 5/1\nf 3//1 4//1 5//1\nf -2 -5 -1\nl 1 2\n";
     let (m, report) = obj::parse(text.as_bytes()).expect("valid obj");
     assert_eq!(m.n_vertices(), 5);
     assert_eq!(m.vertices[2], [1.0, 0.0, 1.0]);
-    assert_eq!(
-        m.triangles,
-        vec![[0, 3, 2], [0, 2, 1], [0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]]
-    );
+    assert_eq!(m.triangles, vec![[0, 3, 2], [0, 2, 1], [0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]]);
     assert_eq!(report.polygons_triangulated, 1);
     assert_eq!(report.ignored_statements, 1); // the `l` line
     assert_eq!(report.unknown_groups, vec!["pyramid".to_string()]);
@@ -78,7 +75,11 @@ fn writer_round_trips_exactly_and_groups_by_segment() {
         .iter()
         .map(|t| {
             let n5 = t.iter().filter(|&&v| c.vertices[v as usize][0] > 0.0).count();
-            if n5 >= 2 { 5 } else { 3 }
+            if n5 >= 2 {
+                5
+            } else {
+                3
+            }
         })
         .collect();
     assert_eq!(back.face_labels, Some(want));
@@ -94,7 +95,10 @@ fn writer_round_trips_exactly_and_groups_by_segment() {
     assert_eq!(bio::read_point_cloud(&p).expect("cloud").points, m.vertices);
     std::fs::write(dir.join("bad.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n").unwrap();
     let err = bio::read_mesh(&dir.join("bad.obj")).unwrap_err();
-    assert!(matches!(err, ReadError::Obj { source: ObjError::IndexOutOfRange { line: 4, index: 4, vertex_count: 3 }, .. }), "{err:?}");
+    assert!(
+        matches!(err, ReadError::Obj { source: ObjError::IndexOutOfRange { line: 4, index: 4, vertex_count: 3 }, .. }),
+        "{err:?}"
+    );
     assert!(err.to_string().contains("bad.obj") && err.to_string().contains("line 4"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -107,9 +111,18 @@ fn bad_obj_input_is_typed_with_line_numbers() {
     assert!(matches!(obj::parse(b"v 0 0 zero\n").unwrap_err(), ObjError::BadVertex { line: 1, .. }));
     let err = obj::parse(b"v 0 0 0\nv 1 nan 0\n").unwrap_err();
     assert!(matches!(err, ObjError::NonFinite { line: 2, vertex: 1, .. }), "{err:?}");
-    assert!(matches!(obj::parse(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n").unwrap_err(), ObjError::FaceTooSmall { line: 4, n: 2 }));
-    assert!(matches!(obj::parse(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n").unwrap_err(), ObjError::BadFace { line: 4, .. }));
-    assert!(matches!(obj::parse(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf a b c\n").unwrap_err(), ObjError::BadFace { line: 4, .. }));
+    assert!(matches!(
+        obj::parse(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n").unwrap_err(),
+        ObjError::FaceTooSmall { line: 4, n: 2 }
+    ));
+    assert!(matches!(
+        obj::parse(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n").unwrap_err(),
+        ObjError::BadFace { line: 4, .. }
+    ));
+    assert!(matches!(
+        obj::parse(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf a b c\n").unwrap_err(),
+        ObjError::BadFace { line: 4, .. }
+    ));
     let err = obj::parse(b"v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 1 0\n").unwrap_err();
     assert_eq!(err, ObjError::IndexOutOfRange { line: 3, index: -3, vertex_count: 2 });
     // Forward references are allowed when the vertex exists by the end.

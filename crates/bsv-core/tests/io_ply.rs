@@ -20,7 +20,11 @@ fn enc(ty: &str, v: f64, e: PlyEncoding) -> Vec<u8> {
     let big = e == PlyEncoding::BinaryBigEndian;
     macro_rules! b {
         ($x:expr) => {
-            if big { $x.to_be_bytes().to_vec() } else { $x.to_le_bytes().to_vec() }
+            if big {
+                $x.to_be_bytes().to_vec()
+            } else {
+                $x.to_le_bytes().to_vec()
+            }
         };
     }
     if e == PlyEncoding::Ascii {
@@ -115,7 +119,11 @@ fn reads_every_scalar_type_and_alias_in_every_encoding() {
             assert_eq!(data.comments, vec!["hand written".to_string(), "test file".to_string()]);
             let signed = !matches!(coord, "uchar" | "uint8" | "ushort" | "uint16" | "uint" | "uint32");
             let s = if signed { -1.0 } else { 1.0 };
-            assert_eq!(data.points, vec![[0.0, 0.0, 0.0], [2.0, 0.0, s], [0.0, 3.0, 0.0], [s, 0.0, 4.0]], "{e:?} {coord}");
+            assert_eq!(
+                data.points,
+                vec![[0.0, 0.0, 0.0], [2.0, 0.0, s], [0.0, 3.0, 0.0], [s, 0.0, 4.0]],
+                "{e:?} {coord}"
+            );
             assert_eq!(data.vertex_labels, Some(vec![1, 2, 3, 4]), "{e:?} {label}");
             assert_eq!(data.triangles, Some(vec![[0, 2, 1], [0, 1, 3], [0, 3, 2]]), "{e:?} {count} {index}");
             assert_eq!(data.face_labels, Some(vec![9, 12, 12]));
@@ -179,7 +187,8 @@ fn cloud_round_trips_exactly_in_every_encoding() {
         assert_eq!(back.points, c.points, "{e:?}");
         assert_eq!(back.labels, c.labels);
         // Palette colours from labels, so viewers show the segments.
-        let want: Vec<[u8; 3]> = c.labels.as_ref().map(|l| l.iter().map(|&l| PALETTE[l as usize]).collect()).expect("labels");
+        let want: Vec<[u8; 3]> =
+            c.labels.as_ref().map(|l| l.iter().map(|&l| PALETTE[l as usize]).collect()).expect("labels");
         assert_eq!(back.colors, Some(want));
     }
     c.normals = Some(c.points.iter().map(|p| [p[1], -p[0], 0.25]).collect());
@@ -198,7 +207,8 @@ fn cloud_round_trips_exactly_in_every_encoding() {
 fn mesh_round_trips_with_labels() {
     let mut m = icosphere(0.37, 3);
     let nf = m.n_triangles();
-    m.vertex_labels = Some(m.vertices.iter().map(|p| if p[1] > 0.0 { Segment::Torso.id() } else { Segment::ThighL.id() }).collect());
+    m.vertex_labels =
+        Some(m.vertices.iter().map(|p| if p[1] > 0.0 { Segment::Torso.id() } else { Segment::ThighL.id() }).collect());
     m.face_labels = Some((0..nf).map(|t| (t % 15) as u8).collect());
     for e in ENCODINGS {
         let bytes = ply::mesh_to_bytes(&m, e).expect("encode");
@@ -206,13 +216,19 @@ fn mesh_round_trips_with_labels() {
         assert_eq!(back, m, "{e:?}");
         // The vertex palette colours are there for viewers.
         let data = ply::parse(&bytes).expect("decode");
-        assert_eq!(data.colors.as_ref().map(|c| c[0]), Some(Segment::from_id(m.vertex_labels.as_ref().unwrap()[0]).unwrap().color()));
+        assert_eq!(
+            data.colors.as_ref().map(|c| c[0]),
+            Some(Segment::from_id(m.vertex_labels.as_ref().unwrap()[0]).unwrap().color())
+        );
     }
     let plain = cuboid([1.0, 2.0, 3.0]);
     let back = ply::parse_mesh(&ply::mesh_to_bytes(&plain, PlyEncoding::BinaryLittleEndian).unwrap()).unwrap();
     assert_eq!(back, plain);
     // PlyData round trip keeps comments.
-    let data = PlyData { comments: vec!["scanned by test".into()], ..ply::parse(&ply::mesh_to_bytes(&plain, PlyEncoding::Ascii).unwrap()).unwrap() };
+    let data = PlyData {
+        comments: vec!["scanned by test".into()],
+        ..ply::parse(&ply::mesh_to_bytes(&plain, PlyEncoding::Ascii).unwrap()).unwrap()
+    };
     let again = ply::parse(&ply::to_bytes(&data, PlyEncoding::BinaryBigEndian).unwrap()).unwrap();
     assert!(again.comments.contains(&"scanned by test".to_string()));
     assert_eq!(again.points, data.points);
@@ -305,7 +321,10 @@ fn truncated_binary_body_is_a_typed_error() {
     let err = ply::parse(&m).unwrap_err();
     assert!(matches!(&err, PlyError::Truncated { element, index: 11, count: 12, .. } if element == "face"), "{err:?}");
     // Header without end_header.
-    assert!(matches!(ply::parse(b"ply\nformat ascii 1.0\nelement vertex 3\n"), Err(PlyError::HeaderNotTerminated { .. })));
+    assert!(matches!(
+        ply::parse(b"ply\nformat ascii 1.0\nelement vertex 3\n"),
+        Err(PlyError::HeaderNotTerminated { .. })
+    ));
 }
 
 #[test]
@@ -327,7 +346,10 @@ fn header_count_mismatch_is_a_typed_error() {
     let text = b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
 element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
     let err = ply::parse(text).unwrap_err();
-    assert!(matches!(&err, PlyError::AsciiRecord { line: 13, element, index: 3, .. } if element == "vertex"), "{err:?}");
+    assert!(
+        matches!(&err, PlyError::AsciiRecord { line: 13, element, index: 3, .. } if element == "vertex"),
+        "{err:?}"
+    );
     assert!(err.to_string().contains("more values"), "{err}");
 }
 
@@ -371,19 +393,32 @@ fn nan_coordinates_name_the_vertex() {
 fn other_bad_inputs_are_typed_errors() {
     assert_eq!(ply::parse(b""), Err(PlyError::Empty));
     assert_eq!(ply::parse(b"solid cube\nfacet normal 0 0 1\n"), Err(PlyError::BadMagic));
-    assert!(matches!(ply::parse(b"ply\nformat binary_middle_endian 1.0\nend_header\n"), Err(PlyError::UnsupportedFormat { .. })));
+    assert!(matches!(
+        ply::parse(b"ply\nformat binary_middle_endian 1.0\nend_header\n"),
+        Err(PlyError::UnsupportedFormat { .. })
+    ));
     assert!(matches!(ply::parse(b"ply\nformat ascii 2.0\nend_header\n"), Err(PlyError::UnsupportedFormat { .. })));
     assert!(matches!(ply::parse(b"ply\nelement vertex 0\nend_header\n"), Err(PlyError::MissingFormat)));
     let err = ply::parse(b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float128 x\nend_header\n").unwrap_err();
     assert!(matches!(err, PlyError::UnknownType { line: 4, .. }), "{err:?}");
-    let err = ply::parse(b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n1 2\n").unwrap_err();
-    assert!(matches!(&err, PlyError::MissingProperty { element, property, .. } if element == "vertex" && property == "z"), "{err:?}");
-    let err = ply::parse(b"ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n").unwrap_err();
+    let err =
+        ply::parse(b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n1 2\n")
+            .unwrap_err();
+    assert!(
+        matches!(&err, PlyError::MissingProperty { element, property, .. } if element == "vertex" && property == "z"),
+        "{err:?}"
+    );
+    let err =
+        ply::parse(b"ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n")
+            .unwrap_err();
     assert!(matches!(err, PlyError::MissingElement { .. }));
     // Label out of range names the element and record.
     let text = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty int label\nend_header\n0 0 0 1\n1 0 0 14\n0 1 0 15\n";
     let err = ply::parse(text).unwrap_err();
-    assert!(matches!(&err, PlyError::LabelOutOfRange { element, index: 2, value } if element == "vertex" && *value == 15.0), "{err:?}");
+    assert!(
+        matches!(&err, PlyError::LabelOutOfRange { element, index: 2, value } if element == "vertex" && *value == 15.0),
+        "{err:?}"
+    );
     assert!(err.to_string().contains("record 2") && err.to_string().contains("label 15"), "{err}");
     // Same in binary (fast path).
     let mut b = b"ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nproperty uchar label\nend_header\n".to_vec();

@@ -149,7 +149,8 @@ impl ToPyErr for VolumeError {
         let at =
             |element: &str, index: usize| vec![("element", Field::Str(element.into())), ("index", Field::Int(index))];
         let fields = match self {
-            VolumeError::IndexOutOfRange { face, .. } | VolumeError::DegenerateFace { face, .. } => at("face", *face),
+            VolumeError::Mesh(bsv_core::MeshInvariant::IndexOutOfRange { face, .. })
+            | VolumeError::DegenerateFace { face, .. } => at("face", *face),
             VolumeError::NonFiniteVertex { vertex, .. } => at("vertex", *vertex),
             VolumeError::UnknownLabel { what, index, .. } => at(what, *index),
             VolumeError::LabelCountMismatch { what, .. } => vec![("element", Field::Str((*what).into()))],
@@ -186,20 +187,21 @@ fn register_class(e: &RegisterError) -> (&'static str, Vec<(&'static str, Field)
         RegisterError::Input(I::NonFinitePoint { index, .. } | I::NonFiniteTemplateVertex { index, .. }) => {
             ("RegistrationInputError", vec![("index", Field::Int(*index))])
         }
-        RegisterError::Input(I::BadTriangleIndex { triangle, .. } | I::DegenerateTemplate { triangle, .. }) => {
-            ("RegistrationInputError", vec![("index", Field::Int(*triangle))])
-        }
+        RegisterError::Input(
+            I::BadTriangleIndex(bsv_core::MeshInvariant::IndexOutOfRange { face: triangle, .. })
+            | I::DegenerateTemplate { triangle, .. },
+        ) => ("RegistrationInputError", vec![("index", Field::Int(*triangle))]),
         RegisterError::Input(_) => ("RegistrationInputError", Vec::new()),
     }
 }
 
-impl ToPyErr for bsv_core::scanner::ScanError {
+impl ToPyErr for bsv_capture::scanner::ScanError {
     fn to_py_err(&self) -> PyErr {
         exception("ScanError", message(self), Vec::new())
     }
 }
 
-impl ToPyErr for bsv_core::fuse::FuseError {
+impl ToPyErr for bsv_capture::fuse::FuseError {
     fn to_py_err(&self) -> PyErr {
         exception("InputError", message(self), vec![("argument", Field::Str("views".into()))])
     }

@@ -1,11 +1,11 @@
-//! Python binding of cloud building (`bsv_core::fuse::build_cloud`): dicts of numpy images and a
+//! Python binding of cloud building (`bsv_capture::fuse::build_cloud`): dicts of numpy images and a
 //! dict of parameters in, the cloud tuple and the report dict out. Conversion only.
 
 use crate::classes::{from_kwargs, to_py};
 use crate::convert::{colors_to, labels_to, points_to};
 use crate::errors::{input_error, py_err};
-use bsv_core::camera::{Extrinsics, Intrinsics};
-use bsv_core::fuse::{self, DepthImage, DepthView, FuseParams};
+use bsv_capture::camera::{Extrinsics, Intrinsics};
+use bsv_capture::fuse::{self, DepthImage, DepthView, FuseParams};
 use numpy::{PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};

@@ -4,7 +4,8 @@
 #![allow(missing_docs)]
 
 use bsv_core::geometry::face_normals;
-use bsv_core::shapes::{ellipsoid, sample_surface};
+use bsv_capture::sample::sample_surface;
+use bsv_core::shapes::ellipsoid;
 use bsv_core::PointCloud;
 use bsv_register::{register, ControlFlow, IterationLog, RegisterParams};
 use criterion::{criterion_group, criterion_main, Criterion};

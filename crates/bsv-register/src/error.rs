@@ -117,16 +117,9 @@ pub enum InputError {
         /// Triangle count.
         triangles: usize,
     },
-    /// A triangle refers to a vertex that does not exist.
-    #[error("template triangle {triangle} refers to vertex {vertex} but the mesh has {n_vertices} vertices: the mesh file is corrupt")]
-    BadTriangleIndex {
-        /// Triangle index.
-        triangle: usize,
-        /// The out-of-range vertex id.
-        vertex: u32,
-        /// Number of vertices.
-        n_vertices: usize,
-    },
+    /// A template triangle refers to a vertex that does not exist (core's mesh invariant).
+    #[error("template {0}: the mesh file is corrupt; re-export or repair the template")]
+    BadTriangleIndex(#[from] bsv_core::MeshInvariant),
     /// A template vertex has a NaN or infinite coordinate.
     #[error("template vertex {index} is not finite ({point:?}): repair or re-export the template")]
     NonFiniteTemplateVertex {
@@ -187,7 +180,7 @@ impl InputError {
             InputError::EmptyCloud { .. }
             | InputError::NonFinitePoint { .. }
             | InputError::EmptyTemplate { .. }
-            | InputError::BadTriangleIndex { .. }
+            | InputError::BadTriangleIndex(_)
             | InputError::NonFiniteTemplateVertex { .. }
             | InputError::NonManifoldTemplate { .. }
             | InputError::DegenerateTemplate { .. }

@@ -148,11 +148,7 @@ pub(crate) fn check_template(template: &TriMesh) -> Result<Aabb, InputError> {
     if let Some(index) = template.vertices.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
         return Err(InputError::NonFiniteTemplateVertex { index, point: template.vertices[index] });
     }
-    for (t, tri) in template.triangles.iter().enumerate() {
-        if let Some(&v) = tri.iter().find(|&&v| v as usize >= nv) {
-            return Err(InputError::BadTriangleIndex { triangle: t, vertex: v, n_vertices: nv });
-        }
-    }
+    template.check_indices()?;
     if let Some(l) = &template.vertex_labels {
         if l.len() != nv {
             return Err(InputError::LengthMismatch { what: "template vertex labels", got: l.len(), expected: nv });

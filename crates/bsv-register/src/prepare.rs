@@ -107,7 +107,7 @@ fn drop_extremities(cloud: &PointCloud, params: &OutlierParams) -> Result<Option
         }
         Some(labels) if params.drop_extremities && labels.iter().any(is_extremity) => {
             let mut c = cloud.clone();
-            let dropped = bsv_core::clean::drop_segments(&mut c, &bsv_core::EXTREMITIES);
+            let dropped = c.drop_segments(&bsv_core::EXTREMITIES);
             if c.points.is_empty() {
                 return Err(InputError::OnlyExtremities { n: dropped });
             }

@@ -3,7 +3,7 @@
 #![allow(clippy::unwrap_used)]
 mod common;
 use bsv_core::shapes::{cuboid, icosphere};
-use bsv_core::PointCloud;
+use bsv_core::{MeshInvariant, PointCloud};
 use bsv_register::{
     prepare, register, register_in, ArticulationParams, ControlFlow, EnergyParams, InputError, IterationLog,
     LabelSource, NumericError, OutlierParams, ParameterError, RegisterError, RegisterParams, Registrar, ResourceError,
@@ -254,7 +254,7 @@ fn remedies_name_parameters_never_front_ends() {
         InputError::CloudLooksLikeMillimetres { extent_m: 1800.0, limit_m: 5.0 }.into(),
         InputError::CloudTooSmall { extent_m: 0.001, limit_m: 0.05 }.into(),
         InputError::EmptyTemplate { vertices: 0, triangles: 0 }.into(),
-        InputError::BadTriangleIndex { triangle: 0, vertex: 9, n_vertices: 4 }.into(),
+        InputError::BadTriangleIndex(MeshInvariant::IndexOutOfRange { face: 0, index: 9, n_vertices: 4 }).into(),
         InputError::NonFiniteTemplateVertex { index: 0, point: [f64::NAN; 3] }.into(),
         InputError::NonManifoldTemplate { a: 0, b: 1, faces: 1, count: 3 }.into(),
         InputError::DegenerateTemplate { triangle: 0, count: 1 }.into(),

@@ -8,12 +8,23 @@ use bsv_volume::{report, segment_volumes, DEFAULT_DENSITY_KG_M3};
 use std::time::Instant;
 
 /// A capsule limb at `x` (vertical), split at `split` (height) into `lower` and `upper` segments.
-fn limb(m: &mut TriMesh, labels: &mut Vec<u8>, r: f64, len: f64, at: [f64; 3], split: f64, lower: Segment, upper: Segment) {
+#[allow(clippy::too_many_arguments)] // an example's plain helper: a parameter struct would only hide the shape
+fn limb(
+    m: &mut TriMesh,
+    labels: &mut Vec<u8>,
+    r: f64,
+    len: f64,
+    at: [f64; 3],
+    split: f64,
+    lower: Segment,
+    upper: Segment,
+) {
     let mut c = capsule(r, len, 64, 12, 24);
     translate(&mut c, at);
     let off = m.vertices.len() as u32;
     for t in &c.triangles {
-        let p = scale(add(add(c.vertices[t[0] as usize], c.vertices[t[1] as usize]), c.vertices[t[2] as usize]), 1.0 / 3.0);
+        let p =
+            scale(add(add(c.vertices[t[0] as usize], c.vertices[t[1] as usize]), c.vertices[t[2] as usize]), 1.0 / 3.0);
         labels.push(if p[1] < split { lower.id() } else { upper.id() });
     }
     m.vertices.extend(c.vertices);

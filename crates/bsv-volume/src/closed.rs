@@ -61,10 +61,7 @@ pub fn close_holes(mesh: &TriMesh) -> Result<(TriMesh, Vec<Hole>), VolumeError> 
 }
 
 /// Validates, checks manifoldness, closes holes when allowed; returns the closed mesh and its edges.
-pub(crate) fn prepare(
-    mesh: &TriMesh,
-    close: bool,
-) -> Result<(Cow<'_, TriMesh>, Vec<Hole>, EdgeTable), VolumeError> {
+pub(crate) fn prepare(mesh: &TriMesh, close: bool) -> Result<(Cow<'_, TriMesh>, Vec<Hole>, EdgeTable), VolumeError> {
     validate(mesh)?;
     check_labels(mesh)?;
     let table = EdgeTable::build(&mesh.triangles);
@@ -98,7 +95,7 @@ pub(crate) fn prepare(
         }
         if let Some(fl) = &mut out.face_labels {
             let lab = majority(&face_votes);
-            fl.extend(std::iter::repeat(lab).take(n));
+            fl.extend(std::iter::repeat_n(lab, n));
         }
         if let Some(vl) = &mut out.vertex_labels {
             vl.push(majority(&vertex_votes));
@@ -113,8 +110,7 @@ pub(crate) fn prepare(
 /// The `OpenMesh` error of a mesh with boundary edges: loop count and the centroids of the largest loops.
 pub(crate) fn open_error(vertices: &[[f64; 3]], table: &EdgeTable) -> VolumeError {
     let loops = boundary_cycles(&table.boundary);
-    let mut described: Vec<(usize, [f64; 3])> =
-        loops.iter().map(|l| (l.len(), loop_centroid(vertices, l))).collect();
+    let mut described: Vec<(usize, [f64; 3])> = loops.iter().map(|l| (l.len(), loop_centroid(vertices, l))).collect();
     described.sort_by_key(|d| std::cmp::Reverse(d.0));
     VolumeError::OpenMesh {
         loops: loops.len(),
@@ -126,10 +122,9 @@ pub(crate) fn open_error(vertices: &[[f64; 3]], table: &EdgeTable) -> VolumeErro
 /// Checks the lengths and values of the label arrays that are present.
 pub(crate) fn check_labels(mesh: &TriMesh) -> Result<(), VolumeError> {
     let max = bsv_core::SEGMENT_COUNT as u8;
-    for (what, labels, expected) in [
-        ("vertex", &mesh.vertex_labels, mesh.vertices.len()),
-        ("face", &mesh.face_labels, mesh.triangles.len()),
-    ] {
+    for (what, labels, expected) in
+        [("vertex", &mesh.vertex_labels, mesh.vertices.len()), ("face", &mesh.face_labels, mesh.triangles.len())]
+    {
         let Some(l) = labels else { continue };
         if l.len() != expected {
             return Err(VolumeError::LabelCountMismatch { what, got: l.len(), expected });

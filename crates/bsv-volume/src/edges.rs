@@ -2,7 +2,7 @@
 
 use crate::VolumeError;
 use bsv_core::geometry::{add, scale};
-use bsv_core::TriMesh;
+use bsv_core::{MeshInvariant, TriMesh};
 
 /// An edge used by exactly two triangles that run it in opposite directions.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -102,7 +102,7 @@ pub(crate) fn validate(mesh: &TriMesh) -> Result<(), VolumeError> {
     for (face, t) in mesh.triangles.iter().enumerate() {
         for &index in t {
             if index as usize >= n {
-                return Err(VolumeError::IndexOutOfRange { face, index, n_vertices: n });
+                return Err(MeshInvariant::IndexOutOfRange { face, index, n_vertices: n }.into());
             }
         }
         if t[0] == t[1] || t[0] == t[2] {

@@ -1,5 +1,6 @@
 //! The error type of every volume operation (closing, labelling, segment volumes, reports).
 
+use bsv_core::MeshInvariant;
 use thiserror::Error;
 
 /// Why a volume could not be computed. Every message names the offending element and says what to do.
@@ -9,15 +10,8 @@ pub enum VolumeError {
     #[error("the mesh has no triangles: nothing encloses a volume; check that the file holds faces (a point cloud has none)")]
     EmptyMesh,
     /// A triangle refers to a vertex that does not exist.
-    #[error("triangle {face} refers to vertex {index}, but the mesh has {n_vertices} vertices; the file is corrupt or was cut short")]
-    IndexOutOfRange {
-        /// Triangle index.
-        face: usize,
-        /// The bad vertex index.
-        index: u32,
-        /// Number of vertices in the mesh.
-        n_vertices: usize,
-    },
+    #[error("{0}; the file is corrupt or was cut short")]
+    Mesh(#[from] MeshInvariant),
     /// A vertex coordinate is NaN or infinite.
     #[error("vertex {vertex} has a non-finite coordinate {position:?}; remove or repair it before measuring volumes")]
     NonFiniteVertex {
@@ -27,7 +21,9 @@ pub enum VolumeError {
         position: [f64; 3],
     },
     /// A triangle uses the same vertex twice.
-    #[error("triangle {face} uses vertex {vertex} twice (degenerate face); remove degenerate faces (mesh repair) first")]
+    #[error(
+        "triangle {face} uses vertex {vertex} twice (degenerate face); remove degenerate faces (mesh repair) first"
+    )]
     DegenerateFace {
         /// Triangle index.
         face: usize,
@@ -80,7 +76,9 @@ pub enum VolumeError {
         position: [f64; 3],
     },
     /// A label array does not match the element count.
-    #[error("{what} labels have {got} entries but the mesh has {expected} {what}s; relabel the mesh or drop the labels")]
+    #[error(
+        "{what} labels have {got} entries but the mesh has {expected} {what}s; relabel the mesh or drop the labels"
+    )]
     LabelCountMismatch {
         /// "vertex" or "face".
         what: &'static str,

@@ -58,10 +58,7 @@ pub fn asymmetries(v: &SegmentVolumes) -> Vec<(&'static str, f64)> {
         ("asymmetry_arm_pct", agg(Aggregate::ArmL, Aggregate::ArmR)),
         ("asymmetry_leg_pct", agg(Aggregate::LegL, Aggregate::LegR)),
     ];
-    parts
-        .into_iter()
-        .filter_map(|(k, lr)| lr.and_then(|(l, r)| asymmetry_pct(l, r)).map(|a| (k, a)))
-        .collect()
+    parts.into_iter().filter_map(|(k, lr)| lr.and_then(|(l, r)| asymmetry_pct(l, r)).map(|a| (k, a))).collect()
 }
 
 /// Mass (kg) of a volume (m^3) at a density (kg/m^3).

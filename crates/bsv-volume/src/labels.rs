@@ -1,70 +1,15 @@
-//! Segment labels on a mesh: face labels from vertex labels, vertex labels from face labels, and the
-//! merging of small label islands into their surroundings.
+//! Segment labels on a mesh: the merging of small label islands into their surroundings, and (re-
+//! exported from [`bsv_core::labels`], the one rule each) face labels from vertex labels and vertex
+//! labels from face labels.
 //!
 //! Tie rules (deterministic, independent of hash order or threads):
-//! - face from vertices: the label shared by at least two corners; when the three corners all differ,
-//!   the label of the corner with the smallest vertex index;
-//! - vertex from faces: the most common label among the incident faces; ties go to the smallest id;
+//! - face from vertices, vertex from faces: see [`bsv_core::labels`];
 //! - island merging: an island takes the label it shares the most edges with; ties go to the smallest id.
+
+pub use bsv_core::labels::{face_label_from_corners, face_labels_from_vertices, vertex_labels_from_faces};
 
 use bsv_core::geometry::face_cross;
 use bsv_core::TriMesh;
-
-/// Face labels from vertex labels: majority of the three corners (see the module's tie rule).
-/// Triangles with an out-of-range corner get label 0.
-pub fn face_labels_from_vertices(triangles: &[[u32; 3]], vertex_labels: &[u8]) -> Vec<u8> {
-    triangles
-        .iter()
-        .map(|t| {
-            let l = |k: usize| vertex_labels.get(t[k] as usize).copied();
-            let (Some(a), Some(b), Some(c)) = (l(0), l(1), l(2)) else { return 0 };
-            if a == b || a == c {
-                a
-            } else if b == c {
-                b
-            } else {
-                // All different: the corner with the smallest vertex index decides.
-                let k = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
-                [a, b, c][k]
-            }
-        })
-        .collect()
-}
-
-/// Vertex labels from face labels: the most common label of the incident faces (ties: smallest id);
-/// vertices used by no face get 0.
-pub fn vertex_labels_from_faces(n_vertices: usize, triangles: &[[u32; 3]], face_labels: &[u8]) -> Vec<u8> {
-    let mut pairs: Vec<(u32, u8)> = Vec::with_capacity(triangles.len() * 3);
-    for (t, &l) in triangles.iter().zip(face_labels) {
-        for &v in t {
-            if (v as usize) < n_vertices {
-                pairs.push((v, l));
-            }
-        }
-    }
-    pairs.sort_unstable();
-    let mut out = vec![0u8; n_vertices];
-    let mut i = 0;
-    while i < pairs.len() {
-        let v = pairs[i].0;
-        let (mut best, mut best_count) = (0u8, 0usize);
-        while i < pairs.len() && pairs[i].0 == v {
-            let l = pairs[i].1;
-            let mut j = i;
-            while j < pairs.len() && pairs[j] == (v, l) {
-                j += 1;
-            }
-            // Labels come in increasing order, so `>` keeps the smallest id on ties.
-            if j - i > best_count {
-                best = l;
-                best_count = j - i;
-            }
-            i = j;
-        }
-        out[v as usize] = best;
-    }
-    out
-}
 
 /// When a same-label connected patch of faces counts as a small island to merge.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -106,10 +51,12 @@ pub fn merge_small_islands(mesh: &TriMesh, face_labels: &mut [u8], opts: &Island
     }
     let adj = FaceAdjacency::build(&mesh.triangles[..m]);
     let areas: Vec<f64> = (0..m)
-        .map(|t| if mesh.triangles[t].iter().all(|&v| (v as usize) < mesh.vertices.len()) {
-            0.5 * bsv_core::geometry::norm(face_cross(mesh, t))
-        } else {
-            0.0
+        .map(|t| {
+            if mesh.triangles[t].iter().all(|&v| (v as usize) < mesh.vertices.len()) {
+                0.5 * bsv_core::geometry::norm(face_cross(mesh, t))
+            } else {
+                0.0
+            }
         })
         .collect();
     // Each merge joins an island to a neighbour, so the number of patches falls: this terminates.

@@ -16,7 +16,8 @@ pub use closed::{close_holes, closed_volume, mesh_volume, tetra_sum, Hole, MeshV
 pub use error::VolumeError;
 pub use indices::{aggregate, aggregates, asymmetries, asymmetry_pct, mass_kg, ratios, DEFAULT_DENSITY_KG_M3};
 pub use labels::{
-    face_labels_from_vertices, merge_small_islands, vertex_labels_from_faces, IslandOptions, IslandReport,
+    face_label_from_corners, face_labels_from_vertices, merge_small_islands, vertex_labels_from_faces, IslandOptions,
+    IslandReport,
 };
 pub use report::{report, report_with, NamedValues, Units, VolumeReport};
 pub use segments::{

@@ -163,12 +163,17 @@ pub fn segment_volumes_with(mesh: &TriMesh, opts: &SegmentOptions) -> Result<Seg
         }
     }
     if source == LabelSource::None {
-        notes.push("the mesh has no segment labels (neither face nor vertex labels): only the whole volume is given".into());
+        notes.push(
+            "the mesh has no segment labels (neither face nor vertex labels): only the whole volume is given".into(),
+        );
     } else if n_labelled == 0 {
         notes.push("every face is unlabelled (label 0): only the whole volume is given".into());
     }
     if inverted {
-        notes.push("the triangles face inward (negative enclosed volume): every volume was negated; orient the mesh outward".into());
+        notes.push(
+            "the triangles face inward (negative enclosed volume): every volume was negated; orient the mesh outward"
+                .into(),
+        );
     }
     if !holes.is_empty() {
         notes.push(format!("{} hole(s) were closed by centroid fans before measuring", holes.len()));
@@ -314,8 +319,7 @@ fn label_volumes_at(
             spokes.push((p, v, d));
         }
     }
-    let apex: Vec<[f64; 3]> =
-        apex_sum.iter().zip(&apex_n).map(|(s, &c)| scale(*s, 1.0 / c.max(1) as f64)).collect();
+    let apex: Vec<[f64; 3]> = apex_sum.iter().zip(&apex_n).map(|(s, &c)| scale(*s, 1.0 / c.max(1) as f64)).collect();
     let pair: Vec<(u8, u8)> = {
         let mut pr = vec![(0u8, 0u8); np];
         for (k, e) in iface.iter().enumerate() {
@@ -364,17 +368,12 @@ fn label_volumes_at(
     caps.open_pieces = open.iter().filter(|&&o| o).count();
     caps.closed_loops = np - caps.open_pieces;
     caps.junctions = junctions.len();
-    caps.clusters = (0..np + junctions.len())
-        .filter(|&x| (x >= np || open[x]) && cuf.find(x) == x)
-        .count();
+    caps.clusters = (0..np + junctions.len()).filter(|&x| (x >= np || open[x]) && cuf.find(x) == x).count();
     finish(acc, count, whole, caps)
 }
 
 fn finish(acc: [f64; 256], count: [usize; 256], whole: f64, caps: CapStats) -> LabelVolumes {
-    let by_label = (0..256usize)
-        .filter(|&l| count[l] > 0)
-        .map(|l| (l as u8, acc[l] / 6.0, count[l]))
-        .collect();
+    let by_label = (0..256usize).filter(|&l| count[l] > 0).map(|l| (l as u8, acc[l] / 6.0, count[l])).collect();
     LabelVolumes { whole_m3: whole / 6.0, by_label, caps }
 }
 

@@ -3,7 +3,7 @@
 
 use bsv_core::geometry::{cross, dot, norm, sub};
 use bsv_core::shapes::{cuboid, icosphere, translate};
-use bsv_core::TriMesh;
+use bsv_core::{MeshInvariant, TriMesh};
 use bsv_volume::{close_holes, closed_volume, mesh_volume, segment_volumes, VolumeError};
 use std::f64::consts::PI;
 
@@ -159,7 +159,10 @@ fn bad_input_errors() {
     assert!(matches!(closed_volume(&m), Err(VolumeError::NonFiniteVertex { vertex: 3, .. })));
     let mut m = cuboid([1.0, 1.0, 1.0]);
     m.triangles[5][2] = 99;
-    assert_eq!(closed_volume(&m), Err(VolumeError::IndexOutOfRange { face: 5, index: 99, n_vertices: 8 }));
+    assert_eq!(
+        closed_volume(&m),
+        Err(VolumeError::Mesh(MeshInvariant::IndexOutOfRange { face: 5, index: 99, n_vertices: 8 }))
+    );
     let mut m = cuboid([1.0, 1.0, 1.0]);
     m.triangles[4] = [0, 1, 1];
     assert_eq!(closed_volume(&m), Err(VolumeError::DegenerateFace { face: 4, vertex: 1 }));

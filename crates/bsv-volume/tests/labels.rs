@@ -35,7 +35,7 @@ fn vertex_labels_majority_and_tie_rule() {
     assert_eq!(vl[2], 5); // faces 0, 1 -> 5
     assert_eq!(vl[3], 2); // faces 1 (5), 2 (2) -> 2
     assert_eq!(vl[5], 0); // unused
-    // Round trip on a cleanly labelled box keeps the face labels.
+                          // Round trip on a cleanly labelled box keeps the face labels.
     let m = subdivided_cuboid([1.0, 1.0, 1.0], 6);
     let fl: Vec<u8> = (0..m.n_triangles()).map(|t| if centroid(&m, t)[1] < 0.0 { 2 } else { 9 }).collect();
     let vl = vertex_labels_from_faces(m.n_vertices(), &m.triangles, &fl);
@@ -55,7 +55,13 @@ fn speckled_sphere() -> (TriMesh, Vec<u8>, Vec<u8>) {
     let clean: Vec<u8> = (0..m.n_triangles()).map(|t| if centroid(&m, t)[1] < 0.0 { 9 } else { 2 }).collect();
     let mut noisy = clean.clone();
     for t in (0..m.n_triangles()).step_by(97) {
-        noisy[t] = if t % 2 == 0 { 5 } else if noisy[t] == 2 { 9 } else { 2 };
+        noisy[t] = if t % 2 == 0 {
+            5
+        } else if noisy[t] == 2 {
+            9
+        } else {
+            2
+        };
     }
     (m, clean, noisy)
 }
@@ -106,7 +112,10 @@ fn segment_volumes_can_merge_islands_first() {
     m.face_labels = Some(noisy);
     let raw = segment_volumes_with(&m, &SegmentOptions::default()).unwrap();
     assert!(raw.get(Segment::ForearmL).is_some());
-    let opts = SegmentOptions { close_holes: false, islands: Some(IslandOptions { keep_largest: false, ..Default::default() }) };
+    let opts = SegmentOptions {
+        close_holes: false,
+        islands: Some(IslandOptions { keep_largest: false, ..Default::default() }),
+    };
     let merged = segment_volumes_with(&m, &opts).unwrap();
     assert_eq!(merged.get(Segment::ForearmL), None);
     assert_eq!(merged.segments, reference.segments);

@@ -149,7 +149,10 @@ fn json_has_the_keys_of_the_design_and_round_trips() {
             && a.0.iter().zip(&b.0).all(|(x, y)| x.0 == y.0 && (x.1 - y.1).abs() <= 1e-14 * x.1.abs().max(1.0))
     };
     assert!(close(&back.volumes_l, &r.volumes_l) && close(&back.ratios, &r.ratios));
-    assert_eq!((back.units.clone(), back.notes.clone(), back.registration.clone()), (r.units.clone(), r.notes.clone(), None));
+    assert_eq!(
+        (back.units.clone(), back.notes.clone(), back.registration.clone()),
+        (r.units.clone(), r.notes.clone(), None)
+    );
     assert_eq!((back.density_kg_m3, back.mass_trunk_limbs_kg), (r.density_kg_m3, r.mass_trunk_limbs_kg));
     let mut with_reg = r.clone();
     with_reg.registration = Some(serde_json::json!({"iterations": 20, "seconds": 1.5, "rms_mesh_to_points_mm": 2.1}));

@@ -13,8 +13,9 @@ use std::path::Path;
 
 use crate::{PointCloud, TriMesh};
 
-pub use error::{AttributeError, ReadError, WriteError};
+pub use error::{ReadError, WriteError};
 pub use ply::PlyEncoding;
+pub use validate::AttributeError;
 
 /// File formats known by extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -56,32 +57,24 @@ pub fn read_mesh(path: &Path) -> Result<TriMesh, ReadError> {
 /// Reads a triangle mesh like [`read_mesh`] and also returns the OBJ report (unknown group names and
 /// the like; empty for PLY files).
 pub fn read_mesh_with_report(path: &Path) -> Result<(TriMesh, obj::ObjReport), ReadError> {
-    let format = Format::from_path(path).ok_or_else(|| ReadError::UnsupportedExtension {
-        path: path.to_path_buf(),
-        extension: extension_of(path),
-    })?;
+    let format = Format::from_path(path)
+        .ok_or_else(|| ReadError::UnsupportedExtension { path: path.to_path_buf(), extension: extension_of(path) })?;
     let bytes = read_bytes(path)?;
     match format {
         Format::Ply => ply::parse_mesh(&bytes)
             .map(|m| (m, obj::ObjReport::default()))
             .map_err(|source| ReadError::Ply { path: path.to_path_buf(), source }),
-        Format::Obj => {
-            obj::parse(&bytes).map_err(|source| ReadError::Obj { path: path.to_path_buf(), source })
-        }
+        Format::Obj => obj::parse(&bytes).map_err(|source| ReadError::Obj { path: path.to_path_buf(), source }),
     }
 }
 
 /// Reads a point cloud: a PLY's vertex element (a mesh PLY's vertices too), or an OBJ's `v` lines.
 pub fn read_point_cloud(path: &Path) -> Result<PointCloud, ReadError> {
-    let format = Format::from_path(path).ok_or_else(|| ReadError::UnsupportedExtension {
-        path: path.to_path_buf(),
-        extension: extension_of(path),
-    })?;
+    let format = Format::from_path(path)
+        .ok_or_else(|| ReadError::UnsupportedExtension { path: path.to_path_buf(), extension: extension_of(path) })?;
     let bytes = read_bytes(path)?;
     match format {
-        Format::Ply => {
-            ply::parse_cloud(&bytes).map_err(|source| ReadError::Ply { path: path.to_path_buf(), source })
-        }
+        Format::Ply => ply::parse_cloud(&bytes).map_err(|source| ReadError::Ply { path: path.to_path_buf(), source }),
         Format::Obj => obj::parse_points(&bytes)
             .map(PointCloud::new)
             .map_err(|source| ReadError::Obj { path: path.to_path_buf(), source }),
@@ -105,10 +98,8 @@ fn write_ply_file(
 }
 
 fn format_for_write(path: &Path) -> Result<Format, WriteError> {
-    Format::from_path(path).ok_or_else(|| WriteError::UnsupportedExtension {
-        path: path.to_path_buf(),
-        extension: extension_of(path),
-    })
+    Format::from_path(path)
+        .ok_or_else(|| WriteError::UnsupportedExtension { path: path.to_path_buf(), extension: extension_of(path) })
 }
 
 /// Writes a mesh by extension: `.ply` as binary little-endian PLY, `.obj` as OBJ with segment groups.

@@ -7,13 +7,14 @@
 //! listed in [`ObjReport::unknown_groups`]. `vt`, `vn`, `s`, `usemtl`, `mtllib` and comments are ignored;
 //! other statements (`l`, `p`, curves) are counted in [`ObjReport::ignored_statements`].
 //! Face labels are present when at least one group name is a segment name. When every face is labelled
-//! (no 0), vertex labels are derived too: each vertex takes the label most of its faces carry, ties going
-//! to the smaller id, unreferenced vertices 0.
+//! (no 0), vertex labels are derived too ([`crate::labels::vertex_labels_from_faces`]: each vertex takes
+//! the label most of its faces carry, ties going to the smaller id, unreferenced vertices 0).
 //!
 //! Writer: `v` lines with the shortest decimal that parses back to the same f64 (exact round trip),
 //! `f` lines in face order, and a `g <segment name>` line whenever the face label changes. A mesh with
-//! vertex labels but no face labels gets face labels by majority of its three corners (ties to the
-//! smaller id), since OBJ cannot store vertex labels.
+//! vertex labels but no face labels gets face labels by majority of its three corners
+//! ([`crate::labels::face_labels_from_vertices`]: when all three differ, the corner with the smallest
+//! vertex index), since OBJ cannot store vertex labels.
 
 use std::borrow::Cow;
 use std::fmt::Write as _;
@@ -21,9 +22,9 @@ use std::fmt::Write as _;
 use serde::Serialize;
 use thiserror::Error;
 
-use super::error::AttributeError;
-use super::validate;
-use crate::segment::{Segment, SEGMENT_COUNT};
+use super::validate::{self, AttributeError};
+use crate::labels::{face_labels_from_vertices, vertex_labels_from_faces};
+use crate::segment::Segment;
 use crate::TriMesh;
 
 /// What the reader noticed besides the mesh itself.
@@ -57,7 +58,9 @@ pub enum ObjError {
         message: String,
     },
     /// A NaN or infinite coordinate.
-    #[error("line {line}: vertex {vertex} has a non-finite coordinate ({value}); remove NaN/inf vertices and export again")]
+    #[error(
+        "line {line}: vertex {vertex} has a non-finite coordinate ({value}); remove NaN/inf vertices and export again"
+    )]
     NonFinite {
         /// 1-based line number.
         line: usize,
@@ -106,7 +109,11 @@ fn lines(bytes: &[u8]) -> impl Iterator<Item = (usize, Cow<'_, str>)> {
     })
 }
 
-fn parse_vertex(line_no: usize, vertex: usize, mut words: std::str::SplitAsciiWhitespace<'_>) -> Result<[f64; 3], ObjError> {
+fn parse_vertex(
+    line_no: usize,
+    vertex: usize,
+    mut words: std::str::SplitAsciiWhitespace<'_>,
+) -> Result<[f64; 3], ObjError> {
     let mut p = [0.0; 3];
     for (k, c) in p.iter_mut().enumerate() {
         let w = words.next().ok_or_else(|| ObjError::BadVertex {
@@ -178,14 +185,22 @@ pub fn parse(bytes: &[u8]) -> Result<(TriMesh, ObjReport), ObjError> {
                         }
                         i if i < 0 => {
                             if n + i < 0 {
-                                return Err(ObjError::IndexOutOfRange { line: line_no, index: i, vertex_count: vertices.len() });
+                                return Err(ObjError::IndexOutOfRange {
+                                    line: line_no,
+                                    index: i,
+                                    vertex_count: vertices.len(),
+                                });
                             }
                             n + i
                         }
                         i => i - 1,
                     };
                     let Ok(r) = u32::try_from(resolved) else {
-                        return Err(ObjError::IndexOutOfRange { line: line_no, index: i, vertex_count: vertices.len() });
+                        return Err(ObjError::IndexOutOfRange {
+                            line: line_no,
+                            index: i,
+                            vertex_count: vertices.len(),
+                        });
                     };
                     if resolved >= n {
                         forward.push((line_no, i, r));
@@ -232,45 +247,12 @@ pub fn parse(bytes: &[u8]) -> Result<(TriMesh, ObjReport), ObjError> {
     let mut mesh = TriMesh::new(vertices, triangles);
     if any_segment_group {
         if !labels.is_empty() && labels.iter().all(|&l| l != 0) {
-            mesh.vertex_labels = Some(vertex_labels_by_majority(mesh.n_vertices(), &mesh.triangles, &labels));
+            mesh.vertex_labels = Some(vertex_labels_from_faces(mesh.n_vertices(), &mesh.triangles, &labels));
             report.vertex_labels_derived = true;
         }
         mesh.face_labels = Some(labels);
     }
     Ok((mesh, report))
-}
-
-/// Each vertex takes the label most of its faces carry (ties to the smaller id; unreferenced: 0).
-fn vertex_labels_by_majority(n_vertices: usize, triangles: &[[u32; 3]], face_labels: &[u8]) -> Vec<u8> {
-    let mut votes = vec![[0u32; SEGMENT_COUNT]; n_vertices];
-    for (t, &l) in triangles.iter().zip(face_labels) {
-        for &v in t {
-            votes[v as usize][usize::from(l).min(SEGMENT_COUNT - 1)] += 1;
-        }
-    }
-    votes
-        .iter()
-        .map(|c| {
-            let mut best = 0usize;
-            for (id, &n) in c.iter().enumerate() {
-                if n > c[best] {
-                    best = id;
-                }
-            }
-            best as u8
-        })
-        .collect()
-}
-
-/// Label of a face from its corners' labels: the majority, ties to the smaller id.
-fn face_label_from_corners(l: [u8; 3]) -> u8 {
-    if l[0] == l[1] || l[0] == l[2] {
-        l[0]
-    } else if l[1] == l[2] {
-        l[1]
-    } else {
-        l[0].min(l[1]).min(l[2])
-    }
 }
 
 /// Encodes a mesh as OBJ text (see the module docs for how labels become groups).
@@ -289,14 +271,12 @@ pub fn to_string(mesh: &TriMesh) -> Result<String, AttributeError> {
         // `{:?}` is the shortest decimal that parses back to the same f64.
         let _ = writeln!(s, "v {:?} {:?} {:?}", p[0], p[1], p[2]);
     }
-    let label_of = |t: usize| -> Option<u8> {
-        if let Some(fl) = &mesh.face_labels {
-            return Some(fl[t]);
-        }
-        let vl = mesh.vertex_labels.as_ref()?;
-        let tri = mesh.triangles[t];
-        Some(face_label_from_corners(tri.map(|v| vl[v as usize])))
+    let derived = match (&mesh.face_labels, &mesh.vertex_labels) {
+        (None, Some(vl)) => Some(face_labels_from_vertices(&mesh.triangles, vl)),
+        _ => None,
     };
+    let face_labels = mesh.face_labels.as_ref().or(derived.as_ref());
+    let label_of = |t: usize| -> Option<u8> { face_labels.map(|fl| fl[t]) };
     let mut group: Option<u8> = None;
     for (t, f) in mesh.triangles.iter().enumerate() {
         if let Some(l) = label_of(t) {

@@ -1,7 +1,46 @@
-//! Consistency checks run by the writers before encoding (lengths, labels, indices, finiteness).
+//! Consistency checks run by the writers before encoding (lengths, labels, indices, finiteness) and
+//! the error they return.
 
-use super::error::AttributeError;
+use thiserror::Error;
+
+use crate::mesh::{check_indices, MeshInvariant};
 use crate::segment::SEGMENT_COUNT;
+
+/// An inconsistency in in-memory mesh or cloud data found before encoding it.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum AttributeError {
+    /// An attribute array does not have one entry per vertex/face.
+    #[error("{what} has {len} entries but there are {expected}; make it one entry per element (or drop it)")]
+    LengthMismatch {
+        /// Which array (e.g. "vertex_labels").
+        what: &'static str,
+        /// Its length.
+        len: usize,
+        /// The number of vertices, points or faces.
+        expected: usize,
+    },
+    /// A segment label above 14.
+    #[error("{what}[{index}] = {value} is not a segment id (0..=14); fix the labelling before writing")]
+    LabelOutOfRange {
+        /// Which array.
+        what: &'static str,
+        /// Element index.
+        index: usize,
+        /// The label.
+        value: u8,
+    },
+    /// A triangle refers to a vertex that does not exist.
+    #[error("{0}; repair the mesh before writing")]
+    Mesh(#[from] MeshInvariant),
+    /// A coordinate is NaN or infinite.
+    #[error("vertex {index} has a non-finite coordinate {value}; remove or fix it before writing")]
+    NonFinite {
+        /// Vertex / point index.
+        index: usize,
+        /// The offending value.
+        value: f64,
+    },
+}
 
 /// Checks that an optional attribute array has `expected` entries.
 pub(crate) fn length<T>(what: &'static str, v: Option<&[T]>, expected: usize) -> Result<(), AttributeError> {
@@ -36,10 +75,5 @@ pub(crate) fn finite(points: &[[f64; 3]]) -> Result<(), AttributeError> {
 
 /// Checks that every triangle index is below `n_vertices`.
 pub(crate) fn indices(triangles: &[[u32; 3]], n_vertices: usize) -> Result<(), AttributeError> {
-    for (face, t) in triangles.iter().enumerate() {
-        if let Some(&index) = t.iter().find(|&&i| i as usize >= n_vertices) {
-            return Err(AttributeError::IndexOutOfRange { face, index, vertex_count: n_vertices });
-        }
-    }
-    Ok(())
+    Ok(check_indices(triangles, n_vertices)?)
 }

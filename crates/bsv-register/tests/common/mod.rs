@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use bsv_core::geometry::{cross, face_normals, normalize, signed_volume, sub};
-use bsv_core::shapes::sample_surface;
+use bsv_capture::sample::sample_surface;
 use bsv_core::{PointCloud, TriMesh};
 use bsv_register::{register, ControlFlow, IterationLog, RegisterParams, Registration};
 

@@ -371,7 +371,13 @@ impl BlockIssues {
 
 /// Reads the vertex element from a fixed-stride binary body slice in one fused pass over blocks
 /// (parallel for large clouds), with readers specialised per type and endianness.
-fn vertices_fixed(data: &[u8], stride: usize, el: &Element, plan: &VertexPlan, big: bool) -> Result<VertexCols, PlyError> {
+fn vertices_fixed(
+    data: &[u8],
+    stride: usize,
+    el: &Element,
+    plan: &VertexPlan,
+    big: bool,
+) -> Result<VertexCols, PlyError> {
     let mut offsets = [0usize; N_SLOTS];
     let mut off = 0;
     for (p, prop) in el.props.iter().enumerate() {
@@ -393,8 +399,11 @@ fn vertices_fixed(data: &[u8], stride: usize, el: &Element, plan: &VertexPlan, b
         let o3 = |base: usize| [offsets[base], offsets[base + 1], offsets[base + 2]];
         let t3 = |base: usize| [t[base], t[base + 1], t[base + 2]];
         triple_column(b.data, stride, o3(X), t3(X), big, b.points);
-        issues.non_finite =
-            b.points.iter().position(|p| !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite())).map(|i| b.first + i);
+        issues.non_finite = b
+            .points
+            .iter()
+            .position(|p| !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()))
+            .map(|i| b.first + i);
         if let Some(nrm) = b.normals {
             triple_column(b.data, stride, o3(NX), t3(NX), big, nrm);
         }
@@ -493,7 +502,12 @@ fn capacity(count: usize, remaining: usize, min_record: usize) -> usize {
 }
 
 /// Reads the vertex element record by record (ascii, or binary with list properties).
-fn vertices_stream<'a, S: Source<'a>>(src: &mut S, el: &'a Element, plan: &VertexPlan, remaining: usize) -> Result<VertexCols, PlyError> {
+fn vertices_stream<'a, S: Source<'a>>(
+    src: &mut S,
+    el: &'a Element,
+    plan: &VertexPlan,
+    remaining: usize,
+) -> Result<VertexCols, PlyError> {
     let cap = capacity(el.count, remaining, el.min_size());
     let mut cols = VertexCols {
         points: Vec::with_capacity(cap),
@@ -521,7 +535,11 @@ fn vertices_stream<'a, S: Source<'a>>(src: &mut S, el: &'a Element, plan: &Verte
         }
         if let Some(l) = cols.labels.as_mut() {
             let value = v[LABEL];
-            l.push(to_label(value).ok_or_else(|| PlyError::LabelOutOfRange { element: el.name.clone(), index, value })?);
+            l.push(to_label(value).ok_or_else(|| PlyError::LabelOutOfRange {
+                element: el.name.clone(),
+                index,
+                value,
+            })?);
         }
     }
     Ok(cols)
@@ -546,7 +564,8 @@ struct TriLayout {
 
 fn tri_layout(el: &Element, list: usize) -> Option<TriLayout> {
     let mut off = 0;
-    let mut layout = TriLayout { stride: 0, count_off: 0, count_ty: Scalar::U8, idx_off: 0, idx_ty: Scalar::U8, label: None };
+    let mut layout =
+        TriLayout { stride: 0, count_off: 0, count_ty: Scalar::U8, idx_off: 0, idx_ty: Scalar::U8, label: None };
     for (p, prop) in el.props.iter().enumerate() {
         match prop.kind {
             PropKind::List { count, item } if p == list => {
@@ -576,7 +595,11 @@ fn fill_tris<R: Rd>(data: &[u8], l: &TriLayout, big: bool, n_vertices: usize, ou
     let nv = n_vertices as f64;
     let valid = |v: f64| v < nv && f64::from(v as u32) == v;
     for (r, t) in data.chunks_exact(l.stride).zip(out) {
-        let n = if l.count_ty == Scalar::U8 { f64::from(r[l.count_off]) } else { decode(&r[l.count_off..], l.count_ty, big) };
+        let n = if l.count_ty == Scalar::U8 {
+            f64::from(r[l.count_off])
+        } else {
+            decode(&r[l.count_off..], l.count_ty, big)
+        };
         let o = l.idx_off;
         let (a, b, c) = (R::rd(&r[o..]), R::rd(&r[o + isz..]), R::rd(&r[o + 2 * isz..]));
         if n != 3.0 || !(valid(a) && valid(b) && valid(c)) {
@@ -632,7 +655,12 @@ fn face_list_prop(el: &Element) -> Result<usize, PlyError> {
         })
 }
 
-fn faces_stream<'a, S: Source<'a>>(src: &mut S, el: &'a Element, n_vertices: usize, remaining: usize) -> Result<FaceCols, PlyError> {
+fn faces_stream<'a, S: Source<'a>>(
+    src: &mut S,
+    el: &'a Element,
+    n_vertices: usize,
+    remaining: usize,
+) -> Result<FaceCols, PlyError> {
     let list = face_list_prop(el)?;
     let label = scalar_prop(el, "label").map(|(i, _)| i);
     let cap = capacity(el.count, remaining, el.min_size());
@@ -666,8 +694,11 @@ fn faces_stream<'a, S: Source<'a>>(src: &mut S, el: &'a Element, n_vertices: usi
                 }
                 PropKind::Scalar(s) if Some(p) == label => {
                     let value = src.value(s)?;
-                    face_label = to_label(value)
-                        .ok_or_else(|| PlyError::LabelOutOfRange { element: el.name.clone(), index: face, value })?;
+                    face_label = to_label(value).ok_or_else(|| PlyError::LabelOutOfRange {
+                        element: el.name.clone(),
+                        index: face,
+                        value,
+                    })?;
                 }
                 kind => skip_prop(src, kind, el, face)?,
             }
@@ -721,15 +752,8 @@ pub(super) fn read_body(bytes: &[u8], header: &Header) -> Result<PlyData, PlyErr
     let mut fcols = None;
     match header.encoding {
         PlyEncoding::Ascii => {
-            let mut src = Ascii {
-                text: body,
-                pos: 0,
-                line_no: header.lines,
-                line: &[],
-                cursor: 0,
-                element: "",
-                index: 0,
-            };
+            let mut src =
+                Ascii { text: body, pos: 0, line_no: header.lines, line: &[], cursor: 0, element: "", index: 0 };
             for el in &header.elements {
                 let remaining = body.len() - src.pos.min(body.len());
                 match el.name.as_str() {
@@ -748,7 +772,10 @@ pub(super) fn read_body(bytes: &[u8], header: &Header) -> Result<PlyData, PlyErr
                 extra_lines += 1;
             }
             if extra_lines > 0 {
-                return Err(extra_data(header, format!("{extra_lines} extra non-empty line(s) from line {first_extra}")));
+                return Err(extra_data(
+                    header,
+                    format!("{extra_lines} extra non-empty line(s) from line {first_extra}"),
+                ));
             }
         }
         PlyEncoding::BinaryLittleEndian | PlyEncoding::BinaryBigEndian => {

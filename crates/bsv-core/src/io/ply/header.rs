@@ -159,7 +159,11 @@ pub fn parse_header(bytes: &[u8]) -> Result<Header, PlyError> {
     let mut comments = Vec::new();
     loop {
         if pos >= bytes.len() {
-            return Err(if line_no == 0 { PlyError::BadMagic } else { PlyError::HeaderNotTerminated { lines: line_no } });
+            return Err(if line_no == 0 {
+                PlyError::BadMagic
+            } else {
+                PlyError::HeaderNotTerminated { lines: line_no }
+            });
         }
         let rest = &bytes[pos..];
         let (raw, next) = match rest.iter().position(|&b| b == b'\n') {
@@ -205,9 +209,8 @@ pub fn parse_header(bytes: &[u8]) -> Result<Header, PlyError> {
                 let (Some(name), Some(count)) = (words.next(), words.next()) else {
                     return Err(syntax("`element` needs a name and a count".into()));
                 };
-                let count: usize = count
-                    .parse()
-                    .map_err(|_| syntax(format!("element `{name}` has an invalid count {count:?}")))?;
+                let count: usize =
+                    count.parse().map_err(|_| syntax(format!("element `{name}` has an invalid count {count:?}")))?;
                 if elements.iter().any(|e| e.name == name) {
                     return Err(syntax(format!("element `{name}` is declared twice")));
                 }
@@ -219,7 +222,8 @@ pub fn parse_header(bytes: &[u8]) -> Result<Header, PlyError> {
                 };
                 let ty = words.next().unwrap_or("");
                 let scalar = |name: &str| {
-                    Scalar::from_name(name).ok_or_else(|| PlyError::UnknownType { line: line_no, name: name.to_string() })
+                    Scalar::from_name(name)
+                        .ok_or_else(|| PlyError::UnknownType { line: line_no, name: name.to_string() })
                 };
                 let (kind, name) = if ty == "list" {
                     let (Some(c), Some(i), Some(n)) = (words.next(), words.next(), words.next()) else {

@@ -16,8 +16,8 @@ use thiserror::Error;
 
 use crate::{PointCloud, TriMesh};
 
-pub use write::{cloud_to_bytes, mesh_to_bytes, to_bytes};
 pub(crate) use write::{check_cloud, check_mesh, write_cloud_to, write_mesh_to};
+pub use write::{cloud_to_bytes, mesh_to_bytes, to_bytes};
 
 /// The body encoding of a PLY file (read from headers, chosen when writing).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -68,7 +68,12 @@ impl PlyData {
     /// face element.
     pub fn into_mesh(self) -> Result<TriMesh, PlyError> {
         let triangles = self.triangles.ok_or(PlyError::NoFaces { vertices: self.points.len() })?;
-        Ok(TriMesh { vertices: self.points, triangles, vertex_labels: self.vertex_labels, face_labels: self.face_labels })
+        Ok(TriMesh {
+            vertices: self.points,
+            triangles,
+            vertex_labels: self.vertex_labels,
+            face_labels: self.face_labels,
+        })
     }
 
     /// The vertices with their normals, colours and labels as a point cloud (faces are dropped).

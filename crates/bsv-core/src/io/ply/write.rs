@@ -9,8 +9,8 @@ use std::io::Write;
 use rayon::prelude::*;
 
 use super::{PlyData, PlyEncoding};
-use crate::io::error::AttributeError;
-use crate::io::validate;
+use crate::io::validate::{self, AttributeError};
+use crate::mesh::MeshInvariant;
 use crate::segment::PALETTE;
 use crate::{PointCloud, TriMesh};
 
@@ -185,7 +185,9 @@ impl View<'_> {
         self.validate()?;
         if let Some(t) = self.triangles {
             if self.points.len() > i32::MAX as usize && !t.is_empty() {
-                return Err(AttributeError::IndexOutOfRange { face: 0, index: u32::MAX, vertex_count: self.points.len() });
+                return Err(
+                    MeshInvariant::IndexOutOfRange { face: 0, index: u32::MAX, n_vertices: self.points.len() }.into()
+                );
             }
         }
         Ok(())
@@ -206,7 +208,6 @@ impl View<'_> {
         let _ = self.write_to(encoding, &mut out);
         Ok(out)
     }
-
 }
 
 /// Records per encoded block.

@@ -10,8 +10,8 @@
 
 use crate::camera::{CameraError, Extrinsics, Intrinsics};
 use crate::clean::{statistical_outliers, CleanError, SorParams};
-use crate::geometry::{cross, dot, norm, scale, sub};
-use crate::{PointCloud, Segment, EXTREMITIES, SEGMENT_COUNT};
+use bsv_core::geometry::{cross, dot, norm, scale, sub};
+use bsv_core::{PointCloud, Segment, EXTREMITIES, SEGMENT_COUNT};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -241,24 +241,48 @@ impl FuseParams {
     /// Checks every parameter's range.
     pub fn validate(&self) -> Result<(), FuseError> {
         if self.sor && self.sor_k == 0 {
-            return Err(FuseError::BadParam { param: "sor_k", value: 0.0, hint: "use k >= 1 (the paper uses 600) or sor = false" });
+            return Err(FuseError::BadParam {
+                param: "sor_k",
+                value: 0.0,
+                hint: "use k >= 1 (the paper uses 600) or sor = false",
+            });
         }
         if !self.sor_std_ratio.is_finite() {
-            return Err(FuseError::BadParam { param: "sor_std_ratio", value: self.sor_std_ratio, hint: "use a finite number (the paper uses 0.05)" });
+            return Err(FuseError::BadParam {
+                param: "sor_std_ratio",
+                value: self.sor_std_ratio,
+                hint: "use a finite number (the paper uses 0.05)",
+            });
         }
         if !(self.min_depth.is_finite() && self.min_depth >= 0.0) {
-            return Err(FuseError::BadParam { param: "min_depth", value: self.min_depth, hint: "use a finite depth >= 0 in metres" });
+            return Err(FuseError::BadParam {
+                param: "min_depth",
+                value: self.min_depth,
+                hint: "use a finite depth >= 0 in metres",
+            });
         }
         if let Some(m) = self.max_depth {
             if !(m.is_finite() && m > self.min_depth) {
-                return Err(FuseError::BadParam { param: "max_depth", value: m, hint: "use a finite depth in metres above min_depth, or null" });
+                return Err(FuseError::BadParam {
+                    param: "max_depth",
+                    value: m,
+                    hint: "use a finite depth in metres above min_depth, or null",
+                });
             }
         }
         if !(self.normal_max_step.is_finite() && self.normal_max_step > 0.0) {
-            return Err(FuseError::BadParam { param: "normal_max_step", value: self.normal_max_step, hint: "use a positive length in metres (e.g. 0.03)" });
+            return Err(FuseError::BadParam {
+                param: "normal_max_step",
+                value: self.normal_max_step,
+                hint: "use a positive length in metres (e.g. 0.03)",
+            });
         }
         if let Some(&l) = self.drop_labels.iter().find(|&&l| usize::from(l) >= SEGMENT_COUNT) {
-            return Err(FuseError::BadParam { param: "drop_labels", value: f64::from(l), hint: "use segment ids 0..=14" });
+            return Err(FuseError::BadParam {
+                param: "drop_labels",
+                value: f64::from(l),
+                hint: "use segment ids 0..=14",
+            });
         }
         Ok(())
     }
@@ -353,7 +377,14 @@ fn check_view(view: &DepthView, params: &FuseParams) -> Result<(), FuseError> {
 
 /// The normal at pixel (u, v) from its valid neighbours (central differences where possible),
 /// oriented toward the camera; the direction back to the camera when no neighbour pair is usable.
-fn pixel_normal(view: &DepthView, params: &FuseParams, depth_ok: &dyn Fn(f64) -> bool, u: usize, v: usize, p: [f64; 3]) -> [f64; 3] {
+fn pixel_normal(
+    view: &DepthView,
+    params: &FuseParams,
+    depth_ok: &dyn Fn(f64) -> bool,
+    u: usize,
+    v: usize,
+    p: [f64; 3],
+) -> [f64; 3] {
     let intr = &view.intrinsics;
     let (w, h) = (intr.width as usize, intr.height as usize);
     let z0 = p[2];

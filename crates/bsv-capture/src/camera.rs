@@ -5,7 +5,7 @@
 //! address pixel centres: pixel (u, v) = column u, row v, the image spans [-0.5, width - 0.5].
 //! Depth means z along the optical axis (as RealSense depth images), not distance along the ray.
 
-use crate::geometry::{add, cross, dot, norm, normalize, scale, sub};
+use bsv_core::geometry::{add, cross, dot, norm, normalize, scale, sub};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -367,10 +367,7 @@ impl Extrinsics {
         }
         let y = scale(normalize(up_perp), -1.0);
         let x = cross(y, z);
-        Ok(Extrinsics {
-            rotation: [[x[0], y[0], z[0]], [x[1], y[1], z[1]], [x[2], y[2], z[2]]],
-            translation: eye,
-        })
+        Ok(Extrinsics { rotation: [[x[0], y[0], z[0]], [x[1], y[1], z[1]], [x[2], y[2], z[2]]], translation: eye })
     }
 
     /// Checks every value is finite and the rotation is orthonormal with det +1 (tolerance 1e-6).

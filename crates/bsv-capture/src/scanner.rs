@@ -14,12 +14,13 @@ mod rig;
 
 pub use capture::{write_capture, CaptureCamera, DEPTH_SCALE};
 pub use rig::{
-    Condition, DepthNoise, ExtrinsicError, ExtrinsicSigma, Rig, RigCamera, PAPER_CAMERA_DISTANCE,
-    PAPER_CAMERA_HEIGHT, PAPER_HEIGHT, PAPER_HFOV_DEG, PAPER_VFOV_DEG, PAPER_WIDTH,
+    Condition, DepthNoise, ExtrinsicError, ExtrinsicSigma, Rig, RigCamera, PAPER_CAMERA_DISTANCE, PAPER_CAMERA_HEIGHT,
+    PAPER_HEIGHT, PAPER_HFOV_DEG, PAPER_VFOV_DEG, PAPER_WIDTH,
 };
 
 use crate::camera::{CameraError, Extrinsics, Intrinsics};
-use crate::{PointCloud, Segment, TriMesh};
+use bsv_core::labels::face_labels_from_vertices;
+use bsv_core::{MeshInvariant, PointCloud, Segment, TriMesh};
 use parry3d_f64::math::Vector;
 use parry3d_f64::query::{Ray, RayCast};
 use rand::SeedableRng;
@@ -34,15 +35,8 @@ pub enum ScanError {
     #[error("mesh to scan has no triangles: load a non-empty surface mesh")]
     EmptyMesh,
     /// A triangle refers to a vertex that does not exist.
-    #[error("mesh triangle {triangle} refers to vertex {index} but the mesh has {n_vertices} vertices: repair the mesh file")]
-    BadIndex {
-        /// Triangle index.
-        triangle: usize,
-        /// Offending vertex index.
-        index: u32,
-        /// Vertex count.
-        n_vertices: usize,
-    },
+    #[error("mesh to scan: {0}: repair the mesh file")]
+    Mesh(#[from] MeshInvariant),
     /// A vertex has a NaN or infinite coordinate.
     #[error("mesh vertex {0} has a non-finite coordinate: repair the mesh file")]
     NonFiniteVertex(usize),
@@ -144,21 +138,17 @@ pub fn parry_mesh(mesh: &TriMesh) -> Result<parry3d_f64::shape::TriMesh, ScanErr
     if mesh.triangles.is_empty() {
         return Err(ScanError::EmptyMesh);
     }
-    let n = mesh.vertices.len();
     if let Some(i) = mesh.vertices.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
         return Err(ScanError::NonFiniteVertex(i));
     }
-    for (t, tri) in mesh.triangles.iter().enumerate() {
-        if let Some(&index) = tri.iter().find(|&&i| i as usize >= n) {
-            return Err(ScanError::BadIndex { triangle: t, index, n_vertices: n });
-        }
-    }
+    mesh.check_indices()?;
     let verts: Vec<Vector> = mesh.vertices.iter().map(|p| Vector::new(p[0], p[1], p[2])).collect();
     parry3d_f64::shape::TriMesh::new(verts, mesh.triangles.clone()).map_err(|e| ScanError::Parry(e.to_string()))
 }
 
 /// Segment label of every face: `face_labels`, else the majority of the corners' `vertex_labels`
-/// (first corner when all differ), else 0.
+/// ([`bsv_core::labels::face_labels_from_vertices`]: the corner with the smallest vertex index when all
+/// three differ, 0 for a triangle with a missing corner), else 0.
 pub fn face_labels(mesh: &TriMesh) -> Result<Vec<u8>, ScanError> {
     let nt = mesh.triangles.len();
     if let Some(fl) = &mesh.face_labels {
@@ -171,18 +161,7 @@ pub fn face_labels(mesh: &TriMesh) -> Result<Vec<u8>, ScanError> {
         if vl.len() != mesh.vertices.len() {
             return Err(ScanError::LabelCount { what: "vertex_labels", got: vl.len(), expected: mesh.vertices.len() });
         }
-        return Ok(mesh
-            .triangles
-            .iter()
-            .map(|t| {
-                let l = t.map(|i| vl.get(i as usize).copied().unwrap_or(0));
-                if l[1] == l[2] {
-                    l[1]
-                } else {
-                    l[0]
-                }
-            })
-            .collect());
+        return Ok(face_labels_from_vertices(&mesh.triangles, vl));
     }
     Ok(vec![0; nt])
 }
@@ -303,9 +282,8 @@ pub fn scan(mesh: &TriMesh, rig: &Rig, condition: Condition, seed: u64) -> Resul
             pixels,
         });
     }
-    cloud.colors = Some(
-        cloud_labels.iter().map(|&l| Segment::from_id(l).unwrap_or(Segment::Unlabelled).color()).collect(),
-    );
+    cloud.colors =
+        Some(cloud_labels.iter().map(|&l| Segment::from_id(l).unwrap_or(Segment::Unlabelled).color()).collect());
     cloud.labels = Some(cloud_labels);
     Ok(Scan { condition, seed, cloud, views })
 }

@@ -3,7 +3,7 @@
 
 #![allow(clippy::unwrap_used)]
 
-use bsv_core::camera::{deproject_depth, CameraCalibration, CameraError, Extrinsics, Intrinsics};
+use bsv_capture::camera::{deproject_depth, CameraCalibration, CameraError, Extrinsics, Intrinsics};
 
 fn distorted() -> Intrinsics {
     Intrinsics {

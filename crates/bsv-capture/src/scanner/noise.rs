@@ -13,7 +13,7 @@ fn discontinuity_target(depth: &[f64], w: usize, h: usize, u: usize, v: usize, n
     let mut best: Option<f64> = None;
     let mut consider = |other: f64| {
         let diff = (other - z).abs();
-        if diff > noise.flying_jump && best.map_or(true, |b| diff > (b - z).abs()) {
+        if diff > noise.flying_jump && best.is_none_or(|b| diff > (b - z).abs()) {
             best = Some(other);
         }
     };

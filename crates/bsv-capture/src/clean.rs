@@ -1,13 +1,13 @@
 //! Point-cloud cleaning: statistical outlier removal (exact k nearest neighbours, kiddo k-d tree,
-//! rayon), dropping segments, voxel down-sampling.
+//! rayon), voxel down-sampling. Dropping segments is `bsv_core::PointCloud::drop_segments`.
 //!
 //! Statistical outlier removal follows Open3D's `remove_statistical_outlier`, whose parameter names
 //! the paper uses (600 neighbours, std ratio 0.05): for each point the mean Euclidean distance to its
 //! `k` nearest points (the point itself counts as one of them, distance 0) is computed; a point is kept
 //! when that mean is <= global mean + `std_ratio` x standard deviation (sample std) of the means.
 
-use crate::geometry::dist2;
-use crate::{PointCloud, Segment};
+use bsv_core::geometry::dist2;
+use bsv_core::PointCloud;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 use std::num::NonZeroUsize;
@@ -30,7 +30,9 @@ pub enum CleanError {
         point: [f64; 3],
     },
     /// The k-d tree could not be built.
-    #[error("statistical outlier removal: building the k-d tree failed ({0}); the cloud may be too large (> 4e9 points)")]
+    #[error(
+        "statistical outlier removal: building the k-d tree failed ({0}); the cloud may be too large (> 4e9 points)"
+    )]
     Tree(String),
     /// Non-positive or non-finite voxel size.
     #[error("voxel down-sampling: voxel size {0} must be a positive finite length in metres")]
@@ -290,17 +292,6 @@ pub fn remove_statistical_outliers(cloud: &mut PointCloud, params: SorParams) ->
     let res = statistical_outliers(&cloud.points, params)?;
     cloud.retain_indices(|i| res.keep[i]);
     Ok(res)
-}
-
-/// Removes the points whose label is one of `segments` (no-op for an unlabelled cloud);
-/// returns the number removed.
-pub fn drop_segments(cloud: &mut PointCloud, segments: &[Segment]) -> usize {
-    let Some(labels) = cloud.labels.clone() else {
-        return 0;
-    };
-    let before = cloud.len();
-    cloud.retain_indices(|i| !segments.iter().any(|s| s.id() == labels[i]));
-    before - cloud.len()
 }
 
 /// Keeps one point per occupied cubic voxel of edge `voxel` (the point nearest the voxel's centroid

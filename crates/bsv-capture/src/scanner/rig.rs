@@ -67,10 +67,7 @@ impl FromStr for Condition {
     /// Parses "noer", "l515", "cali", "l5ca" (case-insensitive).
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         let l = s.trim().to_ascii_lowercase();
-        Condition::ALL
-            .into_iter()
-            .find(|c| c.name() == l)
-            .ok_or_else(|| ScanError::UnknownCondition(s.to_string()))
+        Condition::ALL.into_iter().find(|c| c.name() == l).ok_or_else(|| ScanError::UnknownCondition(s.to_string()))
     }
 }
 
@@ -223,8 +220,8 @@ impl Rig {
     /// front at z = +2 m looking toward -Z, back at z = -2 m looking toward +Z, the paper's error stds.
     pub fn paper_default() -> Rig {
         // The constants are valid, so these cannot fail; fall back to a computed value regardless.
-        let intr = Intrinsics::from_fov(PAPER_WIDTH, PAPER_HEIGHT, PAPER_HFOV_DEG, PAPER_VFOV_DEG)
-            .unwrap_or(Intrinsics {
+        let intr =
+            Intrinsics::from_fov(PAPER_WIDTH, PAPER_HEIGHT, PAPER_HFOV_DEG, PAPER_VFOV_DEG).unwrap_or(Intrinsics {
                 width: PAPER_WIDTH,
                 height: PAPER_HEIGHT,
                 fx: 737.6,

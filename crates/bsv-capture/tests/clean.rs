@@ -1,21 +1,20 @@
 //! Point-cloud cleaning: the fast exact k-NN mean distances against plain k-NN, statistical outlier
-//! removal on a surface with injected outliers, segment dropping, voxel down-sampling, errors.
+//! removal on a surface with injected outliers, voxel down-sampling, errors.
 
 #![allow(clippy::unwrap_used)]
 
-use bsv_core::clean::{
-    drop_segments, mean_knn_distances, mean_knn_distances_naive, remove_statistical_outliers,
-    statistical_outliers, voxel_downsample, CleanError, SorParams,
+use bsv_capture::clean::{
+    mean_knn_distances, mean_knn_distances_naive, remove_statistical_outliers, statistical_outliers, voxel_downsample,
+    CleanError, SorParams,
 };
-use bsv_core::{shapes, PointCloud, Segment};
+use bsv_capture::sample::sample_surface;
+use bsv_core::{shapes, PointCloud};
 use rand::{Rng, SeedableRng};
 
 /// Brute-force mean distance to the k nearest points (itself included).
 fn brute(points: &[[f64; 3]], i: usize, k: usize) -> f64 {
-    let mut d: Vec<f64> = points
-        .iter()
-        .map(|q| ((0..3).map(|a| (q[a] - points[i][a]).powi(2)).sum::<f64>()).sqrt())
-        .collect();
+    let mut d: Vec<f64> =
+        points.iter().map(|q| ((0..3).map(|a| (q[a] - points[i][a]).powi(2)).sum::<f64>()).sqrt()).collect();
     d.sort_by(f64::total_cmp);
     d[..k].iter().sum::<f64>() / k as f64
 }
@@ -24,7 +23,7 @@ fn brute(points: &[[f64; 3]], i: usize, k: usize) -> f64 {
 fn fast_mean_distances_are_exact() {
     let mut body = shapes::ellipsoid([0.2, 0.8, 0.15], 4);
     shapes::translate(&mut body, [0.0, 0.9, 0.0]);
-    let (mut pts, _) = shapes::sample_surface(&body, 20_000, 3);
+    let (mut pts, _) = sample_surface(&body, 20_000, 3);
     // Duplicates, a far cluster and isolated points exercise the bounds and the fallbacks.
     let dup = pts[..50].to_vec();
     pts.extend_from_slice(&dup);
@@ -91,20 +90,6 @@ fn bad_parameters_are_errors() {
     assert!(statistical_outliers(&[], SorParams::default()).unwrap().keep.is_empty());
     let c = PointCloud::new(vec![[0.0; 3]]);
     assert!(matches!(voxel_downsample(&c, 0.0), Err(CleanError::BadVoxel(_))));
-}
-
-#[test]
-fn drop_segments_removes_extremities() {
-    let mut c = PointCloud::new((0..6).map(|i| [i as f64, 0.0, 0.0]).collect());
-    c.labels = Some(vec![1, 2, 7, 9, 13, 2]);
-    c.colors = Some(vec![[1, 1, 1], [2, 2, 2], [7, 7, 7], [9, 9, 9], [13, 13, 13], [2, 2, 2]]);
-    let removed = drop_segments(&mut c, &bsv_core::EXTREMITIES);
-    assert_eq!(removed, 3);
-    assert_eq!(c.labels.as_ref().unwrap(), &vec![2, 9, 2]);
-    assert_eq!(c.colors.as_ref().unwrap()[1], [9, 9, 9]);
-    assert_eq!(c.points[1], [3.0, 0.0, 0.0]);
-    let mut unlabelled = PointCloud::new(vec![[0.0; 3]]);
-    assert_eq!(drop_segments(&mut unlabelled, &[Segment::Head]), 0);
 }
 
 #[test]

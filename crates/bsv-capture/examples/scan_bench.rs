@@ -1,11 +1,12 @@
 //! Benchmark: virtual scan of a ~27k-triangle body-sized mesh (both cameras, each condition) and
 //! statistical outlier removal of 300k points. Prints a table of medians of 5 runs.
-//! Run: `cargo run -p bsv-core --release --example scan_bench [-- --naive] [-- --images DIR]`.
+//! Run: `cargo run -p bsv-capture --release --example scan_bench [-- --naive] [-- --images DIR]`.
 
 #![allow(clippy::unwrap_used)]
 
-use bsv_core::clean::{mean_knn_distances, mean_knn_distances_naive, statistical_outliers, SorParams};
-use bsv_core::scanner::{scan, write_capture, Condition, Rig};
+use bsv_capture::clean::{mean_knn_distances, mean_knn_distances_naive, statistical_outliers, SorParams};
+use bsv_capture::sample::sample_surface;
+use bsv_capture::scanner::{scan, write_capture, Condition, Rig};
 use bsv_core::shapes;
 use std::time::Instant;
 
@@ -38,8 +39,6 @@ fn time<T>(runs: usize, mut f: impl FnMut() -> T) -> (f64, T) {
     (median(times), last.expect("runs >= 1"))
 }
 
-
-
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let mesh = shapes::capsule_body(true, false);
@@ -50,11 +49,7 @@ fn main() {
     let sor_only = args.iter().any(|a| a == "--sor-only");
     for c in Condition::ALL.into_iter().filter(|_| !sor_only) {
         let (t, s) = time(5, || scan(&mesh, &rig, c, 1).expect("scan"));
-        println!(
-            "| scan {c}, 2 cameras 768x1024 | {} tris -> {} pts | {t:.3} |",
-            mesh.triangles.len(),
-            s.cloud.len()
-        );
+        println!("| scan {c}, 2 cameras 768x1024 | {} tris -> {} pts | {t:.3} |", mesh.triangles.len(), s.cloud.len());
         if let Some(i) = args.iter().position(|a| a == "--images") {
             if let Some(dir) = args.get(i + 1) {
                 write_capture(&s, &std::path::Path::new(dir).join(c.name())).expect("write");
@@ -71,7 +66,7 @@ fn main() {
     }
     let mut ell = shapes::ellipsoid([0.2, 0.85, 0.14], 6);
     shapes::translate(&mut ell, [0.0, 0.9, 0.0]);
-    let (points, _) = shapes::sample_surface(&ell, 300_000, 1);
+    let (points, _) = sample_surface(&ell, 300_000, 1);
     let (t, res) = time(5, || statistical_outliers(&points, SorParams::default()).expect("sor"));
     let kept = res.keep.iter().filter(|&&k| k).count();
     println!("| SOR k=600 std 0.05 (exact, bounded radius) | {} pts (kept {kept}) | {t:.3} |", points.len());
@@ -86,6 +81,9 @@ fn main() {
         let (t2, naive) = time(1, || mean_knn_distances_naive(&points, 600).expect("naive"));
         let fast = mean_knn_distances(&points, 600).expect("fast");
         let maxdiff = fast.iter().zip(&naive).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-        println!("| SOR k=600 plain kiddo nearest_n (1 run) | {} pts (max diff {maxdiff:.1e}) | {t2:.3} |", points.len());
+        println!(
+            "| SOR k=600 plain kiddo nearest_n (1 run) | {} pts (max diff {maxdiff:.1e}) | {t2:.3} |",
+            points.len()
+        );
     }
 }

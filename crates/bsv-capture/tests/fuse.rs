@@ -5,12 +5,10 @@
 
 #![allow(clippy::unwrap_used)]
 
-use bsv_core::camera::{Extrinsics, Intrinsics};
-use bsv_core::fuse::{build_cloud, ColorMode, DepthImage, DepthView, FuseError, FuseParams};
-use bsv_core::scanner::{scan, write_capture, CameraView, Condition, Rig, DEPTH_SCALE};
+use bsv_capture::camera::{Extrinsics, Intrinsics};
+use bsv_capture::fuse::{build_cloud, ColorMode, DepthImage, DepthView, FuseError, FuseParams};
+use bsv_capture::scanner::{scan, write_capture, CameraView, Condition, Rig, DEPTH_SCALE};
 use bsv_core::shapes;
-
-
 
 /// Parameters that keep every point (no SOR, no dropping, no normals, palette colours).
 fn keep_all() -> FuseParams {
@@ -258,9 +256,15 @@ fn bad_inputs_give_typed_errors() {
     assert!(matches!(build_cloud(std::slice::from_ref(&good), &image), Err(FuseError::MissingColour { .. })));
 
     let bad_k = FuseParams { sor_k: 0, ..FuseParams::default() };
-    assert!(matches!(build_cloud(std::slice::from_ref(&good), &bad_k), Err(FuseError::BadParam { param: "sor_k", .. })));
+    assert!(matches!(
+        build_cloud(std::slice::from_ref(&good), &bad_k),
+        Err(FuseError::BadParam { param: "sor_k", .. })
+    ));
     let bad_drop = FuseParams { drop_labels: vec![15], ..FuseParams::default() };
-    assert!(matches!(build_cloud(std::slice::from_ref(&good), &bad_drop), Err(FuseError::BadParam { param: "drop_labels", .. })));
+    assert!(matches!(
+        build_cloud(std::slice::from_ref(&good), &bad_drop),
+        Err(FuseError::BadParam { param: "drop_labels", .. })
+    ));
 
     let mut v = good.clone();
     v.labels.iter_mut().filter(|l| **l != 0).for_each(|l| *l = 1);

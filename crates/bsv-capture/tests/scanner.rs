@@ -3,17 +3,15 @@
 
 #![allow(clippy::unwrap_used)]
 
-use bsv_core::camera::{CameraCalibration, Intrinsics};
-use bsv_core::scanner::{
+use bsv_capture::camera::{CameraCalibration, Intrinsics};
+use bsv_capture::scanner::{
     face_labels, parry_mesh, scan, write_capture, Condition, ExtrinsicSigma, Rig, ScanError, DEPTH_SCALE,
 };
-use bsv_core::{shapes, TriMesh};
+use bsv_core::{shapes, MeshInvariant, TriMesh};
 use parry3d_f64::math::Vector;
 use parry3d_f64::query::PointQueryWithLocation;
 use parry3d_f64::shape::TrianglePointLocation;
 use rand::SeedableRng;
-
-
 
 fn front_only() -> Rig {
     let mut rig = Rig::paper_default();
@@ -270,7 +268,10 @@ fn bad_inputs_are_rejected_clearly() {
     assert!(matches!(scan(&TriMesh::default(), &rig, Condition::NoEr, 0), Err(ScanError::EmptyMesh)));
     let mut bad = b.clone();
     bad.triangles[3][1] = 99;
-    assert!(matches!(scan(&bad, &rig, Condition::NoEr, 0), Err(ScanError::BadIndex { triangle: 3, index: 99, .. })));
+    assert!(matches!(
+        scan(&bad, &rig, Condition::NoEr, 0),
+        Err(ScanError::Mesh(MeshInvariant::IndexOutOfRange { face: 3, index: 99, .. }))
+    ));
     let mut bad = b.clone();
     bad.face_labels = Some(vec![1; 5]);
     assert!(scan(&bad, &rig, Condition::NoEr, 0).unwrap_err().to_string().contains("face_labels"));

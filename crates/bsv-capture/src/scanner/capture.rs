@@ -84,7 +84,10 @@ pub fn write_capture(scan: &Scan, dir: &Path) -> Result<(), ScanError> {
         let cdir = dir.join(&view.name);
         std::fs::create_dir_all(&cdir).map_err(io_err(&cdir))?;
         let (w, h) = (view.intrinsics.width, view.intrinsics.height);
-        let size_err = |p: &Path| ScanError::Image { path: p.to_path_buf(), message: "image size does not match the intrinsics".into() };
+        let size_err = |p: &Path| ScanError::Image {
+            path: p.to_path_buf(),
+            message: "image size does not match the intrinsics".into(),
+        };
 
         let depth_path = cdir.join("depth.png");
         let raw: Vec<u16> = view

@@ -3,8 +3,8 @@
 use crate::classes::{to_py, PyVolumeReport};
 use crate::convert::{cloud_from, cloud_to, label_values, mesh_from, mesh_to, points_from, triangles_from};
 use crate::errors::{input_error, py_err};
-use bsv_core::io::{self, PlyEncoding};
 use bsv_capture::scanner::{self, Condition, Rig};
+use bsv_core::io::{self, PlyEncoding};
 use bsv_core::template::{template, TemplateKind};
 use bsv_core::TriMesh;
 use numpy::{PyArray1, PyArray2};

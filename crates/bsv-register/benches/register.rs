@@ -3,8 +3,8 @@
 //! (m2p:5,p2m:5,m2p:10). Prints the time breakdown once, then lets criterion time the whole call.
 #![allow(missing_docs)]
 
-use bsv_core::geometry::face_normals;
 use bsv_capture::sample::sample_surface;
+use bsv_core::geometry::face_normals;
 use bsv_core::shapes::ellipsoid;
 use bsv_core::PointCloud;
 use bsv_register::{register, ControlFlow, IterationLog, RegisterParams};

@@ -1,8 +1,8 @@
 //! Shared helpers of the registration tests: clouds from analytic shapes, distances, volumes.
 #![allow(dead_code)]
 
-use bsv_core::geometry::{cross, face_normals, normalize, signed_volume, sub};
 use bsv_capture::sample::sample_surface;
+use bsv_core::geometry::{cross, face_normals, normalize, signed_volume, sub};
 use bsv_core::{PointCloud, TriMesh};
 use bsv_register::{register, ControlFlow, IterationLog, RegisterParams, Registration};
 

@@ -58,8 +58,8 @@ def prepared(cache: Path, seed: int, index: int) -> dict[str, Any]:
         d = data[cam]
         prm = sg.DEFAULT_PARAMS[cam]
         res = sg.run_holistic(d["colour"], prm)
-        pose, hands, _ = sg._orient(res["pose"], res["hands"], cam)  # noqa: SLF001
-        mask = sg._clean_mask(res["mask"] > prm.mask_threshold)  # noqa: SLF001
+        pose, hands, _ = sg._orient(res["pose"], res["hands"], cam)
+        mask = sg._clean_mask(res["mask"] > prm.mask_threshold)
         mask = sg.refine_mask_with_depth(mask, d["depth_m"], prm.depth_band, prm.depth_grow_px)
         truth_lab = _read_label_png(cap / cam / d["meta"].get("labels", "labels.png"))
         out["views"][cam] = {"pose": pose, "hands": hands, "mask": mask, "truth_labels": truth_lab,
@@ -152,7 +152,7 @@ def search(subjects: list[dict[str, Any]], params: dict[str, Any], rounds: int, 
                         cand[cam] = dataclasses.replace(cand[cam], **{name: round(getattr(cand[cam], name) + sign * step, 4)})
                     try:
                         val = objective(run_set(subjects, cand))
-                    except Exception as e:  # noqa: BLE001 - invalid parameter values end the direction
+                    except Exception as e:  # invalid parameter values end the direction
                         print(f"  {view}.{name} {sign:+d}: {e}", flush=True)
                         break
                     print(f"  {view}.{name} {'+' if sign > 0 else '-'}{step}: {val:.3f} (best {best:.3f})", flush=True)

@@ -8,8 +8,9 @@ mesh checks, volumes, the virtual scanner, the ARAP registration) runs in the Ru
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Callable, Optional, Union
+from typing import Any, Optional, Union
 
 import numpy as np
 
@@ -151,9 +152,9 @@ def register(
     labels: Any = None,
     template: Any = None,
     *,
-    progress: Union[bool, Callable[[dict[str, Any]], None]] = False,
+    progress: bool | Callable[[dict[str, Any]], None] = False,
     density: float = 1000.0,
-    label_source: Optional[str] = None,
+    label_source: str | None = None,
     **params: Any,
 ) -> Registration:
     """Fits the template to a point cloud by regularized ARAP and measures the segment volumes.
@@ -168,7 +169,7 @@ def register(
     """
     cloud = as_cloud(points, labels=labels)
     tmpl = default_template() if template is None else as_mesh(template)
-    callback: Optional[Callable[[dict[str, Any]], None]]
+    callback: Callable[[dict[str, Any]], None] | None
     if progress is True:
         callback = _print_iteration
     elif callable(progress):
@@ -213,7 +214,7 @@ def scan(
     condition: str = "noer",
     seed: int = 0,
     *,
-    images: Optional[PathLike] = None,
+    images: PathLike | None = None,
     overwrite: bool = False,
 ) -> PointCloud:
     """Virtual two-camera capture (DESIGN.md rig) of a labelled mesh: a merged, labelled cloud.
@@ -235,11 +236,14 @@ def scan(
 
 
 __all__ = [
+    "SEGMENT_IDS",
+    "SEGMENT_NAMES",
+    "TRUNK_LIMBS",
     "BsvError",
     "FormatError",
     "InputError",
-    "MeshError",
     "Mesh",
+    "MeshError",
     "OutputExistsError",
     "PointCloud",
     "RegisterParams",
@@ -251,9 +255,6 @@ __all__ = [
     "RegistrationResourceError",
     "RegistrationStopped",
     "ScanError",
-    "SEGMENT_IDS",
-    "SEGMENT_NAMES",
-    "TRUNK_LIMBS",
     "VolumeError",
     "VolumeReport",
     "WriteError",

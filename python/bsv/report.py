@@ -10,14 +10,15 @@ from __future__ import annotations
 
 import html
 import math
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, Optional, Sequence, Union
+from typing import Any, Union
 
 import numpy as np
 
 from . import _bsv
 from .errors import OutputExistsError
-from .types import PALETTE, SEGMENT_NAMES, TRUNK_LIMBS
+from .types import PALETTE, SEGMENT_NAMES
 
 PathLike = Union[str, Path]
 
@@ -38,7 +39,7 @@ def palette() -> np.ndarray:
     return np.asarray(PALETTE, dtype=np.float64) / 255.0
 
 
-def face_labels(faces: np.ndarray, vertex_labels: Optional[np.ndarray], face_labels_: Optional[np.ndarray] = None) -> np.ndarray:
+def face_labels(faces: np.ndarray, vertex_labels: np.ndarray | None, face_labels_: np.ndarray | None = None) -> np.ndarray:
     """Per-face segment ids: the given face labels, else Rust's one rule
     (``bsv_volume::face_labels_from_vertices``: the label shared by two corners; three different: the
     corner with the smallest vertex index)."""
@@ -49,7 +50,7 @@ def face_labels(faces: np.ndarray, vertex_labels: Optional[np.ndarray], face_lab
     return _bsv.face_labels_from_vertices(faces, vertex_labels)
 
 
-def render_mesh(ax: Any, vertices: np.ndarray, faces: np.ndarray, labels: Optional[np.ndarray], view: str = "front",
+def render_mesh(ax: Any, vertices: np.ndarray, faces: np.ndarray, labels: np.ndarray | None, view: str = "front",
                 alpha: float = 1.0, grey: bool = False) -> None:
     """Draws a labelled mesh on a 2-D matplotlib axis: orthographic projection, faces sorted far to near
     (painter's algorithm), Lambert-shaded palette colours (or grey)."""
@@ -127,7 +128,7 @@ def _segments(volumes_l: dict[str, float]) -> list[str]:
     return [SEGMENT_NAMES[i] for i in range(1, 15) if SEGMENT_NAMES[i] in volumes_l]
 
 
-def _volume_figure(path: Path, volumes_l: dict[str, float], truth: Optional[dict[str, float]]) -> None:
+def _volume_figure(path: Path, volumes_l: dict[str, float], truth: dict[str, float] | None) -> None:
     import matplotlib.pyplot as plt
 
     names = _segments(volumes_l)

@@ -17,11 +17,19 @@ from bsv.bench.common import BenchError, Run, keep_trunk_limbs, rve, signed_erro
 from bsv.bench.faust import choose_scans, list_scans, nearest_index, sample_surface
 from bsv.bench.floor import CameraPose, camera_weights, floor_mesh, floor_volumes, read_camera_poses, vertex_normals
 from bsv.bench.peer import prealign, robust_box
-from bsv.bench.reference import PAPER, P2PV_BUFF
-from bsv.bench.tables import (CSV_COLUMNS, bias_table, p2pv_table, paper_table, read_csv, rows, summarise,
-                              target_check, write_csv, write_json)
-
-
+from bsv.bench.reference import P2PV_BUFF, PAPER
+from bsv.bench.tables import (
+    CSV_COLUMNS,
+    bias_table,
+    p2pv_table,
+    paper_table,
+    read_csv,
+    rows,
+    summarise,
+    target_check,
+    write_csv,
+    write_json,
+)
 
 # ---------------------------------------------------------------- metric and tables
 

@@ -11,14 +11,13 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 
 
+from meshcheck import edges_closed  # noqa: E402
+
 import bsv.errors  # noqa: E402
 from bsv import bodies  # noqa: E402
-from meshcheck import edges_closed  # noqa: E402
 from bsv.bodies.collide import penetrations, winding_numbers  # noqa: E402
 from bsv.bodies.labels import boundary_loops  # noqa: E402
 from bsv.bodies.meshio import read_ply  # noqa: E402
-
-
 
 
 @pytest.fixture(scope="module")

@@ -12,10 +12,14 @@ import pytest
 
 import bsv
 from bsv import pipeline
-from bsv.frontend.capture import read_capture
-from bsv.frontend.errors import CalibrationFileError, CaptureError, MarkerNotFoundError, PersonNotFoundError, SegmentationError
+from bsv.frontend.errors import (
+    CalibrationFileError,
+    CaptureError,
+    MarkerNotFoundError,
+    PersonNotFoundError,
+    SegmentationError,
+)
 from bsv.types import Registration
-
 
 
 def _has_mediapipe() -> bool:

@@ -11,12 +11,11 @@ ROOT = Path(__file__).resolve().parents[2]
 TEMPLATES = ROOT / "assets" / "template"
 
 
-from bsv import bodies  # noqa: E402
 from meshcheck import edges_closed  # noqa: E402
+
+from bsv import bodies  # noqa: E402
 from bsv.bodies.meshio import ply_bytes, read_ply  # noqa: E402
 from bsv.bodies.template import check_watertight, obj_text, templates  # noqa: E402
-
-
 
 
 def signed_volume(v, f):
@@ -84,7 +83,8 @@ def test_watertight_check_rejects_an_open_mesh(built):
 
 def test_write_templates_does_not_overwrite(tmp_path, capsys):
     from bsv.bodies.errors import OutputExistsError
-    from bsv.bodies.template import main as template_main, write_templates
+    from bsv.bodies.template import main as template_main
+    from bsv.bodies.template import write_templates
 
     (tmp_path / "template_fine.obj").write_text("mine")
     with pytest.raises(OutputExistsError, match="template_fine.obj"):

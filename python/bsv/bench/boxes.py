@@ -16,9 +16,10 @@ shapes far from a cube. Conditions noer and l5ca, 3 scan seeds each by default.
 from __future__ import annotations
 
 import time
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, Optional, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -119,7 +120,7 @@ def box_mesh(box: Box, yaw_deg: float = YAW_DEG) -> Mesh:
 
 
 def measure_box(box: Box, condition: str, seed: int, template: Mesh, methods: Iterable[str],
-                params: Optional[dict[str, Any]] = None) -> list[Run]:
+                params: dict[str, Any] | None = None) -> list[Run]:
     """Scan one box, express the cloud in the box frame, register the cube with every method."""
     from .. import scan
 
@@ -135,14 +136,14 @@ def measure_box(box: Box, condition: str, seed: int, template: Mesh, methods: It
             fit = register_method(m, cloud, template, p)
             run.estimated_l = {"whole": float(fit.volumes_l["whole"])}
             run.seconds, run.info, run.ok = fit.seconds, fit.info, True
-        except Exception as exc:  # noqa: BLE001 - reported, the rest goes on
+        except Exception as exc:  # reported, the rest goes on
             run.error = f"{type(exc).__name__}: {exc}"
         runs.append(run)
     return runs
 
 
 def run_boxes(out: str | Path, seeds: int = 3, conditions: Sequence[str] = ("noer", "l5ca"),
-              methods: Sequence[str] = ("bsv",), params: Optional[dict[str, Any]] = None,
+              methods: Sequence[str] = ("bsv",), params: dict[str, Any] | None = None,
               progress: bool = True, overwrite: bool = False) -> tuple[list[Run], dict]:
     """Both boxes x conditions x seeds; writes results.json, results.csv and report.md into ``out``
     (existing outputs are refused before any work, :class:`bsv.errors.OutputExistsError`, unless ``overwrite``)."""

@@ -4,8 +4,9 @@ floor as a marker) and the trunk_limbs RVE histogram per condition."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 

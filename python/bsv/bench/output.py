@@ -4,15 +4,25 @@ from __future__ import annotations
 
 import platform
 import time
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 from ..errors import OutputExistsError
 from .common import Run
 from .figures import rve_bars, trunk_limbs_histogram
-from .tables import (bias_table, p2pv_table, paper_table, rows, summarise, target_check, targets_md,
-                     timing_table, write_csv, write_json)
-
+from .tables import (
+    bias_table,
+    p2pv_table,
+    paper_table,
+    rows,
+    summarise,
+    target_check,
+    targets_md,
+    timing_table,
+    write_csv,
+    write_json,
+)
 
 #: Files every benchmark writes into its output folder (besides the figures, :data:`FIGURE_PATTERNS`).
 OUTPUT_FILES = ("results.json", "results.csv", "report.md")

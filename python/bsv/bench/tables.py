@@ -7,14 +7,14 @@ from __future__ import annotations
 import csv
 import json
 import math
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
 from .common import Run, rve, signed_error
-from .reference import (CALIBRATED, CONDITIONS, MEASURED, P2PV_BUFF, P2PV_PDT13, P2PV_ROWS, PAPER_ROWS,
-                        paper_value)
+from .reference import CALIBRATED, CONDITIONS, MEASURED, P2PV_BUFF, P2PV_PDT13, P2PV_ROWS, PAPER_ROWS, paper_value
 
 #: Columns of results.csv, in order.
 CSV_COLUMNS: tuple[str, ...] = (

@@ -7,14 +7,13 @@ from functools import lru_cache
 
 import numpy as np
 
+from .. import _bsv
+from ..errors import SolveError
 from ..types import Mesh
 from .asset import Asset, load_asset
-from ..errors import SolveError
-from .. import _bsv
 from .labels import body_labels, volume
 from .model import Phenotype, shape
 from .pose import Pose, pose_vertices
-
 
 
 @lru_cache(maxsize=1)

@@ -13,8 +13,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .asset import Asset, AssetError, load_asset
 from ..errors import PhenotypeError
+from .asset import Asset, AssetError, load_asset
 
 GENDERS = ("female", "male")
 AGES = ("child", "young", "old")
@@ -42,7 +42,7 @@ class Phenotype:
     caucasian: float = 1.0 / 3.0
     local: dict = field(default_factory=dict)
 
-    def with_(self, **kw) -> "Phenotype":
+    def with_(self, **kw) -> Phenotype:
         """A copy with some fields replaced."""
         return replace(self, **kw)
 
@@ -162,4 +162,4 @@ def shape(p: Phenotype, asset: Asset | None = None) -> tuple[np.ndarray, np.ndar
     return v, j
 
 
-__all__ = ["Phenotype", "PhenotypeError", "AssetError", "shape", "target_weights"]
+__all__ = ["AssetError", "Phenotype", "PhenotypeError", "shape", "target_weights"]

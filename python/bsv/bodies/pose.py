@@ -14,9 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .asset import Asset, load_asset
 from ..errors import PoseError
-
+from .asset import Asset, load_asset
 
 
 @dataclass(frozen=True)
@@ -32,7 +31,7 @@ class Pose:
     palms_forward: bool = True
 
     @staticmethod
-    def symmetric(arm_down: float = 40.0, elbow: float = 10.0, hip_abduction: float = 4.0) -> "Pose":
+    def symmetric(arm_down: float = 40.0, elbow: float = 10.0, hip_abduction: float = 4.0) -> Pose:
         """The same angles on both sides."""
         return Pose(arm_down, arm_down, elbow, elbow, hip_abduction, hip_abduction)
 

@@ -38,7 +38,7 @@ class MarkerSpec:
         if self.marker_id < 0:
             raise CalibrationError(f"marker id must be >= 0, got {self.marker_id}")
 
-    def aruco_dictionary(self):  # noqa: ANN201 - cv2 type
+    def aruco_dictionary(self):
         """The ``cv2.aruco.Dictionary`` (raises CalibrationError for an unknown name or an id out of range)."""
         import cv2
 
@@ -110,7 +110,7 @@ class Board:
 
 def render_view(
     marker: MarkerSpec,
-    intrinsics,  # noqa: ANN001 - Intrinsics (avoids an import cycle in type hints)
+    intrinsics,
     rotation: np.ndarray,
     translation: np.ndarray,
     *,

@@ -5,8 +5,9 @@ the capture code can be exercised end to end with no camera (tests, the demo). T
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Optional, Sequence, Union
+from typing import Union
 
 import numpy as np
 
@@ -17,7 +18,7 @@ from .intrinsics import Intrinsics
 PathLike = Union[str, Path]
 
 
-def _rs_intrinsics(rs, intr: Intrinsics):  # noqa: ANN001, ANN202 - pyrealsense2 types
+def _rs_intrinsics(rs, intr: Intrinsics):
     ri = rs.intrinsics()
     ri.width, ri.height = int(intr.width), int(intr.height)
     ri.fx, ri.fy, ri.ppx, ri.ppy = float(intr.fx), float(intr.fy), float(intr.cx), float(intr.cy)
@@ -37,7 +38,7 @@ def write_recording(
     fps: int = 30,
     serial: str = "000000000000",
     name: str = "BSV software camera",
-    depth_to_colour: Optional[tuple[np.ndarray, np.ndarray]] = None,
+    depth_to_colour: tuple[np.ndarray, np.ndarray] | None = None,
     overwrite: bool = False,
 ) -> Path:
     """Records synthetic frames as a RealSense recording: ``depth`` uint16 (H x W, device units of

@@ -32,14 +32,15 @@ the hand model gives more precisely (pinky_mcp, index_finger_mcp), then 21 per h
 from __future__ import annotations
 
 import contextlib
-import os
-import sys
 import dataclasses
 import json
 import math
+import os
+import sys
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterator, Optional, Sequence, Union
+from typing import Any, Union
 
 import numpy as np
 
@@ -184,7 +185,7 @@ class Segmentation:
     #: Left/right landmark pairs whose MediaPipe names were swapped to match the view.
     swapped: tuple[str, ...] = field(default_factory=tuple)
     #: The 33 pose landmarks (x, y, visibility; subject's left/right), as :func:`label_pixels` takes them.
-    pose: Optional[np.ndarray] = None
+    pose: np.ndarray | None = None
 
     def landmark(self, name: str) -> np.ndarray:
         """(x, y, visibility) of one landmark by name (KeyError naming it if unknown)."""
@@ -203,7 +204,7 @@ class Segmentation:
 # MediaPipe
 
 
-def _mediapipe_holistic():  # noqa: ANN202 - module
+def _mediapipe_holistic():
     # MediaPipe's C++ logging (glog/absl, TFLite) prints several lines per image: keep warnings out.
     os.environ.setdefault("GLOG_minloglevel", "2")
     os.environ.setdefault("TF_CPP_MIN_LOG_LEVEL", "2")
@@ -221,8 +222,8 @@ def _check_model(holistic: Any, complexity: int) -> None:
     base = Path(holistic.__file__).resolve().parents[2] / "modules" / "pose_landmark"
     if not (base / _POSE_MODELS[complexity]).is_file():
         try:
-            holistic._download_oss_pose_landmark_model(complexity)  # noqa: SLF001 - what Holistic() does
-        except Exception as e:  # noqa: BLE001 - network errors of any kind
+            holistic._download_oss_pose_landmark_model(complexity)  # what Holistic() does
+        except Exception as e:  # network errors of any kind
             raise SegmentationError(
                 f"model_complexity={complexity} needs {base / _POSE_MODELS[complexity]}, which the mediapipe "
                 f"wheel does not ship and which could not be downloaded ({e}); use model_complexity=1"
@@ -366,7 +367,7 @@ def _polygon_dist(p: np.ndarray, poly: np.ndarray, shape: tuple[int, int]) -> np
     return d
 
 
-def _crotch(mask: np.ndarray, h_mid: np.ndarray, k_mid: np.ndarray) -> Optional[np.ndarray]:
+def _crotch(mask: np.ndarray, h_mid: np.ndarray, k_mid: np.ndarray) -> np.ndarray | None:
     """Top of the gap between the legs: the first pixel off the mask walking from the mid-hip to the
     mid-knee (None if the legs touch all the way)."""
     n = int(np.ceil(np.hypot(*(k_mid - h_mid)))) + 1
@@ -518,8 +519,8 @@ def refine_mask_with_depth(mask: np.ndarray, depth_m: np.ndarray, band_m: float 
 # Public API
 
 
-def segment_image(colour_rgb: np.ndarray, view: str = "front", depth: Optional[np.ndarray] = None,
-                  params: Optional[SegmentParams] = None, **overrides: Any) -> Segmentation:
+def segment_image(colour_rgb: np.ndarray, view: str = "front", depth: np.ndarray | None = None,
+                  params: SegmentParams | None = None, **overrides: Any) -> Segmentation:
     """Segments one RGB uint8 (H, W, 3) image of a standing subject seen from the ``view`` ("front" or
     "back") camera. ``depth`` (metres, aligned to the colour image, 0 = none) refines the person mask.
     ``params`` defaults to :data:`DEFAULT_PARAMS` of the view; keyword overrides set fields of
@@ -564,7 +565,7 @@ def segment_image(colour_rgb: np.ndarray, view: str = "front", depth: Optional[n
 
 
 def segment_capture(folder: PathLike, cameras: Sequence[str] = ("front", "back"), use_depth: bool = True,
-                    write: bool = True, out_dir: Optional[PathLike] = None, overwrite: bool = False,
+                    write: bool = True, out_dir: PathLike | None = None, overwrite: bool = False,
                     **params: Any) -> dict[str, Segmentation]:
     """Segments every camera folder of a capture (or a virtual scan): ``FOLDER/<camera>/`` with the colour
     and depth PNGs and camera.json (see :func:`bsv.frontend.capture.read_capture`). The camera name is the
@@ -639,7 +640,21 @@ def label_accuracy(pred: np.ndarray, truth: np.ndarray) -> dict[str, Any]:
 
 
 __all__ = [
-    "SEGMENT_IDS", "SEGMENT_NAMES", "POSE_NAMES", "HAND_NAMES", "LANDMARK_NAMES", "REQUIRED_LANDMARKS",
-    "SegmentParams", "DEFAULT_PARAMS", "Segmentation", "run_holistic", "label_pixels", "refine_mask_with_depth", "segment_image",
-    "segment_capture", "write_segmentation", "SEGMENTATION_FILES", "label_accuracy",
+    "DEFAULT_PARAMS",
+    "HAND_NAMES",
+    "LANDMARK_NAMES",
+    "POSE_NAMES",
+    "REQUIRED_LANDMARKS",
+    "SEGMENTATION_FILES",
+    "SEGMENT_IDS",
+    "SEGMENT_NAMES",
+    "SegmentParams",
+    "Segmentation",
+    "label_accuracy",
+    "label_pixels",
+    "refine_mask_with_depth",
+    "run_holistic",
+    "segment_capture",
+    "segment_image",
+    "write_segmentation",
 ]

@@ -10,9 +10,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Optional, Union
-
-import numpy as np
+from typing import Any, Union
 
 from . import _bsv
 from ._bsv import RegisterParams, VolumeReport
@@ -67,8 +65,8 @@ def read_mesh(path: PathLike) -> Mesh:
 
 def read_point_cloud(path: PathLike) -> PointCloud:
     """Reads a PLY point cloud (x, y, z and optional normals, colours and ``label``)."""
-    p, n, c, l = _bsv.read_point_cloud(str(path))
-    return PointCloud(p, n, c, l)
+    p, n, c, lab = _bsv.read_point_cloud(str(path))
+    return PointCloud(p, n, c, lab)
 
 
 def write_mesh(
@@ -231,8 +229,8 @@ def scan(
             raise OutputExistsError(f"{img} is a file; images= needs a folder")
         if any(Path(img).iterdir()) and not overwrite:
             raise OutputExistsError(f"{img} is not empty; pass overwrite=True to write into it")
-    p, n, c, l = _bsv.scan(m.vertices, m.faces, m.vertex_labels, m.face_labels, condition, int(seed), img)
-    return PointCloud(p, n, c, l)
+    p, n, c, lab = _bsv.scan(m.vertices, m.faces, m.vertex_labels, m.face_labels, condition, int(seed), img)
+    return PointCloud(p, n, c, lab)
 
 
 __all__ = [

@@ -65,18 +65,17 @@ def cube_template(divisions: int = CUBE_DIVISIONS) -> Mesh:
     pts = np.stack([ii[on_surface], jj[on_surface], kk[on_surface]], axis=1)
     index[on_surface] = np.arange(len(pts))
     faces = []
-    a, b = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
-    a, b = a.ravel(), b.ravel()
+    a_grid, b_grid = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    a, b = a_grid.ravel(), b_grid.ravel()
+
+    def idx(axis: int, side: int, u: int, v: int, da: int, db: int) -> np.ndarray:
+        c = {axis: np.full_like(a, side), u: a + da, v: b + db}
+        return index[c[0], c[1], c[2]]
+
     for axis in range(3):
         u, v = [k for k in range(3) if k != axis]
         for side in (0, n):
-            def idx(da: int, db: int) -> np.ndarray:
-                c = [None, None, None]
-                c[axis] = np.full_like(a, side)
-                c[u], c[v] = a + da, b + db
-                return index[c[0], c[1], c[2]]
-
-            q00, q10, q11, q01 = idx(0, 0), idx(1, 0), idx(1, 1), idx(0, 1)
+            q00, q10, q11, q01 = (idx(axis, side, u, v, da, db) for da, db in ((0, 0), (1, 0), (1, 1), (0, 1)))
             # (u, v, axis) right-handed when (axis, u, v) is a cyclic order; flip for the low side
             outward_ccw = ((u - axis) % 3 == 1) == (side == n)
             if outward_ccw:
@@ -84,8 +83,8 @@ def cube_template(divisions: int = CUBE_DIVISIONS) -> Mesh:
             else:
                 faces += [np.stack([q00, q11, q10], 1), np.stack([q00, q01, q11], 1)]
     f = np.concatenate(faces)
-    v = pts / n - 0.5
-    return Mesh(v.astype(np.float64), f, np.full(len(v), TORSO, np.uint8), np.full(len(f), TORSO, np.uint8))
+    verts = pts / n - 0.5
+    return Mesh(verts.astype(np.float64), f, np.full(len(verts), TORSO, np.uint8), np.full(len(f), TORSO, np.uint8))
 
 
 def asset_path() -> Path:

@@ -121,7 +121,7 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] |
         s = subject(index, cfg.seed, local=cfg.local)
     except Exception as exc:
         err = f"subject generation failed: {type(exc).__name__}: {exc}"
-        runs = [Run(name, c, m, False, error=err) for c in cfg.conditions for m in cfg.methods]
+        runs: list[Run] = [Run(name, c, m, False, error=err) for c in cfg.conditions for m in cfg.methods]
         for _ in cfg.conditions:
             if on_condition:
                 on_condition()
@@ -131,7 +131,7 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] |
     truth = {k: float(v) for k, v in s.volumes_l().items()}
     template = load_template(cfg.template)
     mesh = s.body.mesh()
-    runs: list[Run] = []
+    runs = []
     for cond in cfg.conditions:
         try:
             runs += measure_condition(name, mesh, truth, cond, scan_seed(cfg.seed, index), template,

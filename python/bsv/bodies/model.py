@@ -10,6 +10,7 @@ min 0, average 0.5, max 1; height and proportions: 0.5 is neutral and carries no
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
@@ -42,7 +43,7 @@ class Phenotype:
     caucasian: float = 1.0 / 3.0
     local: dict = field(default_factory=dict)
 
-    def with_(self, **kw) -> Phenotype:
+    def with_(self, **kw: Any) -> Phenotype:
         """A copy with some fields replaced."""
         return replace(self, **kw)
 

@@ -22,7 +22,7 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Union
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -37,8 +37,15 @@ from .errors import (
 from .intrinsics import Intrinsics, load_intrinsics
 from .marker import SIDES, Board, MarkerSpec
 
-PathLike = Union[str, Path]
-ImageLike = Union[np.ndarray, PathLike]
+if TYPE_CHECKING:
+    import cv2
+
+PathLike = str | Path
+ImageLike = np.ndarray | PathLike
+
+#: The default marker and board (frozen dataclasses, shared as argument defaults).
+_DEFAULT_MARKER = MarkerSpec()
+_DEFAULT_BOARD = Board()
 
 #: Largest blur edge width (pixels) accepted for a marker; a sharp edge is about 1-2 px wide.
 MAX_EDGE_WIDTH_PX = 4.0
@@ -90,7 +97,7 @@ def edge_width_px(gray: np.ndarray, roi: tuple[int, int, int, int] | None = None
     return contrast / steep
 
 
-def _detector(marker: MarkerSpec):
+def _detector(marker: MarkerSpec) -> cv2.aruco.ArucoDetector:
     import cv2
 
     params = cv2.aruco.DetectorParameters()
@@ -101,7 +108,7 @@ def _detector(marker: MarkerSpec):
     return cv2.aruco.ArucoDetector(marker.aruco_dictionary(), params)
 
 
-def detect_marker(image: ImageLike, marker: MarkerSpec = MarkerSpec(), *, name: str = "image",
+def detect_marker(image: ImageLike, marker: MarkerSpec = _DEFAULT_MARKER, *, name: str = "image",
                   max_edge_width_px: float = MAX_EDGE_WIDTH_PX, detector: Any = None) -> np.ndarray:
     """The 4 sub-pixel corners (4 x 2, ArUco order) of the configured marker in one image.
 
@@ -188,7 +195,7 @@ def _edge_line(img: np.ndarray, p0: np.ndarray, p1: np.ndarray, centre: np.ndarr
     return np.array([nrm[0], nrm[1], -nrm @ m])
 
 
-def refine_corners(gray: np.ndarray, corners: np.ndarray, marker: MarkerSpec = MarkerSpec(), *,
+def refine_corners(gray: np.ndarray, corners: np.ndarray, marker: MarkerSpec = _DEFAULT_MARKER, *,
                    max_move_px: float = 1.5) -> np.ndarray:
     """Sub-pixel refinement of the 4 outer corners as intersections of the 4 edge lines of the marker's
     black border, each fitted to area-integral edge points along its whole length (see ``_edge_line``):
@@ -220,7 +227,7 @@ def refine_corners(gray: np.ndarray, corners: np.ndarray, marker: MarkerSpec = M
     return out
 
 
-def marker_pose(corners: np.ndarray, intrinsics: Intrinsics, marker: MarkerSpec = MarkerSpec()
+def marker_pose(corners: np.ndarray, intrinsics: Intrinsics, marker: MarkerSpec = _DEFAULT_MARKER
                 ) -> tuple[np.ndarray, np.ndarray, float]:
     """Marker-to-camera rotation (3 x 3), translation (metres) and the reprojection RMS (pixels) from
     4 corners: IPPE square, then Levenberg-Marquardt refinement."""
@@ -360,7 +367,7 @@ def calibrate_camera(
     images: Iterable[ImageLike],
     intrinsics: Intrinsics,
     side: str,
-    board: Board = Board(),
+    board: Board = _DEFAULT_BOARD,
     *,
     serial: str | None = None,
     average: str = "image",
@@ -413,7 +420,7 @@ def calibrate_camera(
 def calibrate(
     images: Mapping[str, Iterable[ImageLike]],
     intrinsics: Mapping[str, Intrinsics],
-    board: Board = Board(),
+    board: Board = _DEFAULT_BOARD,
     *,
     serials: Mapping[str, str] | None = None,
     out: PathLike | None = None,
@@ -519,7 +526,7 @@ def draw_alignment(image: np.ndarray, corners: np.ndarray | None, info: Alignmen
     return out
 
 
-def live(serial: str | None = None, board: Board = Board(), *, side: str = "front", width: int = 1920,
+def live(serial: str | None = None, board: Board = _DEFAULT_BOARD, *, side: str = "front", width: int = 1920,
          height: int = 1080, fps: int = 30, yaw_tol_deg: float = 0.5, shift_tol_m: float = 0.005) -> None:
     """Live view of one RealSense camera's colour stream with the detected marker and the remaining yaw and
     transversal shift to face it, ALIGNED within tolerance; Esc or q quits. (Exercised by hand only.)"""

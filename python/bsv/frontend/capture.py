@@ -24,7 +24,8 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Union
+from types import ModuleType
+from typing import Any
 
 import numpy as np
 
@@ -32,7 +33,7 @@ from ..errors import OutputExistsError
 from .errors import CaptureError, NoCameraError, RecordingError
 from .intrinsics import Intrinsics
 
-PathLike = Union[str, Path]
+PathLike = str | Path
 
 #: Default camera names, in capture order.
 CAMERAS = ("front", "back")
@@ -73,7 +74,7 @@ class CameraCapture:
     extra: dict[str, Any] = field(default_factory=dict)
 
 
-def import_realsense():
+def import_realsense() -> ModuleType:
     """``pyrealsense2``, or a CaptureError saying how to install it."""
     try:
         import pyrealsense2 as rs
@@ -163,11 +164,12 @@ def align_depth_to_colour(depth: np.ndarray, depth_intr: Intrinsics, colour_intr
     return out
 
 
-def _stream_intrinsics(profile, stream) -> Intrinsics:
+def _stream_intrinsics(profile: Any, stream: Any) -> Intrinsics:
     return Intrinsics.from_realsense(profile.get_stream(stream).as_video_stream_profile().get_intrinsics())
 
 
-def open_colour_stream(rs, serial: str | None, width: int, height: int, fps: int):
+def open_colour_stream(rs: ModuleType, serial: str | None, width: int, height: int,
+                       fps: int) -> tuple[Any, Intrinsics]:
     """Starts a colour-only pipeline (RGB8) on the camera ``serial`` (or the only one); returns the
     pipeline and the colour intrinsics. Used by the live calibration view."""
     _check_devices(rs, [serial] if serial else None)
@@ -179,7 +181,7 @@ def open_colour_stream(rs, serial: str | None, width: int, height: int, fps: int
     return pipe, _stream_intrinsics(prof, rs.stream.color)
 
 
-def _check_devices(rs, serials: list[str | None] | None) -> list[str]:
+def _check_devices(rs: ModuleType, serials: list[str | None] | None) -> list[str]:
     found = [d.get_info(rs.camera_info.serial_number) for d in rs.context().query_devices()]
     if not found:
         raise NoCameraError("no RealSense camera connected: plug the cameras in (USB 3), or replay recordings "
@@ -205,7 +207,7 @@ class _Frames:
     recording: Path | None = None
 
 
-def _stream_facts(rs, name: str, dev, profiles, recording: Path | None) -> _Frames:
+def _stream_facts(rs: ModuleType, name: str, dev: Any, profiles: Any, recording: Path | None) -> _Frames:
     by_type = {p.stream_type(): p for p in profiles}
     if rs.stream.depth not in by_type or rs.stream.color not in by_type:
         raise RecordingError(f"{name}: {recording or 'the camera'} lacks a depth or colour stream "
@@ -220,7 +222,7 @@ def _stream_facts(rs, name: str, dev, profiles, recording: Path | None) -> _Fram
                     np.asarray(ext.translation, dtype=np.float64) / scale), recording=recording)
 
 
-def _read_recording(rs, name: str, path: Path, config: CaptureConfig) -> _Frames:
+def _read_recording(rs: ModuleType, name: str, path: Path, config: CaptureConfig) -> _Frames:
     """Every frame of a recording, copied inside the sensor callbacks: non-real-time playback waits for
     a callback but drops frames a slow pipeline consumer has not taken yet (measured), so no pipeline."""
     import time
@@ -235,7 +237,7 @@ def _read_recording(rs, name: str, path: Path, config: CaptureConfig) -> _Frames
     profiles = [p for s in sensors for p in s.get_stream_profiles()]
     frames = _stream_facts(rs, name, dev, profiles, path)
 
-    def on_frame(f) -> None:
+    def on_frame(f: Any) -> None:
         arr = np.asanyarray(f.get_data()).copy()
         st = f.get_profile().stream_type()
         if st == rs.stream.depth:
@@ -270,7 +272,7 @@ def _read_recording(rs, name: str, path: Path, config: CaptureConfig) -> _Frames
 class _Live:
     """A live camera pipeline (recording to file) and the frames taken from it."""
 
-    def __init__(self, rs, name: str, config: CaptureConfig, serial: str | None, recording: Path) -> None:
+    def __init__(self, rs: ModuleType, name: str, config: CaptureConfig, serial: str | None, recording: Path) -> None:
         self.config, self.name = config, name
         self.pipe = rs.pipeline()
         cfg = rs.config()
@@ -387,7 +389,7 @@ def capture(
         for k, f in files.items():
             if not f.is_file():
                 raise RecordingError(f"{k}: recording {f} does not exist")
-        plan = {k: (None, f) for k, f in files.items()}
+        plan: dict[str, tuple[str | None, Path]] = {k: (None, f) for k, f in files.items()}
     else:
         if not serials:
             found = _check_devices(rs, None)

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Union
+from types import ModuleType
+from typing import Any
 
 import numpy as np
 
@@ -15,10 +16,10 @@ from ..errors import OutputExistsError
 from .errors import RecordingError
 from .intrinsics import Intrinsics
 
-PathLike = Union[str, Path]
+PathLike = str | Path
 
 
-def _rs_intrinsics(rs, intr: Intrinsics):
+def _rs_intrinsics(rs: ModuleType, intr: Intrinsics) -> Any:
     ri = rs.intrinsics()
     ri.width, ri.height = int(intr.width), int(intr.height)
     ri.fx, ri.fy, ri.ppx, ri.ppy = float(intr.fx), float(intr.fy), float(intr.cx), float(intr.cy)

@@ -40,7 +40,8 @@ import sys
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Union
+from types import ModuleType
+from typing import Any
 
 import numpy as np
 
@@ -48,7 +49,7 @@ from ..types import SEGMENT_IDS as _SEGMENT_IDS
 from ..types import SEGMENT_NAMES as _SEGMENT_NAMES
 from .errors import LandmarkMissingError, PersonNotFoundError, SegmentationError
 
-PathLike = Union[str, Path]
+PathLike = str | Path
 
 #: Segment ids of DESIGN.md without 0 (the table of ``bsv_core::Segment``, via :mod:`bsv.types`).
 SEGMENT_IDS: dict[str, int] = {n: i for n, i in _SEGMENT_IDS.items() if i != 0}
@@ -204,7 +205,7 @@ class Segmentation:
 # MediaPipe
 
 
-def _mediapipe_holistic():
+def _mediapipe_holistic() -> ModuleType:
     # MediaPipe's C++ logging (glog/absl, TFLite) prints several lines per image: keep warnings out.
     os.environ.setdefault("GLOG_minloglevel", "2")
     os.environ.setdefault("TF_CPP_MIN_LOG_LEVEL", "2")
@@ -291,11 +292,12 @@ def _orient(pose: np.ndarray, hands: list, view: str) -> tuple[np.ndarray, list,
             swapped.append(POSE_NAMES[li].replace("left_", "").replace("mouth_left", "mouth"))
     # each hand belongs to the side whose (re-ordered) pose wrist is nearest its own wrist landmark
     found = [hd for hd in hands if hd is not None]
-    new = [None, None]
+    new: list[np.ndarray | None] = [None, None]
     for hd in found:
         d = [np.hypot(*(hd[0] - pose[15 + s, :2])) for s in (0, 1)]
         s = int(np.argmin(d))
-        if new[s] is None or d[s] < np.hypot(*(new[s][0] - pose[15 + s, :2])):
+        cur = new[s]
+        if cur is None or d[s] < np.hypot(*(cur[0] - pose[15 + s, :2])):
             new[s] = hd
     return pose, new, tuple(swapped)
 

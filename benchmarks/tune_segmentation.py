@@ -114,7 +114,7 @@ def table(name: str, results: list[dict[str, Any]]) -> str:
     """Mean signed error, mean |error| per segment, mean IoU per view."""
     lines = [f"== {name}: objective mean|err| = {objective(results):.2f} %",
              f"{'segment':<13}{'mean err%':>10}{'mean|err|%':>11}{'IoU front':>10}{'IoU back':>9}"]
-    for s in SEGMENTS + ["trunk_limbs"]:
+    for s in [*SEGMENTS, "trunk_limbs"]:
         e = [r["err"][s] for r in results]
         iou = ["" if s == "trunk_limbs" else f"{np.nanmean([r['iou'][c][s] for r in results]):.3f}" for c in CAMERAS]
         lines.append(f"{s:<13}{np.mean(e):>+10.2f}{np.mean(np.abs(e)):>11.2f}{iou[0]:>10}{iou[1]:>9}")
@@ -189,7 +189,7 @@ def main() -> int:
         res = run_set(subjects, params)
         print(table(f"{name} (seed {SETS[name][0]})", res), flush=True)
         for i, r in enumerate(res):
-            print(f"  subject {i}: " + " ".join(f"{s}={r['err'][s]:+.1f}" for s in SEGMENTS + ["trunk_limbs"]))
+            print(f"  subject {i}: " + " ".join(f"{s}={r['err'][s]:+.1f}" for s in [*SEGMENTS, "trunk_limbs"]))
     return 0
 
 

@@ -108,7 +108,7 @@ def choose_scans(items: Sequence[FaustItem], numbers: Sequence[int] | None = Non
         cands = [it for it in items if it.subject == subj]
         stats = [_box_ratios(read_mesh(it.registration).vertices) for it in cands]
         tallest = max(h for h, _ in stats)
-        upright = [(it, r) for it, (h, r) in zip(cands, stats) if h >= 0.97 * tallest]
+        upright = [(it, r) for it, (h, r) in zip(cands, stats, strict=True) if h >= 0.97 * tallest]
         chosen.append(min(upright, key=lambda ir: float(np.abs(ir[1] - ref_ratio).sum()))[0])
     return chosen
 
@@ -226,7 +226,7 @@ def run_faust(root: str | Path, out: str | Path, scans: Sequence[int] | None = N
     config = {"root": str(root), "scans": ",".join(str(i.number) for i in items), "conditions": ",".join(conditions),
               "seed": seed, "methods": ",".join(methods), "params": dict(params or {}), "facing": facing,
               "template": template}
-    notes = ["Ground truth: FAUST registration meshes labelled by registering the 14-segment template to "
-             "them (see bsv/bench/faust.py); the virtual rig scans the raw scans."]
+    notes = [("Ground truth: FAUST registration meshes labelled by registering the 14-segment template to "
+              "them (see bsv/bench/faust.py); the virtual rig scans the raw scans.")]
     summary = write_outputs(out, "BSV FAUST benchmark", config, infos, runs, wall, notes, overwrite=overwrite)
     return runs, summary

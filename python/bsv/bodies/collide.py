@@ -34,7 +34,7 @@ def closed_segment(vertices: np.ndarray, faces: np.ndarray, face_labels: np.ndar
         n += 1
     if extra_v:
         v = np.concatenate([v, np.array(extra_v)])
-        f = np.concatenate([f] + extra_f)
+        f = np.concatenate([f, *extra_f])
     return v, f
 
 

@@ -111,9 +111,9 @@ def target_weights(p: Phenotype, asset: Asset | None = None) -> dict[int, float]
     race = np.array([_check(r, getattr(p, r), 0, 1) for r in RACES])
     race = race / race.sum() if race.sum() > 0 else np.full(3, 1.0 / 3.0)
     gw = {"female": 1.0 - g, "male": g}
-    aw = dict(zip(AGES, _age_weights(age)))
-    mw = dict(zip(LEVELS, mus))
-    ww = dict(zip(LEVELS, wei))
+    aw = dict(zip(AGES, _age_weights(age), strict=True))
+    mw = dict(zip(LEVELS, mus, strict=True))
+    ww = dict(zip(LEVELS, wei, strict=True))
     hw = {"minheight": max(0.0, 1.0 - 2.0 * h), "maxheight": max(0.0, 2.0 * h - 1.0)}
     pw = {"uncommonproportions": max(0.0, 1.0 - 2.0 * pr), "idealproportions": max(0.0, 2.0 * pr - 1.0)}
     out: dict[int, float] = {}

@@ -58,7 +58,7 @@ def cap_loop(vertices: np.ndarray, loop: np.ndarray, label: int) -> tuple[np.nda
     c = p.mean(axis=0)
     edge = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1).mean()
     radius = np.linalg.norm(p - c, axis=1).mean()
-    rings = max(1, int(round(radius / edge)))
+    rings = max(1, round(radius / edge))
     k = len(loop)
     new_v = [c + s * (p - c) for s in (1.0 - np.arange(1, rings) / rings)]
     new_v.append(c[None, :])
@@ -112,7 +112,7 @@ def trunk_limbs_mesh(full: Mesh) -> Mesh:
     edge_lab = {}
     for col in range(3):
         a, b = f[:, col], f[:, (col + 1) % 3]
-        for x, y, lab in zip(a.tolist(), b.tolist(), fl.tolist()):
+        for x, y, lab in zip(a.tolist(), b.tolist(), fl.tolist(), strict=True):
             edge_lab[(x, y)] = lab
     new_f, new_l, verts = [f], [fl], [v]
     nv = len(v)

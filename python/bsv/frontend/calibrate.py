@@ -409,7 +409,7 @@ def calibrate_camera(
         r_cm, t_cm = average_poses(rs, ts)
     r_wm, t_wm = board.marker_to_world(side)
     r_wc, t_wc = camera_to_world(r_cm, t_cm, r_wm, t_wm)
-    centres = [camera_to_world(r, t, r_wm, t_wm)[1] for r, t in zip(rs, ts)]
+    centres = [camera_to_world(r, t, r_wm, t_wm)[1] for r, t in zip(rs, ts, strict=True)]
     spread_mm = float(np.sqrt(np.mean(np.sum((np.asarray(centres) - t_wc) ** 2, axis=1)))) * 1000.0
     spread_deg = float(np.sqrt(np.mean([rotation_angle_deg(r, r_cm) ** 2 for r in rs])))
     return CameraCalibration(side, intrinsics, r_wc, t_wc, serial=serial, frames=len(rs),

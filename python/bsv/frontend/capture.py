@@ -19,6 +19,7 @@ Written per camera into ``OUT/<camera>/``:
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 from collections.abc import Mapping
@@ -310,10 +311,8 @@ class _Live:
 
     def stop(self) -> None:
         """Stops the pipeline (finishes the recording)."""
-        try:
+        with contextlib.suppress(RuntimeError):
             self.pipe.stop()
-        except RuntimeError:
-            pass
 
 
 #: Files a capture writes into each ``OUT/<camera>/`` (besides the live recording).
@@ -395,7 +394,7 @@ def capture(
             found = _check_devices(rs, None)
             if len(found) < 2:
                 raise NoCameraError(f"need two RealSense cameras (front, back), found {len(found)}: {found}")
-            serials = dict(zip(CAMERAS, sorted(found)))
+            serials = dict(zip(CAMERAS, sorted(found), strict=False))
         else:
             _check_devices(rs, list(serials.values()))
         plan = {k: (s, out / k / "recording.db3") for k, s in serials.items()}

@@ -91,7 +91,7 @@ def write_recording(
     ds.start(q)
     cs.start(q)
     try:
-        for i, (d, c) in enumerate(zip(depth, colour)):
+        for i, (d, c) in enumerate(zip(depth, colour, strict=True)):
             ts = i * 1000.0 / fps
             for sensor, prof, img, bpp in ((ds, dp, np.ascontiguousarray(d), 2), (cs, cp, np.ascontiguousarray(c), 3)):
                 f = rs.software_video_frame()

@@ -198,7 +198,7 @@ class Segmentation:
     def counts(self) -> dict[str, int]:
         """Pixel count of every segment present in :attr:`labels`."""
         ids, n = np.unique(self.labels, return_counts=True)
-        return {SEGMENT_NAMES[i]: int(c) for i, c in zip(ids, n) if i != 0}
+        return {SEGMENT_NAMES[i]: int(c) for i, c in zip(ids, n, strict=True) if i != 0}
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -613,8 +613,8 @@ def write_segmentation(seg: Segmentation, folder: PathLike, overwrite: bool = Fa
     if not ok:
         raise SegmentationError(f"cannot write segmentation.png / mask.png into {d}: is it a writable folder?")
     lm = {n: (None if not np.isfinite(r[0]) else [float(r[0]), float(r[1]), float(r[2])])
-          for n, r in zip(seg.names, seg.landmarks)}
-    meta = {"view": seg.view, "segments": {n: i for n, i in SEGMENT_IDS.items()}, "hands_found": list(seg.hands_found),
+          for n, r in zip(seg.names, seg.landmarks, strict=False)}
+    meta = {"view": seg.view, "segments": dict(SEGMENT_IDS), "hands_found": list(seg.hands_found),
             "swapped_pairs": list(seg.swapped), "counts": seg.counts(), "landmarks_px": lm}
     (d / "landmarks.json").write_text(json.dumps(meta, indent=1))
 

@@ -54,7 +54,8 @@ def winding_numbers(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray,
 
 
 def penetrations(vertices: np.ndarray, faces: np.ndarray, face_labels: np.ndarray,
-                 pairs: Iterable[tuple[str, str]] = DEFAULT_PAIRS, margin: float = 0.03, max_points: int = 400) -> dict[str, int]:
+                 pairs: Iterable[tuple[str, str]] = DEFAULT_PAIRS, margin: float = 0.03,
+                 max_points: int = 400) -> dict[str, int]:
     """Number of (sampled) vertices of the first segment inside the closed second one, per pair.
 
     Vertices of the first segment within ``margin`` metres of a shared boundary are skipped (a joint's

@@ -58,8 +58,8 @@ def prepared(cache: Path, seed: int, index: int) -> dict[str, Any]:
         d = data[cam]
         prm = sg.DEFAULT_PARAMS[cam]
         res = sg.run_holistic(d["colour"], prm)
-        pose, hands, _ = sg._orient(res["pose"], res["hands"], cam)  # noqa: SLF001
-        mask = sg._clean_mask(res["mask"] > prm.mask_threshold)  # noqa: SLF001
+        pose, hands, _ = sg._orient(res["pose"], res["hands"], cam)
+        mask = sg._clean_mask(res["mask"] > prm.mask_threshold)
         mask = sg.refine_mask_with_depth(mask, d["depth_m"], prm.depth_band, prm.depth_grow_px)
         truth_lab = _read_label_png(cap / cam / d["meta"].get("labels", "labels.png"))
         out["views"][cam] = {"pose": pose, "hands": hands, "mask": mask, "truth_labels": truth_lab,
@@ -114,7 +114,7 @@ def table(name: str, results: list[dict[str, Any]]) -> str:
     """Mean signed error, mean |error| per segment, mean IoU per view."""
     lines = [f"== {name}: objective mean|err| = {objective(results):.2f} %",
              f"{'segment':<13}{'mean err%':>10}{'mean|err|%':>11}{'IoU front':>10}{'IoU back':>9}"]
-    for s in SEGMENTS + ["trunk_limbs"]:
+    for s in [*SEGMENTS, "trunk_limbs"]:
         e = [r["err"][s] for r in results]
         iou = ["" if s == "trunk_limbs" else f"{np.nanmean([r['iou'][c][s] for r in results]):.3f}" for c in CAMERAS]
         lines.append(f"{s:<13}{np.mean(e):>+10.2f}{np.mean(np.abs(e)):>11.2f}{iou[0]:>10}{iou[1]:>9}")
@@ -152,7 +152,7 @@ def search(subjects: list[dict[str, Any]], params: dict[str, Any], rounds: int, 
                         cand[cam] = dataclasses.replace(cand[cam], **{name: round(getattr(cand[cam], name) + sign * step, 4)})
                     try:
                         val = objective(run_set(subjects, cand))
-                    except Exception as e:  # noqa: BLE001 - invalid parameter values end the direction
+                    except Exception as e:  # invalid parameter values end the direction
                         print(f"  {view}.{name} {sign:+d}: {e}", flush=True)
                         break
                     print(f"  {view}.{name} {'+' if sign > 0 else '-'}{step}: {val:.3f} (best {best:.3f})", flush=True)
@@ -189,7 +189,7 @@ def main() -> int:
         res = run_set(subjects, params)
         print(table(f"{name} (seed {SETS[name][0]})", res), flush=True)
         for i, r in enumerate(res):
-            print(f"  subject {i}: " + " ".join(f"{s}={r['err'][s]:+.1f}" for s in SEGMENTS + ["trunk_limbs"]))
+            print(f"  subject {i}: " + " ".join(f"{s}={r['err'][s]:+.1f}" for s in [*SEGMENTS, "trunk_limbs"]))
     return 0
 
 

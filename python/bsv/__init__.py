@@ -8,10 +8,9 @@ mesh checks, volumes, the virtual scanner, the ARAP registration) runs in the Ru
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Callable, Optional, Union
-
-import numpy as np
+from typing import Any, Union
 
 from . import _bsv
 from ._bsv import RegisterParams, VolumeReport
@@ -66,8 +65,8 @@ def read_mesh(path: PathLike) -> Mesh:
 
 def read_point_cloud(path: PathLike) -> PointCloud:
     """Reads a PLY point cloud (x, y, z and optional normals, colours and ``label``)."""
-    p, n, c, l = _bsv.read_point_cloud(str(path))
-    return PointCloud(p, n, c, l)
+    p, n, c, lab = _bsv.read_point_cloud(str(path))
+    return PointCloud(p, n, c, lab)
 
 
 def write_mesh(
@@ -151,9 +150,9 @@ def register(
     labels: Any = None,
     template: Any = None,
     *,
-    progress: Union[bool, Callable[[dict[str, Any]], None]] = False,
+    progress: bool | Callable[[dict[str, Any]], None] = False,
     density: float = 1000.0,
-    label_source: Optional[str] = None,
+    label_source: str | None = None,
     **params: Any,
 ) -> Registration:
     """Fits the template to a point cloud by regularized ARAP and measures the segment volumes.
@@ -168,7 +167,7 @@ def register(
     """
     cloud = as_cloud(points, labels=labels)
     tmpl = default_template() if template is None else as_mesh(template)
-    callback: Optional[Callable[[dict[str, Any]], None]]
+    callback: Callable[[dict[str, Any]], None] | None
     if progress is True:
         callback = _print_iteration
     elif callable(progress):
@@ -213,7 +212,7 @@ def scan(
     condition: str = "noer",
     seed: int = 0,
     *,
-    images: Optional[PathLike] = None,
+    images: PathLike | None = None,
     overwrite: bool = False,
 ) -> PointCloud:
     """Virtual two-camera capture (DESIGN.md rig) of a labelled mesh: a merged, labelled cloud.
@@ -230,16 +229,19 @@ def scan(
             raise OutputExistsError(f"{img} is a file; images= needs a folder")
         if any(Path(img).iterdir()) and not overwrite:
             raise OutputExistsError(f"{img} is not empty; pass overwrite=True to write into it")
-    p, n, c, l = _bsv.scan(m.vertices, m.faces, m.vertex_labels, m.face_labels, condition, int(seed), img)
-    return PointCloud(p, n, c, l)
+    p, n, c, lab = _bsv.scan(m.vertices, m.faces, m.vertex_labels, m.face_labels, condition, int(seed), img)
+    return PointCloud(p, n, c, lab)
 
 
 __all__ = [
+    "SEGMENT_IDS",
+    "SEGMENT_NAMES",
+    "TRUNK_LIMBS",
     "BsvError",
     "FormatError",
     "InputError",
-    "MeshError",
     "Mesh",
+    "MeshError",
     "OutputExistsError",
     "PointCloud",
     "RegisterParams",
@@ -251,9 +253,6 @@ __all__ = [
     "RegistrationResourceError",
     "RegistrationStopped",
     "ScanError",
-    "SEGMENT_IDS",
-    "SEGMENT_NAMES",
-    "TRUNK_LIMBS",
     "VolumeError",
     "VolumeReport",
     "WriteError",

@@ -21,7 +21,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Union
+from typing import Any
 
 import numpy as np
 
@@ -30,7 +30,7 @@ from .errors import OutputExistsError
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
 from .types import TRUNK_LIMBS, Mesh, PointCloud, Registration
 
-PathLike = Union[str, Path]
+PathLike = str | Path
 
 #: Files that process writes into OUT (the figures are listed by :data:`bsv.report.FIGURES`).
 OUTPUTS = ("cloud.ply", "fitted.ply", "volumes.json", "report.html")
@@ -271,9 +271,13 @@ def process(
     views = []
     for cam in cameras:
         d = data[cam]
+
+        def segment_camera(cam: str = cam, d: dict[str, Any] = d) -> tuple[np.ndarray, dict]:
+            return _segment(cam, d, dirs[cam], segmentation, segment_params or {}, out / SEGMENTATION_DIR / cam,
+                            overwrite)
+
         labels, summary = steps.run(f"segment_{cam}", f"segmenting the {cam} camera ({segmentation})",
-                                    lambda cam=cam, d=d: _segment(cam, d, dirs[cam], segmentation, segment_params or {},
-                                                                  out / SEGMENTATION_DIR / cam, overwrite))
+                                    segment_camera)
         seg_summary[cam] = summary
         views.append({"name": cam, "intrinsics": d["intrinsics"].to_json(), "camera_to_world": extrinsics[cam],
                       "depth": np.ascontiguousarray(d["depth_m"], dtype=np.float32), "labels": labels,

@@ -10,16 +10,17 @@ from __future__ import annotations
 
 import html
 import math
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, Optional, Sequence, Union
+from typing import Any
 
 import numpy as np
 
 from . import _bsv
 from .errors import OutputExistsError
-from .types import PALETTE, SEGMENT_NAMES, TRUNK_LIMBS
+from .types import PALETTE, SEGMENT_NAMES
 
-PathLike = Union[str, Path]
+PathLike = str | Path
 
 #: PNG figures written next to report.html.
 FIGURES = ("body_front.png", "body_side.png", "cloud_over_mesh.png", "volumes.png")
@@ -38,7 +39,7 @@ def palette() -> np.ndarray:
     return np.asarray(PALETTE, dtype=np.float64) / 255.0
 
 
-def face_labels(faces: np.ndarray, vertex_labels: Optional[np.ndarray], face_labels_: Optional[np.ndarray] = None) -> np.ndarray:
+def face_labels(faces: np.ndarray, vertex_labels: np.ndarray | None, face_labels_: np.ndarray | None = None) -> np.ndarray:
     """Per-face segment ids: the given face labels, else Rust's one rule
     (``bsv_volume::face_labels_from_vertices``: the label shared by two corners; three different: the
     corner with the smallest vertex index)."""
@@ -49,7 +50,7 @@ def face_labels(faces: np.ndarray, vertex_labels: Optional[np.ndarray], face_lab
     return _bsv.face_labels_from_vertices(faces, vertex_labels)
 
 
-def render_mesh(ax: Any, vertices: np.ndarray, faces: np.ndarray, labels: Optional[np.ndarray], view: str = "front",
+def render_mesh(ax: Any, vertices: np.ndarray, faces: np.ndarray, labels: np.ndarray | None, view: str = "front",
                 alpha: float = 1.0, grey: bool = False) -> None:
     """Draws a labelled mesh on a 2-D matplotlib axis: orthographic projection, faces sorted far to near
     (painter's algorithm), Lambert-shaded palette colours (or grey)."""
@@ -70,13 +71,11 @@ def render_mesh(ax: Any, vertices: np.ndarray, faces: np.ndarray, labels: Option
     order = np.argsort(depth[keep], kind="stable")
     idx = np.flatnonzero(keep)[order]
     xy = np.stack([tri[idx] @ sx, tri[idx] @ sy], axis=-1)
-    if grey:
-        base = np.full((len(idx), 3), 0.78)
-    else:
-        base = palette()[np.clip(np.asarray(labels)[idx], 0, 14)]
+    base = np.full((len(idx), 3), 0.78) if grey else palette()[np.clip(np.asarray(labels)[idx], 0, 14)]
     colours = np.clip(base * shade[idx, None], 0.0, 1.0)
     rgba = np.concatenate([colours, np.full((len(idx), 1), alpha)], axis=1)
-    ax.add_collection(PolyCollection(xy, facecolors=rgba, edgecolors=rgba, linewidths=0.15))
+    # matplotlib's stub asks for a Sequence; an (N, 3, 2) array is what PolyCollection handles fastest
+    ax.add_collection(PolyCollection(xy, facecolors=rgba, edgecolors=rgba, linewidths=0.15))  # type: ignore[arg-type]
     ax.set_xlim(xy[..., 0].min() - 0.05, xy[..., 0].max() + 0.05)
     ax.set_ylim(xy[..., 1].min() - 0.05, xy[..., 1].max() + 0.05)
     ax.set_aspect("equal")
@@ -97,7 +96,7 @@ def _body_figure(path: Path, mesh: Any, labels: np.ndarray, view: str) -> None:
     fig, ax = plt.subplots(figsize=(3.6, 5.6), dpi=110)
     render_mesh(ax, mesh.vertices, mesh.faces, labels, view)
     ax.set_title(f"fitted body, {'front' if view == 'front' else 'left side'}", fontsize=9)
-    _legend(fig, sorted(set(int(x) for x in np.unique(labels))))
+    _legend(fig, sorted({int(x) for x in np.unique(labels)}))
     fig.subplots_adjust(bottom=0.2, top=0.95, left=0.02, right=0.98)
     fig.savefig(path)
     plt.close(fig)
@@ -113,7 +112,7 @@ def _cloud_figure(path: Path, mesh: Any, labels: np.ndarray, cloud: Any, max_poi
         pts, lab = pts[sel], lab[sel]
     pal = palette()
     fig, axes = plt.subplots(1, 2, figsize=(6.4, 5.6), dpi=110)
-    for ax, view in zip(axes, ("front", "side")):
+    for ax, view in zip(axes, ("front", "side"), strict=True):
         render_mesh(ax, mesh.vertices, mesh.faces, labels, view, grey=True)
         sx, sy, _ = VIEWS[view]
         ax.scatter(pts @ sx, pts @ sy, s=0.3, c=pal[np.clip(lab, 0, 14)], linewidths=0)
@@ -127,7 +126,7 @@ def _segments(volumes_l: dict[str, float]) -> list[str]:
     return [SEGMENT_NAMES[i] for i in range(1, 15) if SEGMENT_NAMES[i] in volumes_l]
 
 
-def _volume_figure(path: Path, volumes_l: dict[str, float], truth: Optional[dict[str, float]]) -> None:
+def _volume_figure(path: Path, volumes_l: dict[str, float], truth: dict[str, float] | None) -> None:
     import matplotlib.pyplot as plt
 
     names = _segments(volumes_l)
@@ -135,7 +134,7 @@ def _volume_figure(path: Path, volumes_l: dict[str, float], truth: Optional[dict
     est = np.array([volumes_l[n] for n in names])
     pal = palette()
     fig, ax = plt.subplots(figsize=(7.0, 3.2), dpi=110)
-    colours = [pal[[k for k, v in SEGMENT_NAMES.items() if v == n][0]] for n in names]
+    colours = [pal[next(k for k, v in SEGMENT_NAMES.items() if v == n)] for n in names]
     if truth:
         tv = np.array([truth.get(n, np.nan) for n in names])
         ax.bar(x - 0.2, est, 0.4, color=colours, edgecolor="k", linewidth=0.4, label="estimated")
@@ -143,7 +142,7 @@ def _volume_figure(path: Path, volumes_l: dict[str, float], truth: Optional[dict
         ax.legend(fontsize=8)
     else:
         ax.bar(x, est, 0.6, color=colours, edgecolor="k", linewidth=0.4)
-    for xi, e in zip(x, est):
+    for xi, e in zip(x.tolist(), est.tolist(), strict=True):
         ax.text(xi, e, f"{e:.1f}", ha="center", va="bottom", fontsize=6)
     ax.set_xticks(x)
     ax.set_xticklabels(names, rotation=35, ha="right", fontsize=8)

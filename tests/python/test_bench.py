@@ -17,11 +17,19 @@ from bsv.bench.common import BenchError, Run, keep_trunk_limbs, rve, signed_erro
 from bsv.bench.faust import choose_scans, list_scans, nearest_index, sample_surface
 from bsv.bench.floor import CameraPose, camera_weights, floor_mesh, floor_volumes, read_camera_poses, vertex_normals
 from bsv.bench.peer import prealign, robust_box
-from bsv.bench.reference import PAPER, P2PV_BUFF
-from bsv.bench.tables import (CSV_COLUMNS, bias_table, p2pv_table, paper_table, read_csv, rows, summarise,
-                              target_check, write_csv, write_json)
-
-
+from bsv.bench.reference import P2PV_BUFF, PAPER
+from bsv.bench.tables import (
+    CSV_COLUMNS,
+    bias_table,
+    p2pv_table,
+    paper_table,
+    read_csv,
+    rows,
+    summarise,
+    target_check,
+    write_csv,
+    write_json,
+)
 
 # ---------------------------------------------------------------- metric and tables
 
@@ -71,7 +79,7 @@ def test_markdown_tables_show_paper_values_and_marks() -> None:
     assert "2.00 ± 1.41 (5.07) ✓" in lines["torso"]                # better than 5.07
     assert f"({PAPER['torso'][1]:.2f})" in lines["torso"]           # l5ca column uses L5Ca
     assert "floor 1.50, excess +1.50" in lines["torso"]
-    assert lines["thigh_l"].count("–") == 2                        # absent segment
+    assert lines["thigh_l"].count("\u2013") == 2                   # absent segment
     p2 = p2pv_table(s)
     arm = next(ln for ln in p2.splitlines() if ln.startswith("| arm_l"))
     assert "98.00 ✓" in arm and f"{P2PV_BUFF['arm_l']:.2f}" in arm
@@ -87,7 +95,7 @@ def test_csv_and_json_writers_round_trip(tmp_path: Path) -> None:
     back = read_csv(tmp_path / "r.csv")
     assert list(back[0]) == list(CSV_COLUMNS)
     assert len(back) == len(table)
-    for a, b in zip(table, back):
+    for a, b in zip(table, back, strict=True):
         assert a["segment"] == b["segment"] and a["rve_pct"] == pytest.approx(b["rve_pct"], abs=1e-6)
         assert (a["floor_l"] is None) == (b["floor_l"] is None)
     write_json(tmp_path / "r.json", {"x": math.nan, "y": np.float64(2.5), "z": [np.int64(3)], "r": _runs()[0].to_json()})
@@ -184,7 +192,7 @@ def test_floor_reads_a_virtual_capture_and_matches_its_cloud(body: bsv.Mesh, tmp
 
     before, after = offset(body.vertices), offset(floor_mesh(body, cams).vertices)
     assert after < 0.4e-3 and after < 0.5 * before, (before, after)
-    with pytest.raises(Exception, match="camera.json"):
+    with pytest.raises(Exception, match=r"camera\.json"):
         read_camera_poses(tmp_path / "front")
 
 
@@ -297,7 +305,7 @@ def test_existing_outputs_are_refused_without_overwrite(tmp_path: Path, capsys) 
     assert (tmp_path / "report.md").read_text() == "mine"
     (tmp_path / "report.md").unlink()
     (tmp_path / "trunk_limbs_hist_bsv.png").write_bytes(b"png")
-    with pytest.raises(OutputExistsError, match="trunk_limbs_hist_bsv.png") as e:
+    with pytest.raises(OutputExistsError, match=r"trunk_limbs_hist_bsv\.png") as e:
         write_outputs(tmp_path, "t", {}, [], _runs(), 1.0)
     assert isinstance(e.value, bsv.BsvError) and isinstance(e.value, FileExistsError)
     assert (tmp_path / "trunk_limbs_hist_bsv.png").read_bytes() == b"png" and not (tmp_path / "results.json").exists()
@@ -350,7 +358,7 @@ def test_faust_command_on_synthetic_bodies(tmp_path: Path) -> None:
     assert code == 0
     doc = json.loads((out / "results.json").read_text())
     assert [r["subject"] for r in doc["runs"]] == ["tr_scan_000", "tr_scan_010"]
-    for r, s in zip(doc["runs"], subs):
+    for r, s in zip(doc["runs"], subs, strict=True):
         truth = s.volumes_l()
         # the template-labelled ground truth agrees with the bodies' own labels on the aggregate
         assert r["truth_l"]["trunk_limbs"] == pytest.approx(truth["trunk_limbs"], rel=0.025)

@@ -11,14 +11,13 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 
 
+from meshcheck import edges_closed  # noqa: E402
+
 import bsv.errors  # noqa: E402
 from bsv import bodies  # noqa: E402
-from meshcheck import edges_closed  # noqa: E402
 from bsv.bodies.collide import penetrations, winding_numbers  # noqa: E402
 from bsv.bodies.labels import boundary_loops  # noqa: E402
 from bsv.bodies.meshio import read_ply  # noqa: E402
-
-
 
 
 @pytest.fixture(scope="module")
@@ -97,7 +96,7 @@ def test_pose_angles_are_applied():
     a = bodies.load_asset()
     for down in (25.0, 50.0):
         b = bodies.make_body(pose=bodies.Pose.symmetric(arm_down=down, elbow=0.0))
-        v, j = bodies.shape(bodies.Phenotype(), a)
+        _v, j = bodies.shape(bodies.Phenotype(), a)
         from bsv.bodies.pose import bone_transforms
         R, T = bone_transforms(j, bodies.Pose.symmetric(arm_down=down, elbow=0.0), a)
         sh, el = (R[a.bone(n)] @ j[a.bone(n), 0] + T[a.bone(n)] for n in ("upperarm01.L", "lowerarm01.L"))
@@ -108,7 +107,7 @@ def test_pose_angles_are_applied():
 
 def test_dual_quaternion_pose_keeps_forearm_volume():
     a = bodies.load_asset()
-    v, j = bodies.shape(bodies.Phenotype(), a)
+    v, _j = bodies.shape(bodies.Phenotype(), a)
     rest = bodies.segment_volumes(v, a.faces, bodies.make_body().face_labels)
     posed = bodies.make_body().volumes_l()
     assert posed["forearm_l"] == pytest.approx(rest[5] * 1e3, rel=0.03)
@@ -151,7 +150,7 @@ def test_penetration_check_detects_contact():
 def test_cohort_is_deterministic_and_plausible(tmp_path):
     a = bodies.write_cohort(tmp_path / "a", 2, seed=7)
     b = bodies.write_cohort(tmp_path / "b", 2, seed=7)
-    for (pa, ja), (pb, jb) in zip(a, b):
+    for (pa, ja), (pb, jb) in zip(a, b, strict=True):
         assert pa.read_bytes() == pb.read_bytes()
         assert ja.read_bytes() == jb.read_bytes()
     doc = json.loads(a[0][1].read_text())
@@ -163,7 +162,7 @@ def test_cohort_is_deterministic_and_plausible(tmp_path):
         assert 18.3 <= d["subject"]["bmi"] <= 35.2
         assert abs(d["subject"]["stature_m"] - d["subject"]["stature_target_m"]) < 1e-3
         assert d["subject"]["phenotype"]["local"], "local modifiers are on by default"
-    v, f, vl, fl = read_ply(a[0][0])
+    v, f, _vl, fl = read_ply(a[0][0])
     s0 = bodies.subject(0, seed=7)
     assert np.array_equal(v, s0.body.vertices) and np.array_equal(fl, s0.body.face_labels)
     assert edges_closed(f)
@@ -179,7 +178,7 @@ def test_cohort_files_are_not_overwritten(tmp_path, capsys):
     from bsv.bodies.errors import OutputExistsError
 
     (tmp_path / "subject_001.json").write_text("mine")
-    with pytest.raises(OutputExistsError, match="subject_001.json") as e:
+    with pytest.raises(OutputExistsError, match=r"subject_001\.json") as e:
         bodies.write_cohort(tmp_path, 2, seed=7)
     assert isinstance(e.value, FileExistsError)
     assert not (tmp_path / "subject_000.ply").exists() and not (tmp_path / "cohort.json").exists()
@@ -187,7 +186,7 @@ def test_cohort_files_are_not_overwritten(tmp_path, capsys):
     assert (tmp_path / "subject_001.json").read_text() == "mine"
     cohort_main([str(tmp_path), "1", "7", "--overwrite"])
     assert (tmp_path / "cohort.json").is_file() and (tmp_path / "subject_001.json").read_text() == "mine"
-    with pytest.raises(OutputExistsError, match="cohort.json"):
+    with pytest.raises(OutputExistsError, match=r"cohort\.json"):
         bodies.write_cohort(tmp_path, 1, seed=7)
     s = bodies.subject(0, seed=7)
     with pytest.raises(OutputExistsError):

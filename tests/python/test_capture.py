@@ -114,7 +114,7 @@ def test_replay_and_recording_do_not_overwrite(recorded, tmp_path):
     out = tmp_path / "out"
     (out / "front").mkdir(parents=True)
     (out / "front" / "camera.json").write_text("{}")
-    with pytest.raises(OutputExistsError, match="camera.json"):
+    with pytest.raises(OutputExistsError, match=r"camera\.json"):
         cap.capture(out, config=CONFIG, from_recording={"front": rec})
     assert (out / "front" / "camera.json").read_text() == "{}" and not (out / "front" / "depth.png").exists()
     cap.capture(out, config=CONFIG, from_recording={"front": rec}, overwrite=True)
@@ -173,7 +173,7 @@ def test_temporal_median_ignores_zeros():
 
 
 def test_write_recording_checks_its_input(tmp_path):
-    with pytest.raises(errors.RecordingError, match=".db3"):
+    with pytest.raises(errors.RecordingError, match=r"\.db3"):
         write_recording(tmp_path / "x.bag", [], [], D_INTR, C_INTR)
     with pytest.raises(errors.RecordingError, match="uint16"):
         write_recording(tmp_path / "x.db3", [np.zeros((2, 2), np.uint16)], [np.zeros((120, 160, 3), np.uint8)],

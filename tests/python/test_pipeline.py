@@ -12,10 +12,14 @@ import pytest
 
 import bsv
 from bsv import pipeline
-from bsv.frontend.capture import read_capture
-from bsv.frontend.errors import CalibrationFileError, CaptureError, MarkerNotFoundError, PersonNotFoundError, SegmentationError
+from bsv.frontend.errors import (
+    CalibrationFileError,
+    CaptureError,
+    MarkerNotFoundError,
+    PersonNotFoundError,
+    SegmentationError,
+)
 from bsv.types import Registration
-
 
 
 def _has_mediapipe() -> bool:
@@ -120,7 +124,7 @@ def test_oracle_without_label_images_is_a_clear_error(capture, tmp_path):
     copy = tmp_path / "cap"
     shutil.copytree(cap, copy)
     (copy / "front" / "labels.png").unlink()
-    with pytest.raises(SegmentationError, match="labels.png"):
+    with pytest.raises(SegmentationError, match=r"labels\.png"):
         pipeline.process(copy, copy / "calibration.json", tmp_path / "out", segmentation="oracle", progress=False)
 
 
@@ -168,12 +172,12 @@ def test_every_output_blocks_a_rerun(capture, tmp_path):
     out = tmp_path / "demo_only"
     out.mkdir()
     (out / "demo.json").write_text("{}")
-    with pytest.raises(OutputExistsError, match="demo.json"):
+    with pytest.raises(OutputExistsError, match=r"demo\.json"):
         pipeline.demo(out, segmentation="oracle", progress=False)
     seg = tmp_path / "seg_only"
     (seg / "segmentation" / "front").mkdir(parents=True)
     (seg / "segmentation" / "front" / "landmarks.json").write_text("{}")
-    with pytest.raises(OutputExistsError, match="landmarks.json") as e:
+    with pytest.raises(OutputExistsError, match=r"landmarks\.json") as e:
         pipeline.process(cap, cap / "calibration.json", seg, segmentation="oracle", progress=False)
     assert isinstance(e.value, bsv.BsvError) and isinstance(e.value, FileExistsError)
     assert pipeline.main_process([str(cap), "-c", str(cap / "calibration.json"), "-o", str(seg),

@@ -54,7 +54,7 @@ def test_landmarks_found_and_sides_match_the_truth(scans):
         # each knee and wrist landmark lies on (or next to) its own side's segments in the truth
         for lm, ids in (("left_knee", (9, 11)), ("right_knee", (10, 12)), ("left_wrist", (5, 7)), ("right_wrist", (6, 8)),
                         ("left_elbow", (3, 5)), ("right_elbow", (4, 6))):
-            x, y = (int(round(c)) for c in s.landmark(lm)[:2])
+            x, y = (round(c) for c in s.landmark(lm)[:2])
             window = truth[max(y - 6, 0):y + 7, max(x - 6, 0):x + 7]
             assert np.isin(window, ids).any(), f"{name} {view}: {lm} not on {ids}: {np.unique(window)}"
 
@@ -78,7 +78,8 @@ def test_medial_and_transverse_corrections(scans):
     """Left leg labels only on the subject's left of the medial line (through the mid-hips along the body
     axis), thighs only above the knee line."""
     for (name, view), (_, s, _) in scans.items():
-        mid = lambda a: (s.landmark(f"left_{a}")[:2] + s.landmark(f"right_{a}")[:2]) / 2  # noqa: E731
+        def mid(a, s=s):
+            return (s.landmark(f"left_{a}")[:2] + s.landmark(f"right_{a}")[:2]) / 2
         h_mid, axis = mid("hip"), mid("hip") - mid("shoulder")
         knee_y = mid("knee")[1]
         ys, xs = np.nonzero(s.labels)

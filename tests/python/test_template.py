@@ -11,12 +11,12 @@ ROOT = Path(__file__).resolve().parents[2]
 TEMPLATES = ROOT / "assets" / "template"
 
 
-from bsv import bodies  # noqa: E402
 from meshcheck import edges_closed  # noqa: E402
+
+from bsv import bodies  # noqa: E402
 from bsv.bodies.meshio import ply_bytes, read_ply  # noqa: E402
 from bsv.bodies.template import check_watertight, obj_text, templates  # noqa: E402
-
-
+from bsv.errors import TemplateError  # noqa: E402
 
 
 def signed_volume(v, f):
@@ -76,18 +76,19 @@ def test_template_segments_equal_the_full_body_segments(built):
 
 def test_watertight_check_rejects_an_open_mesh(built):
     m = built["template"]
-    with pytest.raises(Exception):
+    with pytest.raises(TemplateError):
         check_watertight(m.vertices, m.faces[1:])
-    with pytest.raises(Exception):
+    with pytest.raises(TemplateError):
         check_watertight(m.vertices, m.faces[:, ::-1])
 
 
 def test_write_templates_does_not_overwrite(tmp_path, capsys):
     from bsv.bodies.errors import OutputExistsError
-    from bsv.bodies.template import main as template_main, write_templates
+    from bsv.bodies.template import main as template_main
+    from bsv.bodies.template import write_templates
 
     (tmp_path / "template_fine.obj").write_text("mine")
-    with pytest.raises(OutputExistsError, match="template_fine.obj"):
+    with pytest.raises(OutputExistsError, match=r"template_fine\.obj"):
         write_templates(tmp_path)
     assert template_main([str(tmp_path)]) == 2 and "--overwrite" in capsys.readouterr().err
     assert (tmp_path / "template_fine.obj").read_text() == "mine" and not (tmp_path / "template.ply").exists()

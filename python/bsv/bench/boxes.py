@@ -16,9 +16,10 @@ shapes far from a cube. Conditions noer and l5ca, 3 scan seeds each by default.
 from __future__ import annotations
 
 import time
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, Optional, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -64,18 +65,17 @@ def cube_template(divisions: int = CUBE_DIVISIONS) -> Mesh:
     pts = np.stack([ii[on_surface], jj[on_surface], kk[on_surface]], axis=1)
     index[on_surface] = np.arange(len(pts))
     faces = []
-    a, b = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
-    a, b = a.ravel(), b.ravel()
+    a_grid, b_grid = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    a, b = a_grid.ravel(), b_grid.ravel()
+
+    def idx(axis: int, side: int, u: int, v: int, da: int, db: int) -> np.ndarray:
+        c = {axis: np.full_like(a, side), u: a + da, v: b + db}
+        return index[c[0], c[1], c[2]]
+
     for axis in range(3):
         u, v = [k for k in range(3) if k != axis]
         for side in (0, n):
-            def idx(da: int, db: int) -> np.ndarray:
-                c = [None, None, None]
-                c[axis] = np.full_like(a, side)
-                c[u], c[v] = a + da, b + db
-                return index[c[0], c[1], c[2]]
-
-            q00, q10, q11, q01 = idx(0, 0), idx(1, 0), idx(1, 1), idx(0, 1)
+            q00, q10, q11, q01 = (idx(axis, side, u, v, da, db) for da, db in ((0, 0), (1, 0), (1, 1), (0, 1)))
             # (u, v, axis) right-handed when (axis, u, v) is a cyclic order; flip for the low side
             outward_ccw = ((u - axis) % 3 == 1) == (side == n)
             if outward_ccw:
@@ -83,8 +83,8 @@ def cube_template(divisions: int = CUBE_DIVISIONS) -> Mesh:
             else:
                 faces += [np.stack([q00, q11, q10], 1), np.stack([q00, q01, q11], 1)]
     f = np.concatenate(faces)
-    v = pts / n - 0.5
-    return Mesh(v.astype(np.float64), f, np.full(len(v), TORSO, np.uint8), np.full(len(f), TORSO, np.uint8))
+    verts = pts / n - 0.5
+    return Mesh(verts.astype(np.float64), f, np.full(len(verts), TORSO, np.uint8), np.full(len(f), TORSO, np.uint8))
 
 
 def asset_path() -> Path:
@@ -119,7 +119,7 @@ def box_mesh(box: Box, yaw_deg: float = YAW_DEG) -> Mesh:
 
 
 def measure_box(box: Box, condition: str, seed: int, template: Mesh, methods: Iterable[str],
-                params: Optional[dict[str, Any]] = None) -> list[Run]:
+                params: dict[str, Any] | None = None) -> list[Run]:
     """Scan one box, express the cloud in the box frame, register the cube with every method."""
     from .. import scan
 
@@ -135,14 +135,14 @@ def measure_box(box: Box, condition: str, seed: int, template: Mesh, methods: It
             fit = register_method(m, cloud, template, p)
             run.estimated_l = {"whole": float(fit.volumes_l["whole"])}
             run.seconds, run.info, run.ok = fit.seconds, fit.info, True
-        except Exception as exc:  # noqa: BLE001 - reported, the rest goes on
+        except Exception as exc:  # reported, the rest goes on
             run.error = f"{type(exc).__name__}: {exc}"
         runs.append(run)
     return runs
 
 
 def run_boxes(out: str | Path, seeds: int = 3, conditions: Sequence[str] = ("noer", "l5ca"),
-              methods: Sequence[str] = ("bsv",), params: Optional[dict[str, Any]] = None,
+              methods: Sequence[str] = ("bsv",), params: dict[str, Any] | None = None,
               progress: bool = True, overwrite: bool = False) -> tuple[list[Run], dict]:
     """Both boxes x conditions x seeds; writes results.json, results.csv and report.md into ``out``
     (existing outputs are refused before any work, :class:`bsv.errors.OutputExistsError`, unless ``overwrite``)."""
@@ -186,8 +186,8 @@ def run_boxes(out: str | Path, seeds: int = 3, conditions: Sequence[str] = ("noe
 def boxes_report(summary: dict, runs: Sequence[Run], wall: float) -> str:
     """Markdown: RVE per box x condition x method (mean ± std, max) against the paper's < 1 % and our 0.5 %."""
     lines = ["# BSV boxes benchmark", "",
-             "Two boxes at 45 deg (DESIGN.md), cube template, per-axis pre-alignment; RVE of the whole volume "
-             "(%), mean ± std (max) over scan seeds. Paper: below 1 %; target 0.5 %.", "",
+             ("Two boxes at 45 deg (DESIGN.md), cube template, per-axis pre-alignment; RVE of the whole volume "
+              "(%), mean ± std (max) over scan seeds. Paper: below 1 %; target 0.5 %."), "",
              "| box | true (L) | condition | method | RVE mean ± std (max) | signed mean | time (s) |",
              "|---|---|---|---|---|---|---|"]
     for box in BOXES:

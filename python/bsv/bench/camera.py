@@ -14,8 +14,9 @@ nothing is written into the capture (the benchmark's virtual captures live in a 
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, Mapping, Optional
+from typing import Any
 
 import numpy as np
 
@@ -41,7 +42,7 @@ def check_available() -> None:
 
 
 def capture_cloud(capture_dir: str | Path, segmentation: str = "oracle",
-                  labels: Optional[Mapping[str, np.ndarray]] = None, sor: bool = True) -> tuple[PointCloud, dict[str, Any]]:
+                  labels: Mapping[str, np.ndarray] | None = None, sor: bool = True) -> tuple[PointCloud, dict[str, Any]]:
     """Merged, cleaned, labelled world cloud of a capture folder and the cloud builder's report.
 
     ``segmentation``: ``oracle`` (each camera's ``labels.png``) or ``camera`` (MediaPipe); ``labels``
@@ -75,5 +76,5 @@ def capture_cloud(capture_dir: str | Path, segmentation: str = "oracle",
                       "colors": np.ascontiguousarray(cap["colour"], dtype=np.uint8)})
     try:
         return build_cloud(views, sor=sor)
-    except Exception as exc:  # noqa: BLE001 - typed bsv errors carry the reason
+    except Exception as exc:  # typed bsv errors carry the reason
         raise BenchError(f"{d}: building the cloud failed: {exc}") from exc

@@ -4,9 +4,10 @@ with either method (BSV's ARAP or the trimesh peer), and the per-run record."""
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any, Mapping, Optional
+from typing import Any
 
 import numpy as np
 
@@ -73,7 +74,7 @@ class Fit:
     info: dict[str, Any] = field(default_factory=dict)
 
 
-def register_bsv(cloud: PointCloud, template: Mesh, params: Optional[Mapping[str, Any]] = None) -> Fit:
+def register_bsv(cloud: PointCloud, template: Mesh, params: Mapping[str, Any] | None = None) -> Fit:
     """BSV's regularized ARAP registration (:func:`bsv.register`) of ``template`` to the labelled cloud."""
     from .. import register
 
@@ -87,7 +88,7 @@ def register_bsv(cloud: PointCloud, template: Mesh, params: Optional[Mapping[str
 
 
 def register_method(method: str, cloud: PointCloud, template: Mesh,
-                    params: Optional[Mapping[str, Any]] = None) -> Fit:
+                    params: Mapping[str, Any] | None = None) -> Fit:
     """Dispatch: ``bsv`` or ``trimesh`` (the peer, :mod:`bsv.bench.peer`)."""
     if method == "bsv":
         return register_bsv(cloud, template, params)
@@ -119,6 +120,6 @@ class Run:
         return asdict(self)
 
     @staticmethod
-    def from_json(doc: Mapping[str, Any]) -> "Run":
+    def from_json(doc: Mapping[str, Any]) -> Run:
         """The inverse of :meth:`to_json`."""
         return Run(**{k: doc[k] for k in Run.__dataclass_fields__ if k in doc})

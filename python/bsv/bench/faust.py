@@ -26,9 +26,10 @@ from __future__ import annotations
 
 import re
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Optional, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -89,8 +90,8 @@ def _box_ratios(v: np.ndarray) -> tuple[float, np.ndarray]:
     return float(ext[1]), np.array([ext[0] / ext[1], ext[2] / ext[1]])
 
 
-def choose_scans(items: Sequence[FaustItem], numbers: Optional[Sequence[int]] = None,
-                 reference: Optional[np.ndarray] = None) -> list[FaustItem]:
+def choose_scans(items: Sequence[FaustItem], numbers: Sequence[int] | None = None,
+                 reference: np.ndarray | None = None) -> list[FaustItem]:
     """The scans to use: ``numbers`` when given (each must exist), else one A-pose-like scan per subject."""
     from .. import default_template, read_mesh
 
@@ -107,7 +108,7 @@ def choose_scans(items: Sequence[FaustItem], numbers: Optional[Sequence[int]] = 
         cands = [it for it in items if it.subject == subj]
         stats = [_box_ratios(read_mesh(it.registration).vertices) for it in cands]
         tallest = max(h for h, _ in stats)
-        upright = [(it, r) for it, (h, r) in zip(cands, stats) if h >= 0.97 * tallest]
+        upright = [(it, r) for it, (h, r) in zip(cands, stats, strict=True) if h >= 0.97 * tallest]
         chosen.append(min(upright, key=lambda ir: float(np.abs(ir[1] - ref_ratio).sum()))[0])
     return chosen
 
@@ -142,7 +143,7 @@ def sample_surface(mesh: Mesh, n: int, seed: int = 0) -> np.ndarray:
     return np.einsum("ij,ijk->ik", w, tri[f])
 
 
-def label_registration(reg: Mesh, params: Optional[dict[str, Any]] = None, samples: int = 60_000) -> tuple[Mesh, dict]:
+def label_registration(reg: Mesh, params: dict[str, Any] | None = None, samples: int = 60_000) -> tuple[Mesh, dict]:
     """Ground-truth labels of a watertight registration mesh: the full 14-segment template registered to
     points sampled on it, each registration vertex labelled by the nearest fitted template vertex."""
     from .. import default_template, register
@@ -168,9 +169,9 @@ def place(reg: Mesh, scan: Mesh, facing: str = "+z") -> tuple[Mesh, Mesh]:
             Mesh((scan.vertices + shift) @ flip.T, scan.faces, scan.vertex_labels, scan.face_labels))
 
 
-def run_faust(root: str | Path, out: str | Path, scans: Optional[Sequence[int]] = None,
+def run_faust(root: str | Path, out: str | Path, scans: Sequence[int] | None = None,
               conditions: Sequence[str] = CONDITIONS, seed: int = 0, methods: Sequence[str] = ("bsv",),
-              params: Optional[dict[str, Any]] = None, progress: bool = True, facing: str = "+z",
+              params: dict[str, Any] | None = None, progress: bool = True, facing: str = "+z",
               template: str = "default", overwrite: bool = False) -> tuple[list[Run], dict]:
     """The FAUST benchmark; writes the same outputs as ``bench synth`` into ``out`` (existing outputs are
     refused before any work, :class:`bsv.errors.OutputExistsError`, unless ``overwrite``)."""
@@ -201,7 +202,7 @@ def run_faust(root: str | Path, out: str | Path, scans: Optional[Sequence[int]] 
                 centroids = scan_mesh.vertices[scan_mesh.faces].mean(axis=1)
                 sfl = gt_mesh.vertex_labels[nearest_index(gt_mesh.vertices, centroids)]
                 labelled_scan = Mesh(scan_mesh.vertices, scan_mesh.faces, svl, sfl)
-            except Exception as exc:  # noqa: BLE001 - reported, the rest goes on
+            except Exception as exc:  # reported, the rest goes on
                 err = f"{type(exc).__name__}: {exc}"
                 runs += [Run(it.name, c, m, False, error=err) for c in conditions for m in methods]
                 bar.write(f"FAILED {it.name}: {err}")
@@ -214,7 +215,7 @@ def run_faust(root: str | Path, out: str | Path, scans: Optional[Sequence[int]] 
                 try:
                     runs += measure_condition(it.name, labelled_scan, truth, c, seed, tmpl, methods, "oracle",
                                               params, truth_mesh=gt_mesh)
-                except Exception as exc:  # noqa: BLE001
+                except Exception as exc:
                     runs += [Run(it.name, c, m, False, truth_l=truth, error=f"{type(exc).__name__}: {exc}")
                              for m in methods]
                 for r in runs[-len(methods):]:
@@ -225,7 +226,7 @@ def run_faust(root: str | Path, out: str | Path, scans: Optional[Sequence[int]] 
     config = {"root": str(root), "scans": ",".join(str(i.number) for i in items), "conditions": ",".join(conditions),
               "seed": seed, "methods": ",".join(methods), "params": dict(params or {}), "facing": facing,
               "template": template}
-    notes = ["Ground truth: FAUST registration meshes labelled by registering the 14-segment template to "
-             "them (see bsv/bench/faust.py); the virtual rig scans the raw scans."]
+    notes = [("Ground truth: FAUST registration meshes labelled by registering the 14-segment template to "
+              "them (see bsv/bench/faust.py); the virtual rig scans the raw scans.")]
     summary = write_outputs(out, "BSV FAUST benchmark", config, infos, runs, wall, notes, overwrite=overwrite)
     return runs, summary

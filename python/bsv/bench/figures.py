@@ -4,8 +4,9 @@ floor as a marker) and the trunk_limbs RVE histogram per condition."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -37,7 +38,7 @@ def rve_bars(summary: Mapping[str, Any], path: str | Path) -> Path:
         mean = [np.nan if cl is None else cl["rve_mean"] for cl in cells]
         std = [0.0 if cl is None else cl["rve_std"] for cl in cells]
         xs = x + (k - nbars / 2 + 0.5) * width
-        low = [min(s, m) if not np.isnan(m) else 0.0 for s, m in zip(std, mean)]  # RVE >= 0: clip the bar
+        low = [min(s, m) if not np.isnan(m) else 0.0 for s, m in zip(std, mean, strict=True)]  # RVE >= 0: clip the bar
         ax.bar(xs, mean, width, yerr=[low, std], capsize=2, label=label, color=cmap(k % 10))
         floors = [np.nan if cl is None else cl.get("floor_rve_mean", np.nan) for cl in cells]
         if not np.all(np.isnan(floors)):
@@ -65,7 +66,7 @@ def trunk_limbs_histogram(table: Sequence[Mapping[str, Any]], path: str | Path, 
     plt = _plt()
     conds = [c for c in CONDITIONS if any(r["condition"] == c and r["method"] == method for r in table)]
     fig, axes = plt.subplots(1, max(1, len(conds)), figsize=(3.2 * max(1, len(conds)), 3.0), squeeze=False)
-    for ax, c in zip(axes[0], conds):
+    for ax, c in zip(axes[0], conds, strict=False):
         rs = [r for r in table if r["condition"] == c and r["method"] == method and r["segment"] == "trunk_limbs"]
         v = [r["rve_pct"] for r in rs]
         fl = [r["floor_rve_pct"] for r in rs if r.get("floor_rve_pct") is not None]

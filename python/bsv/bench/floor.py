@@ -13,9 +13,10 @@ Its segment volumes, measured with :func:`bsv.volumes` exactly like an estimate,
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 

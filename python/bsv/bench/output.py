@@ -4,15 +4,25 @@ from __future__ import annotations
 
 import platform
 import time
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 from ..errors import OutputExistsError
 from .common import Run
 from .figures import rve_bars, trunk_limbs_histogram
-from .tables import (bias_table, p2pv_table, paper_table, rows, summarise, target_check, targets_md,
-                     timing_table, write_csv, write_json)
-
+from .tables import (
+    bias_table,
+    p2pv_table,
+    paper_table,
+    rows,
+    summarise,
+    target_check,
+    targets_md,
+    timing_table,
+    write_csv,
+    write_json,
+)
 
 #: Files every benchmark writes into its output folder (besides the figures, :data:`FIGURE_PATTERNS`).
 OUTPUT_FILES = ("results.json", "results.csv", "report.md")
@@ -73,15 +83,15 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
             figs.append(trunk_limbs_histogram(table, d / f"trunk_limbs_hist_{m}.png", m).name)
     n_ok = sum(r.ok for r in runs)
     md = [f"# {title}", "",
-          f"bsv {__version__}; {len(infos)} subjects, {n_ok}/{len(runs)} registrations succeeded; "
-          f"wall time {wall_seconds:.1f} s ({platform.machine()}, {platform.python_version()}).", ""]
+          (f"bsv {__version__}; {len(infos)} subjects, {n_ok}/{len(runs)} registrations succeeded; "
+           f"wall time {wall_seconds:.1f} s ({platform.machine()}, {platform.python_version()})."), ""]
     md += [f"- {k}: `{v}`" for k, v in config.items()]
     md += [""] + [f"{n}" for n in notes]
     md += ["", "## Relative volume error (%), mean ± std over subjects", "",
-           "Each cell: ours (the paper's FAUST value) ✓ better / ✗ worse. The paper reports NoEr and L5Ca; "
-           "noer, l515 and cali are compared with its NoEr column, l5ca with its L5Ca column. For cali and l5ca, "
-           "`floor` is the mean RVE of a perfect registration of that cloud (bsv.bench.floor) and `excess` the "
-           "mean of (RVE - floor RVE) per subject.", "", paper_table(summary), "",
+           ("Each cell: ours (the paper's FAUST value) ✓ better / ✗ worse. The paper reports NoEr and L5Ca; "
+            "noer, l515 and cali are compared with its NoEr column, l5ca with its L5Ca column. For cali and l5ca, "
+            "`floor` is the mean RVE of a perfect registration of that cloud (bsv.bench.floor) and `excess` the "
+            "mean of (RVE - floor RVE) per subject."), "", paper_table(summary), "",
            "## Point2PartVolume-style accuracy (100 - mean RVE, %)", "",
            "✓ = better than both P2PV numbers (BUFF, PDT13).", "", p2pv_table(summary), "",
            "## Signed error of trunk_limbs (%, mean ± std; negative = the fit shrinks the body)", "",

@@ -13,7 +13,8 @@ measures the segments.
 from __future__ import annotations
 
 import time
-from typing import Any, Mapping, Optional
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -60,7 +61,7 @@ def prealign(template_vertices: np.ndarray, points: np.ndarray, mode: str = "aut
     return cc + scale * (np.asarray(template_vertices) - tc), mode
 
 
-def register_trimesh(cloud: PointCloud, template: Mesh, params: Optional[Mapping[str, Any]] = None) -> Fit:
+def register_trimesh(cloud: PointCloud, template: Mesh, params: Mapping[str, Any] | None = None) -> Fit:
     """nricp_amberg of the pre-aligned template onto the cloud; vertex labels from the nearest cloud point."""
     try:
         import trimesh

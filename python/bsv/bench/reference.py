@@ -12,9 +12,9 @@ from ..types import TRUNK_LIMBS
 #: The nine segments of trunk_limbs, in report order.
 SEGMENTS: tuple[str, ...] = TRUNK_LIMBS
 #: Every volume the synthetic benchmark records: segments, then aggregates.
-MEASURED: tuple[str, ...] = SEGMENTS + ("arm_l", "arm_r", "leg_l", "leg_r", "trunk_limbs")
+MEASURED: tuple[str, ...] = (*SEGMENTS, "arm_l", "arm_r", "leg_l", "leg_r", "trunk_limbs")
 #: Report rows of the paper-style table.
-PAPER_ROWS: tuple[str, ...] = ("trunk_limbs",) + SEGMENTS
+PAPER_ROWS: tuple[str, ...] = ("trunk_limbs", *SEGMENTS)
 
 #: The paper's mean RVE (%) on FAUST: {segment: (NoEr, L5Ca)}.
 PAPER: dict[str, tuple[float, float]] = {

@@ -18,8 +18,9 @@ from __future__ import annotations
 import tempfile
 import time
 import traceback
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable, Optional
+from typing import Any
 
 from ..types import Mesh, PointCloud
 from .common import BenchError, Run, keep_trunk_limbs, load_template, register_method
@@ -69,7 +70,7 @@ def scan_seed(seed: int, index: int) -> int:
 
 def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition: str, seed: int,
                       template: Mesh, methods: Iterable[str], segmentation: str = "oracle",
-                      params: Optional[dict[str, Any]] = None, truth_mesh: Optional[Mesh] = None,
+                      params: dict[str, Any] | None = None, truth_mesh: Mesh | None = None,
                       cloud_mode: str = "raw") -> list[Run]:
     """Scan ``mesh`` in one condition, compute the floor if calibrated, register with every method.
 
@@ -98,7 +99,7 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
         try:
             fit = register_method(method, cloud, template, params)
             run.estimated_l, run.seconds, run.info, run.ok = fit.volumes_l, fit.seconds, fit.info, True
-        except Exception as exc:  # noqa: BLE001 - a failed registration is reported, the run goes on
+        except Exception as exc:  # a failed registration is reported, the run goes on
             run.error = f"{type(exc).__name__}: {exc}"
             run.info = {"traceback": traceback.format_exc(limit=3)}
         runs.append(run)
@@ -110,7 +111,7 @@ def subject_name(index: int) -> str:
     return f"subject_{index:03d}"
 
 
-def run_subject(cfg: SynthConfig, index: int, on_condition: Optional[Callable[[], None]] = None) -> tuple[dict, list[Run]]:
+def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] | None = None) -> tuple[dict, list[Run]]:
     """Every condition and method for cohort subject ``index``; failures are recorded, never raised."""
     from ..bodies import subject
 
@@ -118,9 +119,9 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Optional[Callable[[]
     t0 = time.perf_counter()
     try:
         s = subject(index, cfg.seed, local=cfg.local)
-    except Exception as exc:  # noqa: BLE001
+    except Exception as exc:
         err = f"subject generation failed: {type(exc).__name__}: {exc}"
-        runs = [Run(name, c, m, False, error=err) for c in cfg.conditions for m in cfg.methods]
+        runs: list[Run] = [Run(name, c, m, False, error=err) for c in cfg.conditions for m in cfg.methods]
         for _ in cfg.conditions:
             if on_condition:
                 on_condition()
@@ -130,12 +131,12 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Optional[Callable[[]
     truth = {k: float(v) for k, v in s.volumes_l().items()}
     template = load_template(cfg.template)
     mesh = s.body.mesh()
-    runs: list[Run] = []
+    runs = []
     for cond in cfg.conditions:
         try:
             runs += measure_condition(name, mesh, truth, cond, scan_seed(cfg.seed, index), template,
                                       cfg.methods, cfg.segmentation, cfg.params, cloud_mode=cfg.cloud)
-        except Exception as exc:  # noqa: BLE001 - a failed scan/floor is reported, the run goes on
+        except Exception as exc:  # a failed scan/floor is reported, the run goes on
             runs += [Run(name, cond, m, False, truth_l=truth, error=f"{type(exc).__name__}: {exc}")
                      for m in cfg.methods]
         if on_condition:

@@ -7,20 +7,23 @@ from __future__ import annotations
 import csv
 import json
 import math
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
 from .common import Run, rve, signed_error
-from .reference import (CALIBRATED, CONDITIONS, MEASURED, P2PV_BUFF, P2PV_PDT13, P2PV_ROWS, PAPER_ROWS,
-                        paper_value)
+from .reference import CALIBRATED, CONDITIONS, MEASURED, P2PV_BUFF, P2PV_PDT13, P2PV_ROWS, PAPER_ROWS, paper_value
 
 #: Columns of results.csv, in order.
 CSV_COLUMNS: tuple[str, ...] = (
     "subject", "condition", "method", "segment", "estimated_l", "true_l", "rve_pct", "signed_pct",
     "floor_l", "floor_rve_pct", "excess_pct", "seconds",
 )
+
+#: Marks a table cell without a value (an en dash).
+EMPTY_CELL = "\u2013"
 
 #: Targets of the benchmark issue (percent).
 TARGET_TRUNK_LIMBS = 0.6
@@ -109,10 +112,7 @@ def summarise(table: Sequence[Mapping[str, Any]]) -> dict[str, dict[str, dict[st
 
 def _present(summary: Mapping[str, Any], key: str) -> list[str]:
     order = {"conditions": list(CONDITIONS), "methods": ["bsv", "trimesh"]}[key]
-    if key == "methods":
-        have = set(summary)
-    else:
-        have = {c for m in summary.values() for c in m}
+    have = set(summary) if key == "methods" else {c for m in summary.values() for c in m}
     return [x for x in order if x in have] + sorted(have - set(order))
 
 
@@ -138,7 +138,7 @@ def paper_table(summary: Mapping[str, Any]) -> str:
             for m in methods:
                 cell = summary.get(m, {}).get(c, {}).get(seg)
                 if cell is None:
-                    cells.append("–")
+                    cells.append(EMPTY_CELL)
                     continue
                 ref = paper_value(seg, c)
                 txt = f"{cell['rve_mean']:.2f} ± {cell['rve_std']:.2f}"
@@ -165,7 +165,7 @@ def p2pv_table(summary: Mapping[str, Any]) -> str:
             for m in methods:
                 cell = summary.get(m, {}).get(c, {}).get(part)
                 if cell is None:
-                    cells.append("–")
+                    cells.append(EMPTY_CELL)
                 else:
                     acc = 100.0 - cell["rve_mean"]
                     cells.append(f"{acc:.2f}{_mark(acc, best, lower_is_better=False)}")
@@ -180,16 +180,16 @@ def bias_table(summary: Mapping[str, Any], segment: str = "trunk_limbs") -> str:
     lines = ["| condition | " + " | ".join(methods) + " | floor |", "|---|" + "---|" * (len(methods) + 1)]
     for c in conds:
         cells = [c]
-        floor = "–"
+        floor = EMPTY_CELL
         for m in methods:
             cell = summary.get(m, {}).get(c, {}).get(segment)
             if cell is None:
-                cells.append("–")
+                cells.append(EMPTY_CELL)
                 continue
             cells.append(f"{cell['signed_mean']:+.2f} ± {cell['signed_std']:.2f}")
             if "floor_signed_mean" in cell:
                 floor = f"{cell['floor_signed_mean']:+.2f}"
-        lines.append("| " + " | ".join(cells + [floor]) + " |")
+        lines.append("| " + " | ".join([*cells, floor]) + " |")
     return "\n".join(lines)
 
 
@@ -211,7 +211,7 @@ def timing_table(runs: Sequence[Run]) -> str:
     means = ["**mean**"]
     for c, m in cols:
         v = [r.seconds for r in runs if r.condition == c and r.method == m and r.ok]
-        means.append(f"{np.mean(v):.2f}" if v else "–")
+        means.append(f"{np.mean(v):.2f}" if v else EMPTY_CELL)
     lines.append("| " + " | ".join(means) + " |")
     return "\n".join(lines)
 

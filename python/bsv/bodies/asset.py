@@ -12,7 +12,6 @@ import numpy as np
 from ..errors import AssetError
 
 
-
 def asset_path() -> Path:
     """Where body.npz is: $BSV_MAKEHUMAN_NPZ, else the package data dir, else the repository's assets/."""
     env = os.environ.get("BSV_MAKEHUMAN_NPZ")

@@ -2,19 +2,19 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
 
+from .. import _bsv
+from ..errors import SolveError
 from ..types import Mesh
 from .asset import Asset, load_asset
-from ..errors import SolveError
-from .. import _bsv
 from .labels import body_labels, volume
 from .model import Phenotype, shape
 from .pose import Pose, pose_vertices
-
 
 
 @lru_cache(maxsize=1)
@@ -88,7 +88,7 @@ def _control(c: float, m0: float) -> tuple[float, float]:
     return 1.0, m0 * (2.0 - c)
 
 
-def _solve1d(f, lo: float, hi: float, target: float, tol: float, what: str) -> float:
+def _solve1d(f: Callable[[float], float], lo: float, hi: float, target: float, tol: float, what: str) -> float:
     """Root of the increasing function f(x) = target on [lo, hi] (Illinois regula falsi)."""
     flo, fhi = f(lo) - target, f(hi) - target
     if flo > 0 or fhi < 0:
@@ -134,9 +134,15 @@ def solve_stature_bmi(stature: float, bmi: float, phenotype: Phenotype | None = 
         w, m = _control(c_, m0)
         return ph.with_(height=min(max(h_, 0.0), 1.0), weight=w, muscle=m)
 
+    def stature_at(x: float) -> float:  # at the current weight c
+        return _eval(pheno(x, c), po, a)[0]
+
+    def bmi_at(x: float) -> float:  # at the current height h
+        return _eval(pheno(h, x), po, a)[1]
+
     for _ in range(8):
-        h = _solve1d(lambda x: _eval(pheno(x, c), po, a)[0], 0.0, 1.0, stature, tol_m * 0.3, "stature")
-        c = _solve1d(lambda x: _eval(pheno(h, x), po, a)[1], 0.0, 2.0, bmi, tol_bmi * 0.3, "BMI")
+        h = _solve1d(stature_at, 0.0, 1.0, stature, tol_m * 0.3, "stature")
+        c = _solve1d(bmi_at, 0.0, 2.0, bmi, tol_bmi * 0.3, "BMI")
         st, b = _eval(pheno(h, c), po, a)
         if abs(st - stature) < tol_m and abs(b - bmi) < tol_bmi:
             return pheno(h, c)

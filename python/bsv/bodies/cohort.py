@@ -126,7 +126,7 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True) -
                 legs = 1.0
             else:
                 arms[part[-1]] = 3.0
-                if k.endswith("thigh_l") or k.endswith("thigh_r"):
+                if k.endswith(("thigh_l", "thigh_r")):
                     legs = 1.0
         pose = Pose(max(pose.arm_down_l - arms["l"], 10.0), max(pose.arm_down_r - arms["r"], 10.0),
                     pose.elbow_l, pose.elbow_r, pose.hip_abduction_l + legs, pose.hip_abduction_r + legs)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import numpy as np
 
 from ..types import SEGMENT_IDS
@@ -32,7 +34,7 @@ def closed_segment(vertices: np.ndarray, faces: np.ndarray, face_labels: np.ndar
         n += 1
     if extra_v:
         v = np.concatenate([v, np.array(extra_v)])
-        f = np.concatenate([f] + extra_f)
+        f = np.concatenate([f, *extra_f])
     return v, f
 
 
@@ -52,7 +54,8 @@ def winding_numbers(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray,
 
 
 def penetrations(vertices: np.ndarray, faces: np.ndarray, face_labels: np.ndarray,
-                 pairs=DEFAULT_PAIRS, margin: float = 0.03, max_points: int = 400) -> dict[str, int]:
+                 pairs: Iterable[tuple[str, str]] = DEFAULT_PAIRS, margin: float = 0.03,
+                 max_points: int = 400) -> dict[str, int]:
     """Number of (sampled) vertices of the first segment inside the closed second one, per pair.
 
     Vertices of the first segment within ``margin`` metres of a shared boundary are skipped (a joint's

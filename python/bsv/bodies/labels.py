@@ -104,7 +104,7 @@ def clean_islands(faces: np.ndarray, labels: np.ndarray, max_iter: int = 20) -> 
         votes: dict[tuple[int, int], int] = {}
         for f, g in ((pa, pb), (pb, pa)):
             sel = ~keep[f]
-            for fi, lab in zip(f[sel], labels[g[sel]]):
+            for fi, lab in zip(f[sel], labels[g[sel]], strict=True):
                 votes[(int(fi), int(lab))] = votes.get((int(fi), int(lab)), 0) + 1
         best_lab: dict[int, tuple[int, int]] = {}
         for (fi, lab), c in votes.items():
@@ -152,7 +152,7 @@ def boundary_loops(faces: np.ndarray, face_labels: np.ndarray) -> list[tuple[int
     lo, hi = np.minimum(s1, s2), np.maximum(s1, s2)
     # orient every edge as seen from the lower label
     edges = np.where((s1 == lo)[:, None], dir_e, dir_e[:, ::-1])
-    for s, t in sorted(set(zip(lo.tolist(), hi.tolist()))):
+    for s, t in sorted(set(zip(lo.tolist(), hi.tolist(), strict=True))):
         sel = edges[(lo == s) & (hi == t)]
         verts, inv = np.unique(sel, return_inverse=True)
         comp = _components(len(verts), inv.reshape(-1, 2))

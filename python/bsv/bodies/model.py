@@ -10,11 +10,12 @@ min 0, average 0.5, max 1; height and proportions: 0.5 is neutral and carries no
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
-from .asset import Asset, AssetError, load_asset
 from ..errors import PhenotypeError
+from .asset import Asset, AssetError, load_asset
 
 GENDERS = ("female", "male")
 AGES = ("child", "young", "old")
@@ -42,7 +43,7 @@ class Phenotype:
     caucasian: float = 1.0 / 3.0
     local: dict = field(default_factory=dict)
 
-    def with_(self, **kw) -> "Phenotype":
+    def with_(self, **kw: Any) -> Phenotype:
         """A copy with some fields replaced."""
         return replace(self, **kw)
 
@@ -110,9 +111,9 @@ def target_weights(p: Phenotype, asset: Asset | None = None) -> dict[int, float]
     race = np.array([_check(r, getattr(p, r), 0, 1) for r in RACES])
     race = race / race.sum() if race.sum() > 0 else np.full(3, 1.0 / 3.0)
     gw = {"female": 1.0 - g, "male": g}
-    aw = dict(zip(AGES, _age_weights(age)))
-    mw = dict(zip(LEVELS, mus))
-    ww = dict(zip(LEVELS, wei))
+    aw = dict(zip(AGES, _age_weights(age), strict=True))
+    mw = dict(zip(LEVELS, mus, strict=True))
+    ww = dict(zip(LEVELS, wei, strict=True))
     hw = {"minheight": max(0.0, 1.0 - 2.0 * h), "maxheight": max(0.0, 2.0 * h - 1.0)}
     pw = {"uncommonproportions": max(0.0, 1.0 - 2.0 * pr), "idealproportions": max(0.0, 2.0 * pr - 1.0)}
     out: dict[int, float] = {}
@@ -162,4 +163,4 @@ def shape(p: Phenotype, asset: Asset | None = None) -> tuple[np.ndarray, np.ndar
     return v, j
 
 
-__all__ = ["Phenotype", "PhenotypeError", "AssetError", "shape", "target_weights"]
+__all__ = ["AssetError", "Phenotype", "PhenotypeError", "shape", "target_weights"]

@@ -14,9 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .asset import Asset, load_asset
 from ..errors import PoseError
-
+from .asset import Asset, load_asset
 
 
 @dataclass(frozen=True)
@@ -32,7 +31,7 @@ class Pose:
     palms_forward: bool = True
 
     @staticmethod
-    def symmetric(arm_down: float = 40.0, elbow: float = 10.0, hip_abduction: float = 4.0) -> "Pose":
+    def symmetric(arm_down: float = 40.0, elbow: float = 10.0, hip_abduction: float = 4.0) -> Pose:
         """The same angles on both sides."""
         return Pose(arm_down, arm_down, elbow, elbow, hip_abduction, hip_abduction)
 
@@ -183,8 +182,8 @@ def dq_skin(vertices: np.ndarray, R: np.ndarray, T: np.ndarray, asset: Asset | N
     qb = np.stack([np.bincount(sv, weights=w * q[sb, k], minlength=n) for k in range(4)], 1)
     db = np.stack([np.bincount(sv, weights=w * d[sb, k], minlength=n) for k in range(4)], 1)
     norm = np.linalg.norm(qb, axis=1, keepdims=True)
-    qb /= norm
-    db /= norm
+    qb = qb / norm  # (np.bincount is typed as returning integers; with weights it gives floats)
+    db = db / norm
     w0, xyz = qb[:, :1], qb[:, 1:]
     v = vertices
     # rotate: v + 2 xyz x (xyz x v + w v)

@@ -58,7 +58,7 @@ def cap_loop(vertices: np.ndarray, loop: np.ndarray, label: int) -> tuple[np.nda
     c = p.mean(axis=0)
     edge = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1).mean()
     radius = np.linalg.norm(p - c, axis=1).mean()
-    rings = max(1, int(round(radius / edge)))
+    rings = max(1, round(radius / edge))
     k = len(loop)
     new_v = [c + s * (p - c) for s in (1.0 - np.arange(1, rings) / rings)]
     new_v.append(c[None, :])
@@ -90,11 +90,19 @@ def check_watertight(vertices: np.ndarray, faces: np.ndarray) -> None:
         raise TemplateError("mesh is inward (negative volume)")
 
 
+def _face_labels(m: Mesh) -> np.ndarray:
+    """The face labels of a labelled mesh (TemplateError for an unlabelled one)."""
+    if m.face_labels is None:
+        raise TemplateError("mesh has no face labels")
+    return m.face_labels
+
+
 def trunk_limbs_mesh(full: Mesh) -> Mesh:
     """Remove head, hands and feet from a 14-segment body and cap every hole; labels of 9 segments."""
-    keep = ~np.isin(full.face_labels, [SEGMENT_IDS[n] for n in REMOVED])
+    labels = _face_labels(full)
+    keep = ~np.isin(labels, [SEGMENT_IDS[n] for n in REMOVED])
     f = full.faces[keep]
-    fl = full.face_labels[keep]
+    fl = labels[keep]
     used = np.unique(f)
     remap = np.full(len(full.vertices), -1, np.int64)
     remap[used] = np.arange(len(used))
@@ -104,7 +112,7 @@ def trunk_limbs_mesh(full: Mesh) -> Mesh:
     edge_lab = {}
     for col in range(3):
         a, b = f[:, col], f[:, (col + 1) % 3]
-        for x, y, lab in zip(a.tolist(), b.tolist(), fl.tolist()):
+        for x, y, lab in zip(a.tolist(), b.tolist(), fl.tolist(), strict=True):
             edge_lab[(x, y)] = lab
     new_f, new_l, verts = [f], [fl], [v]
     nv = len(v)
@@ -136,7 +144,7 @@ def subdivide_midpoint(m: Mesh) -> Mesh:
     ab, bc, ca = (n + inv[:, 0], n + inv[:, 1], n + inv[:, 2])
     nf = np.concatenate([np.stack([a, ab, ca], 1), np.stack([ab, b, bc], 1), np.stack([ca, bc, c], 1),
                          np.stack([ab, bc, ca], 1)])
-    fl = np.tile(m.face_labels, 4)
+    fl = np.tile(_face_labels(m), 4)
     return Mesh(v, nf, vertex_labels_from_faces(len(v), nf, fl), fl)
 
 
@@ -173,7 +181,7 @@ def write_templates(out_dir: str | Path, overwrite: bool = False) -> dict[str, t
         (out / f"{name}.ply").write_bytes(ply_bytes(m.vertices, m.faces, m.vertex_labels, m.face_labels))
         note = (f"BSV {name}: MakeHuman (CC0) gender 0.5, default macros, A-pose; metres, Y up, faces +Z.\n"
                 f"{len(m.vertices)} vertices, {len(m.faces)} triangles. Regenerate: python -m bsv.bodies.template")
-        (out / f"{name}.obj").write_text(obj_text(m.vertices, m.faces, m.face_labels, note))
+        (out / f"{name}.obj").write_text(obj_text(m.vertices, m.faces, _face_labels(m), note))
         counts[name] = (len(m.vertices), len(m.faces))
     return counts
 

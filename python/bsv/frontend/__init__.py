@@ -35,7 +35,20 @@ def __getattr__(name: str) -> Any:
 
 
 __all__ = [
-    "Board", "BlurredImageError", "CalibrationError", "CalibrationFileError", "CaptureError", "FrontendError",
-    "Intrinsics", "LandmarkMissingError", "MarkerNotFoundError", "MarkerSpec", "NoCameraError",
-    "PersonNotFoundError", "RecordingError", "SegmentationError", "WrongMarkerError", "load_intrinsics",
+    "BlurredImageError",
+    "Board",
+    "CalibrationError",
+    "CalibrationFileError",
+    "CaptureError",
+    "FrontendError",
+    "Intrinsics",
+    "LandmarkMissingError",
+    "MarkerNotFoundError",
+    "MarkerSpec",
+    "NoCameraError",
+    "PersonNotFoundError",
+    "RecordingError",
+    "SegmentationError",
+    "WrongMarkerError",
+    "load_intrinsics",
 ]

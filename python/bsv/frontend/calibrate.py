@@ -19,12 +19,14 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable, Mapping, Optional, Sequence, Union
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..errors import OutputExistsError
 from .errors import (
     BlurredImageError,
     CalibrationError,
@@ -32,12 +34,18 @@ from .errors import (
     MarkerNotFoundError,
     WrongMarkerError,
 )
-from ..errors import OutputExistsError
 from .intrinsics import Intrinsics, load_intrinsics
 from .marker import SIDES, Board, MarkerSpec
 
-PathLike = Union[str, Path]
-ImageLike = Union[np.ndarray, PathLike]
+if TYPE_CHECKING:
+    import cv2
+
+PathLike = str | Path
+ImageLike = np.ndarray | PathLike
+
+#: The default marker and board (frozen dataclasses, shared as argument defaults).
+_DEFAULT_MARKER = MarkerSpec()
+_DEFAULT_BOARD = Board()
 
 #: Largest blur edge width (pixels) accepted for a marker; a sharp edge is about 1-2 px wide.
 MAX_EDGE_WIDTH_PX = 4.0
@@ -67,7 +75,7 @@ def _gray(image: ImageLike) -> np.ndarray:
     return np.ascontiguousarray(img)
 
 
-def edge_width_px(gray: np.ndarray, roi: Optional[tuple[int, int, int, int]] = None) -> float:
+def edge_width_px(gray: np.ndarray, roi: tuple[int, int, int, int] | None = None) -> float:
     """Blur estimate: the contrast of the region divided by its steepest gradients (pixels). A sharp
     step edge is 1-2 px wide; a Gaussian blur of sigma s widens it to about 2.5 s. NaN when the region
     has no contrast to judge by. Without ``roi`` the extreme percentiles of the whole image are used (a
@@ -89,7 +97,7 @@ def edge_width_px(gray: np.ndarray, roi: Optional[tuple[int, int, int, int]] = N
     return contrast / steep
 
 
-def _detector(marker: MarkerSpec):  # noqa: ANN202 - cv2 type
+def _detector(marker: MarkerSpec) -> cv2.aruco.ArucoDetector:
     import cv2
 
     params = cv2.aruco.DetectorParameters()
@@ -100,7 +108,7 @@ def _detector(marker: MarkerSpec):  # noqa: ANN202 - cv2 type
     return cv2.aruco.ArucoDetector(marker.aruco_dictionary(), params)
 
 
-def detect_marker(image: ImageLike, marker: MarkerSpec = MarkerSpec(), *, name: str = "image",
+def detect_marker(image: ImageLike, marker: MarkerSpec = _DEFAULT_MARKER, *, name: str = "image",
                   max_edge_width_px: float = MAX_EDGE_WIDTH_PX, detector: Any = None) -> np.ndarray:
     """The 4 sub-pixel corners (4 x 2, ArUco order) of the configured marker in one image.
 
@@ -147,7 +155,7 @@ def detect_marker(image: ImageLike, marker: MarkerSpec = MarkerSpec(), *, name: 
 
 
 def _edge_line(img: np.ndarray, p0: np.ndarray, p1: np.ndarray, centre: np.ndarray, half: int, trim: float
-               ) -> Optional[np.ndarray]:
+               ) -> np.ndarray | None:
     """Sub-pixel line (homogeneous a x + b y + c = 0) of one outer marker edge from p0 to p1, white outside
     and black inside: along each row (or column) crossing the edge, the summed whiteness of a window
     across the edge is the distance from the window's outer end to the edge, exact for area-sampled
@@ -187,7 +195,7 @@ def _edge_line(img: np.ndarray, p0: np.ndarray, p1: np.ndarray, centre: np.ndarr
     return np.array([nrm[0], nrm[1], -nrm @ m])
 
 
-def refine_corners(gray: np.ndarray, corners: np.ndarray, marker: MarkerSpec = MarkerSpec(), *,
+def refine_corners(gray: np.ndarray, corners: np.ndarray, marker: MarkerSpec = _DEFAULT_MARKER, *,
                    max_move_px: float = 1.5) -> np.ndarray:
     """Sub-pixel refinement of the 4 outer corners as intersections of the 4 edge lines of the marker's
     black border, each fitted to area-integral edge points along its whole length (see ``_edge_line``):
@@ -219,7 +227,7 @@ def refine_corners(gray: np.ndarray, corners: np.ndarray, marker: MarkerSpec = M
     return out
 
 
-def marker_pose(corners: np.ndarray, intrinsics: Intrinsics, marker: MarkerSpec = MarkerSpec()
+def marker_pose(corners: np.ndarray, intrinsics: Intrinsics, marker: MarkerSpec = _DEFAULT_MARKER
                 ) -> tuple[np.ndarray, np.ndarray, float]:
     """Marker-to-camera rotation (3 x 3), translation (metres) and the reprojection RMS (pixels) from
     4 corners: IPPE square, then Levenberg-Marquardt refinement."""
@@ -282,7 +290,7 @@ class CameraCalibration:
     intrinsics: Intrinsics
     rotation: np.ndarray
     translation: np.ndarray
-    serial: Optional[str] = None
+    serial: str | None = None
     frames: int = 0
     reprojection_rms_px: float = 0.0
     spread_mm: float = 0.0
@@ -359,9 +367,9 @@ def calibrate_camera(
     images: Iterable[ImageLike],
     intrinsics: Intrinsics,
     side: str,
-    board: Board = Board(),
+    board: Board = _DEFAULT_BOARD,
     *,
-    serial: Optional[str] = None,
+    serial: str | None = None,
     average: str = "image",
     max_edge_width_px: float = MAX_EDGE_WIDTH_PX,
 ) -> CameraCalibration:
@@ -401,7 +409,7 @@ def calibrate_camera(
         r_cm, t_cm = average_poses(rs, ts)
     r_wm, t_wm = board.marker_to_world(side)
     r_wc, t_wc = camera_to_world(r_cm, t_cm, r_wm, t_wm)
-    centres = [camera_to_world(r, t, r_wm, t_wm)[1] for r, t in zip(rs, ts)]
+    centres = [camera_to_world(r, t, r_wm, t_wm)[1] for r, t in zip(rs, ts, strict=True)]
     spread_mm = float(np.sqrt(np.mean(np.sum((np.asarray(centres) - t_wc) ** 2, axis=1)))) * 1000.0
     spread_deg = float(np.sqrt(np.mean([rotation_angle_deg(r, r_cm) ** 2 for r in rs])))
     return CameraCalibration(side, intrinsics, r_wc, t_wc, serial=serial, frames=len(rs),
@@ -412,10 +420,10 @@ def calibrate_camera(
 def calibrate(
     images: Mapping[str, Iterable[ImageLike]],
     intrinsics: Mapping[str, Intrinsics],
-    board: Board = Board(),
+    board: Board = _DEFAULT_BOARD,
     *,
-    serials: Optional[Mapping[str, str]] = None,
-    out: Optional[PathLike] = None,
+    serials: Mapping[str, str] | None = None,
+    out: PathLike | None = None,
     overwrite: bool = False,
 ) -> Calibration:
     """Calibrates every camera of ``images`` ({"front": frames, "back": frames}) and optionally writes
@@ -497,7 +505,7 @@ def alignment(r_cm: np.ndarray, t_cm: np.ndarray, *, yaw_tol_deg: float = 0.5, s
                      abs(yaw) <= yaw_tol_deg and abs(shift) <= shift_tol_m)
 
 
-def draw_alignment(image: np.ndarray, corners: Optional[np.ndarray], info: Optional[Alignment], marker: MarkerSpec
+def draw_alignment(image: np.ndarray, corners: np.ndarray | None, info: Alignment | None, marker: MarkerSpec
                    ) -> np.ndarray:
     """Colour image with the detected marker outlined and the alignment instructions written on it."""
     import cv2
@@ -518,7 +526,7 @@ def draw_alignment(image: np.ndarray, corners: Optional[np.ndarray], info: Optio
     return out
 
 
-def live(serial: Optional[str] = None, board: Board = Board(), *, side: str = "front", width: int = 1920,
+def live(serial: str | None = None, board: Board = _DEFAULT_BOARD, *, side: str = "front", width: int = 1920,
          height: int = 1080, fps: int = 30, yaw_tol_deg: float = 0.5, shift_tol_m: float = 0.005) -> None:
     """Live view of one RealSense camera's colour stream with the detected marker and the remaining yaw and
     transversal shift to face it, ALIGNED within tolerance; Esc or q quits. (Exercised by hand only.)"""
@@ -537,7 +545,7 @@ def live(serial: Optional[str] = None, board: Board = Board(), *, side: str = "f
             try:
                 c = detect_marker(bgr, board.marker, detector=det)
                 r, t, _ = marker_pose(c, intr, board.marker)
-                info: Optional[Alignment] = alignment(r, t, yaw_tol_deg=yaw_tol_deg, shift_tol_m=shift_tol_m)
+                info: Alignment | None = alignment(r, t, yaw_tol_deg=yaw_tol_deg, shift_tol_m=shift_tol_m)
             except CalibrationError:
                 c, info = None, None
             cv2.imshow(f"bsv calibrate --live ({side})", draw_alignment(bgr, c, info, board.marker))
@@ -562,7 +570,7 @@ def _pairs(items: Sequence[str], what: str) -> dict[str, str]:
     return out
 
 
-def main(argv: Optional[Sequence[str]] = None) -> int:
+def main(argv: Sequence[str] | None = None) -> int:
     """``bsv calibrate``: offline from saved images (``--images front=DIR back=DIR --intrinsics ...``) or
     ``--live`` alignment view of one camera."""
     ap = argparse.ArgumentParser(prog="bsv calibrate", description=__doc__.split("\n")[0])

@@ -19,11 +19,14 @@ Written per camera into ``OUT/<camera>/``:
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping, Optional, Union
+from types import ModuleType
+from typing import Any
 
 import numpy as np
 
@@ -31,7 +34,7 @@ from ..errors import OutputExistsError
 from .errors import CaptureError, NoCameraError, RecordingError
 from .intrinsics import Intrinsics
 
-PathLike = Union[str, Path]
+PathLike = str | Path
 
 #: Default camera names, in capture order.
 CAMERAS = ("front", "back")
@@ -50,7 +53,7 @@ class CaptureConfig:
     timeout_ms: int = 5000
 
     @classmethod
-    def d4xx(cls, **kw: Any) -> "CaptureConfig":
+    def d4xx(cls, **kw: Any) -> CaptureConfig:
         """Defaults for D415/D435/D455 cameras (depth 848 x 480, colour 1280 x 720)."""
         return cls(depth_size=(848, 480), colour_size=(1280, 720), **kw)
 
@@ -65,14 +68,14 @@ class CameraCapture:
     depth: np.ndarray
     depth_scale: float
     intrinsics: Intrinsics
-    depth_intrinsics: Optional[Intrinsics]
+    depth_intrinsics: Intrinsics | None
     frames: int
     folder: Path
-    recording: Optional[Path] = None
+    recording: Path | None = None
     extra: dict[str, Any] = field(default_factory=dict)
 
 
-def import_realsense():  # noqa: ANN201 - module
+def import_realsense() -> ModuleType:
     """``pyrealsense2``, or a CaptureError saying how to install it."""
     try:
         import pyrealsense2 as rs
@@ -162,11 +165,12 @@ def align_depth_to_colour(depth: np.ndarray, depth_intr: Intrinsics, colour_intr
     return out
 
 
-def _stream_intrinsics(profile, stream) -> Intrinsics:  # noqa: ANN001
+def _stream_intrinsics(profile: Any, stream: Any) -> Intrinsics:
     return Intrinsics.from_realsense(profile.get_stream(stream).as_video_stream_profile().get_intrinsics())
 
 
-def open_colour_stream(rs, serial: Optional[str], width: int, height: int, fps: int):  # noqa: ANN001, ANN201
+def open_colour_stream(rs: ModuleType, serial: str | None, width: int, height: int,
+                       fps: int) -> tuple[Any, Intrinsics]:
     """Starts a colour-only pipeline (RGB8) on the camera ``serial`` (or the only one); returns the
     pipeline and the colour intrinsics. Used by the live calibration view."""
     _check_devices(rs, [serial] if serial else None)
@@ -178,7 +182,7 @@ def open_colour_stream(rs, serial: Optional[str], width: int, height: int, fps: 
     return pipe, _stream_intrinsics(prof, rs.stream.color)
 
 
-def _check_devices(rs, serials: Optional[list[Optional[str]]]) -> list[str]:  # noqa: ANN001
+def _check_devices(rs: ModuleType, serials: list[str | None] | None) -> list[str]:
     found = [d.get_info(rs.camera_info.serial_number) for d in rs.context().query_devices()]
     if not found:
         raise NoCameraError("no RealSense camera connected: plug the cameras in (USB 3), or replay recordings "
@@ -201,10 +205,10 @@ class _Frames:
     depth_to_colour: tuple[np.ndarray, np.ndarray]
     depth: list[tuple[float, np.ndarray]] = field(default_factory=list)
     colour: list[tuple[float, np.ndarray]] = field(default_factory=list)
-    recording: Optional[Path] = None
+    recording: Path | None = None
 
 
-def _stream_facts(rs, name: str, dev, profiles, recording: Optional[Path]) -> _Frames:  # noqa: ANN001
+def _stream_facts(rs: ModuleType, name: str, dev: Any, profiles: Any, recording: Path | None) -> _Frames:
     by_type = {p.stream_type(): p for p in profiles}
     if rs.stream.depth not in by_type or rs.stream.color not in by_type:
         raise RecordingError(f"{name}: {recording or 'the camera'} lacks a depth or colour stream "
@@ -219,7 +223,7 @@ def _stream_facts(rs, name: str, dev, profiles, recording: Optional[Path]) -> _F
                     np.asarray(ext.translation, dtype=np.float64) / scale), recording=recording)
 
 
-def _read_recording(rs, name: str, path: Path, config: CaptureConfig) -> _Frames:  # noqa: ANN001
+def _read_recording(rs: ModuleType, name: str, path: Path, config: CaptureConfig) -> _Frames:
     """Every frame of a recording, copied inside the sensor callbacks: non-real-time playback waits for
     a callback but drops frames a slow pipeline consumer has not taken yet (measured), so no pipeline."""
     import time
@@ -234,7 +238,7 @@ def _read_recording(rs, name: str, path: Path, config: CaptureConfig) -> _Frames
     profiles = [p for s in sensors for p in s.get_stream_profiles()]
     frames = _stream_facts(rs, name, dev, profiles, path)
 
-    def on_frame(f) -> None:  # noqa: ANN001
+    def on_frame(f: Any) -> None:
         arr = np.asanyarray(f.get_data()).copy()
         st = f.get_profile().stream_type()
         if st == rs.stream.depth:
@@ -269,7 +273,7 @@ def _read_recording(rs, name: str, path: Path, config: CaptureConfig) -> _Frames
 class _Live:
     """A live camera pipeline (recording to file) and the frames taken from it."""
 
-    def __init__(self, rs, name: str, config: CaptureConfig, serial: Optional[str], recording: Path) -> None:  # noqa: ANN001
+    def __init__(self, rs: ModuleType, name: str, config: CaptureConfig, serial: str | None, recording: Path) -> None:
         self.config, self.name = config, name
         self.pipe = rs.pipeline()
         cfg = rs.config()
@@ -307,10 +311,8 @@ class _Live:
 
     def stop(self) -> None:
         """Stops the pipeline (finishes the recording)."""
-        try:
+        with contextlib.suppress(RuntimeError):
             self.pipe.stop()
-        except RuntimeError:
-            pass
 
 
 #: Files a capture writes into each ``OUT/<camera>/`` (besides the live recording).
@@ -352,10 +354,10 @@ def _reduce(frames: _Frames, config: CaptureConfig, folder: Path) -> CameraCaptu
 
 def capture(
     out_dir: PathLike,
-    serials: Optional[Mapping[str, str]] = None,
+    serials: Mapping[str, str] | None = None,
     config: CaptureConfig = CaptureConfig(),
     *,
-    from_recording: Union[bool, Mapping[str, PathLike]] = False,
+    from_recording: bool | Mapping[str, PathLike] = False,
     overwrite: bool = False,
 ) -> dict[str, CameraCapture]:
     """Captures every camera of ``serials`` ({"front": serial, "back": serial}) at once into
@@ -386,13 +388,13 @@ def capture(
         for k, f in files.items():
             if not f.is_file():
                 raise RecordingError(f"{k}: recording {f} does not exist")
-        plan = {k: (None, f) for k, f in files.items()}
+        plan: dict[str, tuple[str | None, Path]] = {k: (None, f) for k, f in files.items()}
     else:
         if not serials:
             found = _check_devices(rs, None)
             if len(found) < 2:
                 raise NoCameraError(f"need two RealSense cameras (front, back), found {len(found)}: {found}")
-            serials = dict(zip(CAMERAS, sorted(found)))
+            serials = dict(zip(CAMERAS, sorted(found), strict=False))
         else:
             _check_devices(rs, list(serials.values()))
         plan = {k: (s, out / k / "recording.db3") for k, s in serials.items()}

@@ -42,7 +42,7 @@ class Intrinsics:
             raise CalibrationFileError(f"intrinsics need 5 distortion coefficients (k1, k2, p1, p2, k3), got {self.coeffs}")
 
     @classmethod
-    def from_fov(cls, width: int, height: int, hfov_deg: float, vfov_deg: float) -> "Intrinsics":
+    def from_fov(cls, width: int, height: int, hfov_deg: float, vfov_deg: float) -> Intrinsics:
         """Ideal pinhole camera with the given fields of view and a centred principal point."""
         fx = width / 2.0 / math.tan(math.radians(hfov_deg) / 2.0)
         fy = height / 2.0 / math.tan(math.radians(vfov_deg) / 2.0)
@@ -58,7 +58,7 @@ class Intrinsics:
         """OpenCV distortion vector (k1, k2, p1, p2, k3)."""
         return np.asarray(self.coeffs, dtype=np.float64)
 
-    def scaled(self, width: int, height: int) -> "Intrinsics":
+    def scaled(self, width: int, height: int) -> Intrinsics:
         """The same camera at another resolution (same field of view, pixel-centre convention)."""
         sx, sy = width / self.width, height / self.height
         return Intrinsics(
@@ -75,7 +75,7 @@ class Intrinsics:
         }
 
     @classmethod
-    def from_json(cls, d: Any, where: str = "intrinsics") -> "Intrinsics":
+    def from_json(cls, d: Any, where: str = "intrinsics") -> Intrinsics:
         """Parses the JSON form (``coeffs`` or flat k1..k3; RealSense's ppx/ppy are accepted too)."""
         if not isinstance(d, dict):
             raise CalibrationFileError(f"{where}: expected an object with width, height, fx, fy, cx, cy; got {d!r:.80}")
@@ -94,7 +94,7 @@ class Intrinsics:
             ) from e
 
     @classmethod
-    def from_realsense(cls, intr: Any) -> "Intrinsics":
+    def from_realsense(cls, intr: Any) -> Intrinsics:
         """From a ``pyrealsense2.intrinsics`` (ppx/ppy, Brown-Conrady coeffs; other models keep their coeffs)."""
         coeffs = tuple(float(c) for c in list(intr.coeffs)[:5])
         return cls(int(intr.width), int(intr.height), float(intr.fx), float(intr.fy), float(intr.ppx), float(intr.ppy),

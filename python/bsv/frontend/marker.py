@@ -15,10 +15,16 @@ subject faces +Z, +X = subject's left):
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .errors import CalibrationError
+
+if TYPE_CHECKING:
+    import cv2
+
+    from .intrinsics import Intrinsics
 
 #: Camera sides and the board face each one sees.
 SIDES = ("front", "back")
@@ -38,7 +44,7 @@ class MarkerSpec:
         if self.marker_id < 0:
             raise CalibrationError(f"marker id must be >= 0, got {self.marker_id}")
 
-    def aruco_dictionary(self):  # noqa: ANN201 - cv2 type
+    def aruco_dictionary(self) -> cv2.aruco.Dictionary:
         """The ``cv2.aruco.Dictionary`` (raises CalibrationError for an unknown name or an id out of range)."""
         import cv2
 
@@ -110,7 +116,7 @@ class Board:
 
 def render_view(
     marker: MarkerSpec,
-    intrinsics,  # noqa: ANN001 - Intrinsics (avoids an import cycle in type hints)
+    intrinsics: Intrinsics,
     rotation: np.ndarray,
     translation: np.ndarray,
     *,

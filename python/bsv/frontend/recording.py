@@ -5,8 +5,10 @@ the capture code can be exercised end to end with no camera (tests, the demo). T
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Optional, Sequence, Union
+from types import ModuleType
+from typing import Any
 
 import numpy as np
 
@@ -14,10 +16,10 @@ from ..errors import OutputExistsError
 from .errors import RecordingError
 from .intrinsics import Intrinsics
 
-PathLike = Union[str, Path]
+PathLike = str | Path
 
 
-def _rs_intrinsics(rs, intr: Intrinsics):  # noqa: ANN001, ANN202 - pyrealsense2 types
+def _rs_intrinsics(rs: ModuleType, intr: Intrinsics) -> Any:
     ri = rs.intrinsics()
     ri.width, ri.height = int(intr.width), int(intr.height)
     ri.fx, ri.fy, ri.ppx, ri.ppy = float(intr.fx), float(intr.fy), float(intr.cx), float(intr.cy)
@@ -37,7 +39,7 @@ def write_recording(
     fps: int = 30,
     serial: str = "000000000000",
     name: str = "BSV software camera",
-    depth_to_colour: Optional[tuple[np.ndarray, np.ndarray]] = None,
+    depth_to_colour: tuple[np.ndarray, np.ndarray] | None = None,
     overwrite: bool = False,
 ) -> Path:
     """Records synthetic frames as a RealSense recording: ``depth`` uint16 (H x W, device units of
@@ -89,7 +91,7 @@ def write_recording(
     ds.start(q)
     cs.start(q)
     try:
-        for i, (d, c) in enumerate(zip(depth, colour)):
+        for i, (d, c) in enumerate(zip(depth, colour, strict=True)):
             ts = i * 1000.0 / fps
             for sensor, prof, img, bpp in ((ds, dp, np.ascontiguousarray(d), 2), (cs, cp, np.ascontiguousarray(c), 3)):
                 f = rs.software_video_frame()

@@ -32,14 +32,16 @@ the hand model gives more precisely (pinky_mcp, index_finger_mcp), then 21 per h
 from __future__ import annotations
 
 import contextlib
-import os
-import sys
 import dataclasses
 import json
 import math
+import os
+import sys
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterator, Optional, Sequence, Union
+from types import ModuleType
+from typing import Any
 
 import numpy as np
 
@@ -47,7 +49,7 @@ from ..types import SEGMENT_IDS as _SEGMENT_IDS
 from ..types import SEGMENT_NAMES as _SEGMENT_NAMES
 from .errors import LandmarkMissingError, PersonNotFoundError, SegmentationError
 
-PathLike = Union[str, Path]
+PathLike = str | Path
 
 #: Segment ids of DESIGN.md without 0 (the table of ``bsv_core::Segment``, via :mod:`bsv.types`).
 SEGMENT_IDS: dict[str, int] = {n: i for n, i in _SEGMENT_IDS.items() if i != 0}
@@ -184,7 +186,7 @@ class Segmentation:
     #: Left/right landmark pairs whose MediaPipe names were swapped to match the view.
     swapped: tuple[str, ...] = field(default_factory=tuple)
     #: The 33 pose landmarks (x, y, visibility; subject's left/right), as :func:`label_pixels` takes them.
-    pose: Optional[np.ndarray] = None
+    pose: np.ndarray | None = None
 
     def landmark(self, name: str) -> np.ndarray:
         """(x, y, visibility) of one landmark by name (KeyError naming it if unknown)."""
@@ -196,14 +198,14 @@ class Segmentation:
     def counts(self) -> dict[str, int]:
         """Pixel count of every segment present in :attr:`labels`."""
         ids, n = np.unique(self.labels, return_counts=True)
-        return {SEGMENT_NAMES[i]: int(c) for i, c in zip(ids, n) if i != 0}
+        return {SEGMENT_NAMES[i]: int(c) for i, c in zip(ids, n, strict=True) if i != 0}
 
 
 # ----------------------------------------------------------------------------------------------------
 # MediaPipe
 
 
-def _mediapipe_holistic():  # noqa: ANN202 - module
+def _mediapipe_holistic() -> ModuleType:
     # MediaPipe's C++ logging (glog/absl, TFLite) prints several lines per image: keep warnings out.
     os.environ.setdefault("GLOG_minloglevel", "2")
     os.environ.setdefault("TF_CPP_MIN_LOG_LEVEL", "2")
@@ -221,8 +223,8 @@ def _check_model(holistic: Any, complexity: int) -> None:
     base = Path(holistic.__file__).resolve().parents[2] / "modules" / "pose_landmark"
     if not (base / _POSE_MODELS[complexity]).is_file():
         try:
-            holistic._download_oss_pose_landmark_model(complexity)  # noqa: SLF001 - what Holistic() does
-        except Exception as e:  # noqa: BLE001 - network errors of any kind
+            holistic._download_oss_pose_landmark_model(complexity)  # what Holistic() does
+        except Exception as e:  # network errors of any kind
             raise SegmentationError(
                 f"model_complexity={complexity} needs {base / _POSE_MODELS[complexity]}, which the mediapipe "
                 f"wheel does not ship and which could not be downloaded ({e}); use model_complexity=1"
@@ -290,11 +292,12 @@ def _orient(pose: np.ndarray, hands: list, view: str) -> tuple[np.ndarray, list,
             swapped.append(POSE_NAMES[li].replace("left_", "").replace("mouth_left", "mouth"))
     # each hand belongs to the side whose (re-ordered) pose wrist is nearest its own wrist landmark
     found = [hd for hd in hands if hd is not None]
-    new = [None, None]
+    new: list[np.ndarray | None] = [None, None]
     for hd in found:
         d = [np.hypot(*(hd[0] - pose[15 + s, :2])) for s in (0, 1)]
         s = int(np.argmin(d))
-        if new[s] is None or d[s] < np.hypot(*(new[s][0] - pose[15 + s, :2])):
+        cur = new[s]
+        if cur is None or d[s] < np.hypot(*(cur[0] - pose[15 + s, :2])):
             new[s] = hd
     return pose, new, tuple(swapped)
 
@@ -366,7 +369,7 @@ def _polygon_dist(p: np.ndarray, poly: np.ndarray, shape: tuple[int, int]) -> np
     return d
 
 
-def _crotch(mask: np.ndarray, h_mid: np.ndarray, k_mid: np.ndarray) -> Optional[np.ndarray]:
+def _crotch(mask: np.ndarray, h_mid: np.ndarray, k_mid: np.ndarray) -> np.ndarray | None:
     """Top of the gap between the legs: the first pixel off the mask walking from the mid-hip to the
     mid-knee (None if the legs touch all the way)."""
     n = int(np.ceil(np.hypot(*(k_mid - h_mid)))) + 1
@@ -518,8 +521,8 @@ def refine_mask_with_depth(mask: np.ndarray, depth_m: np.ndarray, band_m: float 
 # Public API
 
 
-def segment_image(colour_rgb: np.ndarray, view: str = "front", depth: Optional[np.ndarray] = None,
-                  params: Optional[SegmentParams] = None, **overrides: Any) -> Segmentation:
+def segment_image(colour_rgb: np.ndarray, view: str = "front", depth: np.ndarray | None = None,
+                  params: SegmentParams | None = None, **overrides: Any) -> Segmentation:
     """Segments one RGB uint8 (H, W, 3) image of a standing subject seen from the ``view`` ("front" or
     "back") camera. ``depth`` (metres, aligned to the colour image, 0 = none) refines the person mask.
     ``params`` defaults to :data:`DEFAULT_PARAMS` of the view; keyword overrides set fields of
@@ -564,7 +567,7 @@ def segment_image(colour_rgb: np.ndarray, view: str = "front", depth: Optional[n
 
 
 def segment_capture(folder: PathLike, cameras: Sequence[str] = ("front", "back"), use_depth: bool = True,
-                    write: bool = True, out_dir: Optional[PathLike] = None, overwrite: bool = False,
+                    write: bool = True, out_dir: PathLike | None = None, overwrite: bool = False,
                     **params: Any) -> dict[str, Segmentation]:
     """Segments every camera folder of a capture (or a virtual scan): ``FOLDER/<camera>/`` with the colour
     and depth PNGs and camera.json (see :func:`bsv.frontend.capture.read_capture`). The camera name is the
@@ -610,8 +613,8 @@ def write_segmentation(seg: Segmentation, folder: PathLike, overwrite: bool = Fa
     if not ok:
         raise SegmentationError(f"cannot write segmentation.png / mask.png into {d}: is it a writable folder?")
     lm = {n: (None if not np.isfinite(r[0]) else [float(r[0]), float(r[1]), float(r[2])])
-          for n, r in zip(seg.names, seg.landmarks)}
-    meta = {"view": seg.view, "segments": {n: i for n, i in SEGMENT_IDS.items()}, "hands_found": list(seg.hands_found),
+          for n, r in zip(seg.names, seg.landmarks, strict=False)}
+    meta = {"view": seg.view, "segments": dict(SEGMENT_IDS), "hands_found": list(seg.hands_found),
             "swapped_pairs": list(seg.swapped), "counts": seg.counts(), "landmarks_px": lm}
     (d / "landmarks.json").write_text(json.dumps(meta, indent=1))
 
@@ -639,7 +642,21 @@ def label_accuracy(pred: np.ndarray, truth: np.ndarray) -> dict[str, Any]:
 
 
 __all__ = [
-    "SEGMENT_IDS", "SEGMENT_NAMES", "POSE_NAMES", "HAND_NAMES", "LANDMARK_NAMES", "REQUIRED_LANDMARKS",
-    "SegmentParams", "DEFAULT_PARAMS", "Segmentation", "run_holistic", "label_pixels", "refine_mask_with_depth", "segment_image",
-    "segment_capture", "write_segmentation", "SEGMENTATION_FILES", "label_accuracy",
+    "DEFAULT_PARAMS",
+    "HAND_NAMES",
+    "LANDMARK_NAMES",
+    "POSE_NAMES",
+    "REQUIRED_LANDMARKS",
+    "SEGMENTATION_FILES",
+    "SEGMENT_IDS",
+    "SEGMENT_NAMES",
+    "SegmentParams",
+    "Segmentation",
+    "label_accuracy",
+    "label_pixels",
+    "refine_mask_with_depth",
+    "run_holistic",
+    "segment_capture",
+    "segment_image",
+    "write_segmentation",
 ]

@@ -1,6 +1,6 @@
 """Pinhole intrinsics with Brown-Conrady distortion, as RealSense reports them and calibration.json stores them.
 
-JSON form (compatible with the Rust ``bsv_core::camera::Intrinsics``, which reads the flat k1..k3 keys):
+JSON form (compatible with the Rust ``bsv_capture::camera::Intrinsics``, which reads the flat k1..k3 keys):
 ``{"width", "height", "fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "coeffs": [k1, k2, p1, p2, k3]}``.
 Pixel-centre convention of OpenCV: the centre of the top-left pixel is (0, 0).
 """

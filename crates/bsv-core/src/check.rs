@@ -63,7 +63,7 @@ pub enum MeshCheckError {
         vertices: usize,
     },
     /// Triangles refer to missing vertices.
-    #[error("{what} has {count} triangle(s) referring to missing vertices; run `bsv-cli info --repair` (drops them) or export the mesh again")]
+    #[error("{what} has {count} triangle(s) referring to missing vertices; repair the mesh (`repair_mesh` drops them) or export it again")]
     InvalidFaces {
         /// The mesh's role.
         what: String,
@@ -71,7 +71,7 @@ pub enum MeshCheckError {
         count: usize,
     },
     /// Edges with more than two triangles (or pinched vertices).
-    #[error("{what} is not manifold: {edges} edge(s) shared by more than two triangles, {vertices} pinched vertex/vertices; remove duplicate faces with `bsv-cli info --repair`, otherwise fix the mesh in a modeller (e.g. MeshLab 'Repair non Manifold Edges')")]
+    #[error("{what} is not manifold: {edges} edge(s) shared by more than two triangles, {vertices} pinched vertex/vertices; remove duplicate faces (`repair_mesh`), otherwise fix the mesh in a modeller (e.g. MeshLab 'Repair non Manifold Edges')")]
     NonManifold {
         /// The mesh's role.
         what: String,
@@ -91,7 +91,7 @@ pub enum MeshCheckError {
         loops: usize,
     },
     /// Neighbouring triangles disagree on orientation.
-    #[error("{what} is inconsistently oriented: {edges} edge(s) run the same way by both their triangles; run `bsv-cli info --repair` to orient it")]
+    #[error("{what} is inconsistently oriented: {edges} edge(s) run the same way by both their triangles; repair the mesh (`repair_mesh` orients it)")]
     Inconsistent {
         /// The mesh's role.
         what: String,
@@ -100,7 +100,7 @@ pub enum MeshCheckError {
     },
     /// Closed and consistent but inside-out.
     #[error(
-        "{what} is inside-out (signed volume {volume:.6} m^3 <= 0); run `bsv-cli info --repair` to orient it outward"
+        "{what} is inside-out (signed volume {volume:.6} m^3 <= 0); repair the mesh (`repair_mesh` orients it outward)"
     )]
     Inward {
         /// The mesh's role.

@@ -36,7 +36,7 @@ fn flipped_faces_are_detected_and_repaired() {
     assert!(r.inconsistent_edges >= 5, "{}", r.inconsistent_edges);
     let err = r.require_closed_manifold("the template").unwrap_err();
     assert!(matches!(err, MeshCheckError::Inconsistent { .. }));
-    assert!(err.to_string().contains("the template") && err.to_string().contains("--repair"), "{err}");
+    assert!(err.to_string().contains("the template") && err.to_string().contains("repair_mesh"), "{err}");
     let log = repair_mesh(&mut m);
     assert_eq!(log.flipped_for_consistency, 5);
     assert_eq!(log.components_turned_outward, 0);

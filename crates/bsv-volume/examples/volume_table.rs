@@ -1,11 +1,10 @@
-//! Prints the volumes table and JSON of a synthetic labelled body made of capsules (torso, arms, legs),
-//! and times the segment volumes of a ~30k-triangle mesh. Run: `cargo run -p bsv-volume --example volume_table`.
+//! Prints the volumes table and JSON of a synthetic labelled body made of capsules (torso, arms, legs).
+//! Run: `cargo run -p bsv-volume --example volume_table`. (Speed: `cargo bench -p bsv-volume --bench volumes`.)
 
 use bsv_core::geometry::{add, scale};
 use bsv_core::shapes::{capsule, translate};
 use bsv_core::{Segment, TriMesh};
-use bsv_volume::{report, segment_volumes, DEFAULT_DENSITY_KG_M3};
-use std::time::Instant;
+use bsv_volume::{report, DEFAULT_DENSITY_KG_M3};
 
 /// A capsule limb at `x` (vertical), split at `split` (height) into `lower` and `upper` segments.
 #[allow(clippy::too_many_arguments)] // an example's plain helper: a parameter struct would only hide the shape
@@ -47,17 +46,4 @@ fn main() {
         }
         Err(e) => eprintln!("error: {e}"),
     }
-    let t0 = Instant::now();
-    let runs = 20;
-    for _ in 0..runs {
-        if let Err(e) = segment_volumes(&m) {
-            eprintln!("error: {e}");
-            return;
-        }
-    }
-    println!(
-        "segment volumes of {} triangles: {:.2} ms per run",
-        m.n_triangles(),
-        t0.elapsed().as_secs_f64() * 1e3 / runs as f64
-    );
 }

@@ -181,7 +181,7 @@ fn segment_volumes_of_a_30k_triangle_mesh_sum_exactly() {
         let k = ((c[1] + 0.1) / 0.2).floor().clamp(0.0, 4.0) as usize;
         bands[k]
     });
-    // Speed is measured by `cargo run --example volume_table` (not asserted here).
+    // Speed is measured by `cargo bench -p bsv-volume --bench volumes` (not asserted here).
     let sv = segment_volumes(&m).unwrap();
     assert_eq!(sv.segments.len(), 5);
     assert!((sum_of_parts(&sv) - sv.whole_m3).abs() < 1e-12 * sv.whole_m3);

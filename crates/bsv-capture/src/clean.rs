@@ -134,27 +134,60 @@ pub fn mean_knn_distances(points: &[[f64; 3]], k: usize) -> Result<Vec<f64>, Cle
     let tree: ImmutableKdTree<f64, 3> =
         ImmutableKdTree::new_from_slice(&sorted).map_err(|e| CleanError::Tree(format!("{e:?}")))?;
     let kk = NonZeroUsize::new(k).ok_or(CleanError::ZeroK)?;
-    // Exact k-NN of one point: (mean distance, k-th distance).
-    let exact = |p: &[f64; 3]| {
-        let res = tree.query(p).nearest_n::<SquaredEuclidean<f64>>(kk).execute();
-        let sum: f64 = res.iter().map(|h| h.distance.sqrt()).sum();
-        (sum / k as f64, res.last().map(|h| h.distance.sqrt()).unwrap_or(0.0))
-    };
-    let dist = |a: [f64; 3], b: [f64; 3]| dist2(a, b).sqrt();
+    let knn = MortonKnn { sorted: &sorted, tree: &tree, k, kk };
     let mut means_sorted = vec![0.0; n];
-    means_sorted.par_chunks_mut(CHAIN).enumerate().for_each(|(c, out)| {
-        let base = c * CHAIN;
+    means_sorted.par_chunks_mut(CHAIN).enumerate().for_each(|(c, out)| knn.chain(c * CHAIN, out));
+    let mut means = vec![0.0; n];
+    for (s, &i) in order.iter().enumerate() {
+        means[i as usize] = means_sorted[s];
+    }
+    Ok(means)
+}
+
+#[inline]
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    dist2(a, b).sqrt()
+}
+
+/// The points in Morton order with their k-d tree: the shared input of every chain.
+struct MortonKnn<'a> {
+    sorted: &'a [[f64; 3]],
+    tree: &'a ImmutableKdTree<f64, 3>,
+    k: usize,
+    kk: NonZeroUsize,
+}
+
+/// Per-chain buffers, reused for every group.
+struct Scratch {
+    /// Candidates in structure-of-arrays form so that the distance loop vectorises.
+    cand: [Vec<f64>; 3],
+    d2: Vec<f64>,
+    buf: Vec<u64>,
+}
+
+impl MortonKnn<'_> {
+    /// Exact k-NN of one point: (mean distance, k-th distance).
+    fn exact(&self, p: &[f64; 3]) -> (f64, f64) {
+        let res = self.tree.query(p).nearest_n::<SquaredEuclidean<f64>>(self.kk).execute();
+        let sum: f64 = res.iter().map(|h| h.distance.sqrt()).sum();
+        (sum / self.k as f64, res.last().map(|h| h.distance.sqrt()).unwrap_or(0.0))
+    }
+
+    /// Mean distances of the chain of points starting at `base` (one `out` slot per point).
+    fn chain(&self, base: usize, out: &mut [f64]) {
+        let (sorted, k) = (self.sorted, self.k);
         let len = out.len();
-        // Candidates in structure-of-arrays form so that the distance loop vectorises.
-        let mut cand: [Vec<f64>; 3] = [Vec::with_capacity(4 * k), Vec::with_capacity(4 * k), Vec::with_capacity(4 * k)];
-        let mut d2: Vec<f64> = Vec::with_capacity(4 * k);
-        let mut buf: Vec<u64> = Vec::with_capacity(4 * k);
+        let mut scratch = Scratch {
+            cand: [Vec::with_capacity(4 * k), Vec::with_capacity(4 * k), Vec::with_capacity(4 * k)],
+            d2: Vec::with_capacity(4 * k),
+            buf: Vec::with_capacity(4 * k),
+        };
         let mut anchor: Option<([f64; 3], f64)> = None;
         let mut i = 0;
         while i < len {
             let Some((q, rq)) = anchor else {
                 let p = sorted[base + i];
-                let (m, r) = exact(&p);
+                let (m, r) = self.exact(&p);
                 out[i] = m;
                 anchor = Some((p, r));
                 i += 1;
@@ -165,86 +198,102 @@ pub fn mean_knn_distances(points: &[[f64; 3]], k: usize) -> Result<Vec<f64>, Cle
                 anchor = None;
                 continue;
             }
-            let mut end = i;
-            let (centre, radius) = if first > 0.5 * rq {
-                // A jump of the Morton order: this point alone, its own bound ball.
-                end += 1;
-                (sorted[base + i], rq + first)
-            } else {
-                let mut reach: f64 = 0.0;
-                while end < len && end - i < GROUP {
-                    let s = dist(sorted[base + end], q);
-                    // Far members would inflate the shared query: a group stays within GROUP_REACH r_q.
-                    if end > i && s > (GROUP_REACH * rq).max(first) {
-                        break;
-                    }
-                    reach = reach.max(s);
-                    end += 1;
-                }
-                (q, rq + 2.0 * reach)
-            };
-            for c in &mut cand {
-                c.clear();
-            }
-            for h in tree
-                .query(&centre)
-                .within::<SquaredEuclidean<f64>>(radius * radius * (1.0 + 1e-9) + 1e-300)
-                .unsorted()
-                .execute()
-            {
-                let c = sorted[h.item as usize];
-                for a in 0..3 {
-                    cand[a].push(c[a]);
-                }
-            }
+            let (end, centre, radius) = self.group(base, i, len, (q, rq), first);
+            self.gather_candidates(centre, radius, &mut scratch.cand);
             let mut prev = (q, rq);
             for j in i..end {
                 let p = sorted[base + j];
-                let (sq, sp) = (dist(p, q), dist(p, prev.0));
-                // Upper bound of p's k-th distance: every candidate beyond it is out.
-                let hi = (rq + sq).min(prev.1 + sp);
-                // Lower bound: fewer than k points lie strictly inside it, so all of them are in.
-                let lo = (rq - sq).max(prev.1 - sp).max(0.0);
-                let hi2 = hi * hi * (1.0 + 1e-9) + 1e-300;
-                let lo2 = lo * lo * (1.0 - 1e-9);
-                buf.clear();
-                let mut sure_sum = 0.0;
-                let mut sure = 0usize;
-                d2.clear();
-                d2.extend(cand[0].iter().zip(&cand[1]).zip(&cand[2]).map(|((x, y), z)| {
-                    let (dx, dy, dz) = (x - p[0], y - p[1], z - p[2]);
-                    dx * dx + dy * dy + dz * dz
-                }));
-                for &d in &d2 {
-                    if d < lo2 {
-                        sure_sum += d.sqrt();
-                        sure += 1;
-                    } else if d <= hi2 {
-                        // Non-negative f64 order like their bit patterns: select on u64.
-                        buf.push(d.to_bits());
-                    }
-                }
-                let (m, r) = if sure < k && sure + buf.len() >= k {
-                    let need = k - sure;
-                    let (_, kth, _) = buf.select_nth_unstable(need - 1);
-                    let kth = f64::from_bits(*kth).sqrt();
-                    let sum: f64 = sure_sum + buf[..need].iter().map(|&b| f64::from_bits(b).sqrt()).sum::<f64>();
-                    (sum / k as f64, kth)
-                } else {
-                    exact(&p)
-                };
+                let (m, r) = self.member(p, (q, rq), prev, &mut scratch);
                 out[j] = m;
                 prev = (p, r);
             }
             anchor = Some(prev);
             i = end;
         }
-    });
-    let mut means = vec![0.0; n];
-    for (s, &i) in order.iter().enumerate() {
-        means[i as usize] = means_sorted[s];
     }
-    Ok(means)
+
+    /// The group starting at chain index `i` near anchor `(q, rq)`: its end and the centre and radius
+    /// of the query ball that holds every member's bound ball.
+    fn group(&self, base: usize, i: usize, len: usize, (q, rq): ([f64; 3], f64), first: f64) -> (usize, [f64; 3], f64) {
+        let sorted = self.sorted;
+        let mut end = i;
+        if first > 0.5 * rq {
+            // A jump of the Morton order: this point alone, its own bound ball.
+            end += 1;
+            return (end, sorted[base + i], rq + first);
+        }
+        let mut reach: f64 = 0.0;
+        while end < len && end - i < GROUP {
+            let s = dist(sorted[base + end], q);
+            // Far members would inflate the shared query: a group stays within GROUP_REACH r_q.
+            if end > i && s > (GROUP_REACH * rq).max(first) {
+                break;
+            }
+            reach = reach.max(s);
+            end += 1;
+        }
+        (end, q, rq + 2.0 * reach)
+    }
+
+    /// Replaces `cand` with the points within `radius` of `centre` (padded against rounding).
+    fn gather_candidates(&self, centre: [f64; 3], radius: f64, cand: &mut [Vec<f64>; 3]) {
+        for c in cand.iter_mut() {
+            c.clear();
+        }
+        for h in self
+            .tree
+            .query(&centre)
+            .within::<SquaredEuclidean<f64>>(radius * radius * (1.0 + 1e-9) + 1e-300)
+            .unsorted()
+            .execute()
+        {
+            let c = self.sorted[h.item as usize];
+            for a in 0..3 {
+                cand[a].push(c[a]);
+            }
+        }
+    }
+
+    /// (mean distance, k-th distance) of group member `p` from the group's candidates, bounded by
+    /// the anchor `(q, rq)` and the previous member `prev`; exact k-NN when the bounds do not settle it.
+    #[inline]
+    fn member(&self, p: [f64; 3], (q, rq): ([f64; 3], f64), prev: ([f64; 3], f64), s: &mut Scratch) -> (f64, f64) {
+        let k = self.k;
+        let (sq, sp) = (dist(p, q), dist(p, prev.0));
+        // Upper bound of p's k-th distance: every candidate beyond it is out.
+        let hi = (rq + sq).min(prev.1 + sp);
+        // Lower bound: fewer than k points lie strictly inside it, so all of them are in.
+        let lo = (rq - sq).max(prev.1 - sp).max(0.0);
+        let hi2 = hi * hi * (1.0 + 1e-9) + 1e-300;
+        let lo2 = lo * lo * (1.0 - 1e-9);
+        s.buf.clear();
+        let mut sure_sum = 0.0;
+        let mut sure = 0usize;
+        s.d2.clear();
+        let cand = &s.cand;
+        s.d2.extend(cand[0].iter().zip(&cand[1]).zip(&cand[2]).map(|((x, y), z)| {
+            let (dx, dy, dz) = (x - p[0], y - p[1], z - p[2]);
+            dx * dx + dy * dy + dz * dz
+        }));
+        for &d in &s.d2 {
+            if d < lo2 {
+                sure_sum += d.sqrt();
+                sure += 1;
+            } else if d <= hi2 {
+                // Non-negative f64 order like their bit patterns: select on u64.
+                s.buf.push(d.to_bits());
+            }
+        }
+        if sure < k && sure + s.buf.len() >= k {
+            let need = k - sure;
+            let (_, kth, _) = s.buf.select_nth_unstable(need - 1);
+            let kth = f64::from_bits(*kth).sqrt();
+            let sum: f64 = sure_sum + s.buf[..need].iter().map(|&b| f64::from_bits(b).sqrt()).sum::<f64>();
+            (sum / k as f64, kth)
+        } else {
+            self.exact(&p)
+        }
+    }
 }
 
 /// Mean distances by plain k-NN queries (kiddo `nearest_n` per point): the reference the fast

@@ -506,67 +506,16 @@ pub fn build_cloud(views: &[DepthView], params: &FuseParams) -> Result<(PointClo
     for &l in &params.drop_labels {
         drop[usize::from(l)] = true;
     }
-    let mut cloud = PointCloud::new(Vec::new());
-    let mut normals = Vec::new();
-    let mut colors = Vec::new();
-    let mut labels = Vec::new();
+    let mut world = ViewPoints { points: Vec::new(), normals: Vec::new(), colors: Vec::new(), labels: Vec::new() };
     let mut reports = Vec::with_capacity(views.len());
     for view in views {
-        let camera = || view.name.clone();
-        let t = Instant::now();
-        let (mut vp, mask_pixels, no_depth) = deproject_view(view, params);
-        let seconds_deproject = t.elapsed().as_secs_f64();
-        if mask_pixels == 0 {
-            return Err(FuseError::EmptyMask { camera: camera() });
-        }
-        if vp.points.is_empty() {
-            return Err(FuseError::NoValidDepth { camera: camera(), mask_pixels });
-        }
-        let deprojected = vp.points.len();
-        let t = Instant::now();
-        let mut sor_threshold_m = None;
-        if params.sor {
-            let res = statistical_outliers(&vp.points, SorParams { k: params.sor_k, std_ratio: params.sor_std_ratio })
-                .map_err(|source| FuseError::Clean { camera: camera(), source })?;
-            sor_threshold_m = res.threshold.is_finite().then_some(res.threshold);
-            retain(&mut vp.points, &res.keep);
-            retain(&mut vp.normals, &res.keep);
-            retain(&mut vp.colors, &res.keep);
-            retain(&mut vp.labels, &res.keep);
-        }
-        let seconds_sor = t.elapsed().as_secs_f64();
-        let sor_removed = deprojected - vp.points.len();
-        let mut dropped: BTreeMap<String, usize> = BTreeMap::new();
-        let ext = &view.camera_to_world;
-        for (k, (&p, &l)) in vp.points.iter().zip(&vp.labels).enumerate() {
-            if drop[usize::from(l)] {
-                *dropped.entry(segment_name(l)).or_default() += 1;
-                continue;
-            }
-            cloud.points.push(ext.transform_point(p));
-            if params.normals {
-                normals.push(ext.transform_vector(vp.normals[k]));
-            }
-            colors.push(vp.colors[k]);
-            labels.push(l);
-        }
-        let kept = vp.points.len() - dropped.values().sum::<usize>();
-        reports.push(ViewReport {
-            name: view.name.clone(),
-            mask_pixels,
-            no_depth,
-            deprojected,
-            sor_removed,
-            sor_threshold_m,
-            dropped,
-            kept,
-            seconds_deproject,
-            seconds_sor,
-        });
+        reports.push(fuse_view(view, params, &drop, &mut world)?);
     }
-    if cloud.points.is_empty() {
+    if world.points.is_empty() {
         return Err(FuseError::EmptyCloud { dropped: params.drop_labels.iter().map(|&l| segment_name(l)).collect() });
     }
+    let ViewPoints { points, normals, colors, labels } = world;
+    let mut cloud = PointCloud::new(points);
     if params.normals {
         cloud.normals = Some(normals);
     }
@@ -592,4 +541,77 @@ pub fn build_cloud(views: &[DepthView], params: &FuseParams) -> Result<(PointClo
         seconds: t0.elapsed().as_secs_f64(),
     };
     Ok((cloud, report))
+}
+
+/// One view: deprojects its mask, removes its outliers, and appends its kept points to `world`
+/// in the world frame.
+fn fuse_view(
+    view: &DepthView,
+    params: &FuseParams,
+    drop: &[bool; SEGMENT_COUNT],
+    world: &mut ViewPoints,
+) -> Result<ViewReport, FuseError> {
+    let camera = || view.name.clone();
+    let t = Instant::now();
+    let (mut vp, mask_pixels, no_depth) = deproject_view(view, params);
+    let seconds_deproject = t.elapsed().as_secs_f64();
+    if mask_pixels == 0 {
+        return Err(FuseError::EmptyMask { camera: camera() });
+    }
+    if vp.points.is_empty() {
+        return Err(FuseError::NoValidDepth { camera: camera(), mask_pixels });
+    }
+    let deprojected = vp.points.len();
+    let t = Instant::now();
+    let mut sor_threshold_m = None;
+    if params.sor {
+        let res = statistical_outliers(&vp.points, SorParams { k: params.sor_k, std_ratio: params.sor_std_ratio })
+            .map_err(|source| FuseError::Clean { camera: camera(), source })?;
+        sor_threshold_m = res.threshold.is_finite().then_some(res.threshold);
+        retain(&mut vp.points, &res.keep);
+        retain(&mut vp.normals, &res.keep);
+        retain(&mut vp.colors, &res.keep);
+        retain(&mut vp.labels, &res.keep);
+    }
+    let seconds_sor = t.elapsed().as_secs_f64();
+    let sor_removed = deprojected - vp.points.len();
+    let dropped = append_to_world(&vp, &view.camera_to_world, params, drop, world);
+    let kept = vp.points.len() - dropped.values().sum::<usize>();
+    Ok(ViewReport {
+        name: view.name.clone(),
+        mask_pixels,
+        no_depth,
+        deprojected,
+        sor_removed,
+        sor_threshold_m,
+        dropped,
+        kept,
+        seconds_deproject,
+        seconds_sor,
+    })
+}
+
+/// Appends the camera-frame points whose label is not dropped to `world` (transformed by `ext`);
+/// the count of dropped points per segment name.
+fn append_to_world(
+    vp: &ViewPoints,
+    ext: &Extrinsics,
+    params: &FuseParams,
+    drop: &[bool; SEGMENT_COUNT],
+    world: &mut ViewPoints,
+) -> BTreeMap<String, usize> {
+    let mut dropped: BTreeMap<String, usize> = BTreeMap::new();
+    for (k, (&p, &l)) in vp.points.iter().zip(&vp.labels).enumerate() {
+        if drop[usize::from(l)] {
+            *dropped.entry(segment_name(l)).or_default() += 1;
+            continue;
+        }
+        world.points.push(ext.transform_point(p));
+        if params.normals {
+            world.normals.push(ext.transform_vector(vp.normals[k]));
+        }
+        world.colors.push(vp.colors[k]);
+        world.labels.push(l);
+    }
+    dropped
 }

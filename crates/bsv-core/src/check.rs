@@ -361,8 +361,17 @@ fn flip(t: &mut [u32; 3]) {
 /// outward (positive signed volume).
 pub fn repair_mesh(mesh: &mut TriMesh) -> RepairLog {
     let mut log = RepairLog::default();
-    let n = mesh.n_vertices();
-    if mesh.vertex_labels.as_ref().is_some_and(|l| l.len() != n) {
+    drop_mismatched_labels(mesh, &mut log);
+    remove_bad_triangles(mesh, &mut log);
+    remove_unreferenced_vertices(mesh, &mut log);
+    orient_consistently(mesh, &mut log);
+    turn_closed_components_outward(mesh, &mut log);
+    log
+}
+
+/// Drops label arrays whose length does not match the vertices or triangles.
+fn drop_mismatched_labels(mesh: &mut TriMesh, log: &mut RepairLog) {
+    if mesh.vertex_labels.as_ref().is_some_and(|l| l.len() != mesh.n_vertices()) {
         mesh.vertex_labels = None;
         log.dropped_label_arrays += 1;
     }
@@ -370,8 +379,11 @@ pub fn repair_mesh(mesh: &mut TriMesh) -> RepairLog {
         mesh.face_labels = None;
         log.dropped_label_arrays += 1;
     }
+}
 
-    // 1. Triangles: invalid, degenerate, duplicate.
+/// Step 1: removes invalid, degenerate and duplicate triangles (and their face labels).
+fn remove_bad_triangles(mesh: &mut TriMesh, log: &mut RepairLog) {
+    let n = mesh.n_vertices();
     let mut seen = HashSet::with_capacity(mesh.n_triangles());
     let keep: Vec<bool> = mesh
         .triangles
@@ -397,8 +409,11 @@ pub fn repair_mesh(mesh: &mut TriMesh) -> RepairLog {
         let mut k = keep.iter();
         l.retain(|_| *k.next().unwrap_or(&false));
     }
+}
 
-    // 2. Unreferenced vertices, with index compaction.
+/// Step 2: removes vertices no triangle uses (and their labels), compacting the indices.
+fn remove_unreferenced_vertices(mesh: &mut TriMesh, log: &mut RepairLog) {
+    let n = mesh.n_vertices();
     let mut used = vec![false; n];
     for t in &mesh.triangles {
         for &v in t {
@@ -431,9 +446,11 @@ pub fn repair_mesh(mesh: &mut TriMesh) -> RepairLog {
             *t = t.map(|v| remap[v as usize]);
         }
     }
+}
 
-    // 3. Consistent orientation per component, breadth-first across manifold edges.
-    let edges = edge_map(&mesh.triangles);
+/// Triangles across each manifold edge, with whether both run the edge the same way.
+fn manifold_neighbours(triangles: &[[u32; 3]]) -> HashMap<u32, Vec<(u32, bool)>> {
+    let edges = edge_map(triangles);
     let mut neighbours: HashMap<u32, Vec<(u32, bool)>> = HashMap::new();
     for e in edges.values() {
         if let [(f, df), (g, dg)] = e.faces[..] {
@@ -442,6 +459,12 @@ pub fn repair_mesh(mesh: &mut TriMesh) -> RepairLog {
             neighbours.entry(g).or_default().push((f, df == dg));
         }
     }
+    neighbours
+}
+
+/// Step 3: consistent orientation per component, breadth-first across manifold edges.
+fn orient_consistently(mesh: &mut TriMesh, log: &mut RepairLog) {
+    let neighbours = manifold_neighbours(&mesh.triangles);
     let nf = mesh.n_triangles();
     let mut flipped = vec![false; nf];
     let mut visited = vec![false; nf];
@@ -478,8 +501,11 @@ pub fn repair_mesh(mesh: &mut TriMesh) -> RepairLog {
             log.flipped_for_consistency += 1;
         }
     }
+}
 
-    // 4. Closed components outward.
+/// Step 4: flips every closed component whose signed volume is negative; also counts the edges
+/// still inconsistent.
+fn turn_closed_components_outward(mesh: &mut TriMesh, log: &mut RepairLog) {
     let edges = edge_map(&mesh.triangles);
     let (comp, n_comp) = face_components(&mesh.triangles);
     let mut closed = vec![true; n_comp];
@@ -510,5 +536,4 @@ pub fn repair_mesh(mesh: &mut TriMesh) -> RepairLog {
             }
         }
     }
-    log
 }

@@ -216,6 +216,30 @@ fn label_volumes_at(
     table: &EdgeTable,
     face_labels: &[u8],
 ) -> LabelVolumes {
+    let (mut acc, count, whole) = face_volumes(r, vertices, triangles, face_labels);
+    // 1. Interface edges, chained into pieces.
+    let iface = interface_edges(table, face_labels);
+    let mut caps = CapStats { interface_edges: iface.len(), ..CapStats::default() };
+    if iface.is_empty() {
+        return finish(acc, count, whole, caps);
+    }
+    let (piece, n_pieces) = chain_pieces(vertices.len(), &iface);
+    // 2. One apex per piece, and the piece fans.
+    let pieces = Pieces::build(vertices, &iface, piece, n_pieces);
+    pieces.add_fans(r, vertices, &iface, &mut acc);
+    // 3. Junction clusters close the spokes of the open pieces.
+    pieces.close_spokes(r, vertices, &mut acc, &mut caps);
+    finish(acc, count, whole, caps)
+}
+
+/// Sums the six-fold tetrahedron volumes of the faces from `r`: per label, the face count per
+/// label, and the whole.
+fn face_volumes(
+    r: [f64; 3],
+    vertices: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    face_labels: &[u8],
+) -> ([f64; 256], [usize; 256], f64) {
     let pos = |v: u32| vertices[v as usize];
     let mut acc = [0.0f64; 256];
     let mut count = [0usize; 256];
@@ -226,15 +250,20 @@ fn label_volumes_at(
         count[usize::from(l)] += 1;
         whole += d;
     }
+    (acc, count, whole)
+}
 
-    // 1. Interface edges, oriented as the face with the smaller label runs them.
-    struct IEdge {
-        a: u32,
-        b: u32,
-        lo: u8,
-        hi: u8,
-    }
-    let iface: Vec<IEdge> = table
+/// An interface edge `a -> b`, oriented as the face with the smaller label `lo` runs it.
+struct IEdge {
+    a: u32,
+    b: u32,
+    lo: u8,
+    hi: u8,
+}
+
+/// The edges whose two faces carry different labels.
+fn interface_edges(table: &EdgeTable, face_labels: &[u8]) -> Vec<IEdge> {
+    table
         .interior
         .iter()
         .filter_map(|e| {
@@ -245,16 +274,13 @@ fn label_volumes_at(
                 std::cmp::Ordering::Greater => Some(IEdge { a: e.to, b: e.from, lo: t, hi: s }),
             }
         })
-        .collect();
-    let mut caps = CapStats { interface_edges: iface.len(), ..CapStats::default() };
-    if iface.is_empty() {
-        return finish(acc, count, whole, caps);
-    }
+        .collect()
+}
 
-    // Interface edges at each vertex (CSR).
-    let n = vertices.len();
+/// Interface edges at each of the `n` vertices (CSR): vertex `v`'s edges are `at[start[v]..start[v + 1]]`.
+fn edges_at_vertices(n: usize, iface: &[IEdge]) -> (Vec<usize>, Vec<u32>) {
     let mut start = vec![0usize; n + 1];
-    for e in &iface {
+    for e in iface {
         start[e.a as usize + 1] += 1;
         start[e.b as usize + 1] += 1;
     }
@@ -269,8 +295,13 @@ fn label_volumes_at(
             fill[v as usize] += 1;
         }
     }
+    (start, at)
+}
 
-    // Pieces: union interface edges through regular vertices.
+/// The piece of every interface edge (numbered 0.. in order of first edge) and the number of pieces:
+/// edges are chained through regular vertices (exactly two interface edges with the same label pair).
+fn chain_pieces(n: usize, iface: &[IEdge]) -> (Vec<u32>, usize) {
+    let (start, at) = edges_at_vertices(n, iface);
     let mut uf = UnionFind::new(iface.len());
     for v in 0..n {
         let inc = &at[start[v]..start[v + 1]];
@@ -292,84 +323,107 @@ fn label_volumes_at(
         }
         *pk = piece_of_root[root];
     }
-    let np = n_pieces as usize;
+    (piece, n_pieces as usize)
+}
 
-    // 2. Apex of each piece: centroid of its distinct vertices. Also the out-minus-in degree of every
-    //    (piece, vertex) on the smaller label's side: non-zero only at the ends of open pieces.
-    let mut incid: Vec<(u32, u32, i32)> = Vec::with_capacity(iface.len() * 2);
-    for (k, e) in iface.iter().enumerate() {
-        incid.push((piece[k], e.a, 1));
-        incid.push((piece[k], e.b, -1));
-    }
-    incid.sort_unstable_by_key(|x| (x.0, x.1));
-    let mut apex_sum = vec![[0.0f64; 3]; np];
-    let mut apex_n = vec![0usize; np];
-    let mut spokes: Vec<(u32, u32, i32)> = Vec::new(); // (piece, vertex, out - in)
-    let mut i = 0;
-    while i < incid.len() {
-        let (p, v, _) = incid[i];
-        let mut d = 0;
-        while i < incid.len() && incid[i].0 == p && incid[i].1 == v {
-            d += incid[i].2;
-            i += 1;
-        }
-        apex_sum[p as usize] = add(apex_sum[p as usize], pos(v));
-        apex_n[p as usize] += 1;
-        if d != 0 {
-            spokes.push((p, v, d));
-        }
-    }
-    let apex: Vec<[f64; 3]> = apex_sum.iter().zip(&apex_n).map(|(s, &c)| scale(*s, 1.0 / c.max(1) as f64)).collect();
-    let pair: Vec<(u8, u8)> = {
-        let mut pr = vec![(0u8, 0u8); np];
+/// The interface pieces with their apexes, label pairs and unmatched spokes.
+struct Pieces {
+    /// Piece of each interface edge.
+    of_edge: Vec<u32>,
+    /// Number of pieces.
+    count: usize,
+    /// Apex of each piece: the centroid of its distinct vertices.
+    apex: Vec<[f64; 3]>,
+    /// `(smaller, larger)` label of each piece.
+    pair: Vec<(u8, u8)>,
+    /// `(piece, vertex, out - in)` on the smaller label's side, where non-zero: the ends of open pieces.
+    spokes: Vec<(u32, u32, i32)>,
+}
+
+impl Pieces {
+    fn build(vertices: &[[f64; 3]], iface: &[IEdge], of_edge: Vec<u32>, np: usize) -> Pieces {
+        let pos = |v: u32| vertices[v as usize];
+        let mut incid: Vec<(u32, u32, i32)> = Vec::with_capacity(iface.len() * 2);
         for (k, e) in iface.iter().enumerate() {
-            pr[piece[k] as usize] = (e.lo, e.hi);
+            incid.push((of_edge[k], e.a, 1));
+            incid.push((of_edge[k], e.b, -1));
         }
-        pr
-    };
-
-    // Piece fans: the smaller label gets (apex, b, a), the larger the same triangle reversed.
-    for (k, e) in iface.iter().enumerate() {
-        let d = det6(r, apex[piece[k] as usize], pos(e.b), pos(e.a));
-        acc[usize::from(e.lo)] += d;
-        acc[usize::from(e.hi)] -= d;
+        incid.sort_unstable_by_key(|x| (x.0, x.1));
+        let mut apex_sum = vec![[0.0f64; 3]; np];
+        let mut apex_n = vec![0usize; np];
+        let mut spokes: Vec<(u32, u32, i32)> = Vec::new();
+        let mut i = 0;
+        while i < incid.len() {
+            let (p, v, _) = incid[i];
+            let mut d = 0;
+            while i < incid.len() && incid[i].0 == p && incid[i].1 == v {
+                d += incid[i].2;
+                i += 1;
+            }
+            apex_sum[p as usize] = add(apex_sum[p as usize], pos(v));
+            apex_n[p as usize] += 1;
+            if d != 0 {
+                spokes.push((p, v, d));
+            }
+        }
+        let apex: Vec<[f64; 3]> =
+            apex_sum.iter().zip(&apex_n).map(|(s, &c)| scale(*s, 1.0 / c.max(1) as f64)).collect();
+        let mut pair = vec![(0u8, 0u8); np];
+        for (k, e) in iface.iter().enumerate() {
+            pair[of_edge[k] as usize] = (e.lo, e.hi);
+        }
+        Pieces { of_edge, count: np, apex, pair, spokes }
     }
 
-    // 3. Junction clusters: pieces and junction vertices linked by spokes; one hub per cluster.
-    let mut open = vec![false; np];
-    let mut junction_id = vec![u32::MAX; n];
-    let mut junctions: Vec<u32> = Vec::new();
-    for &(p, v, _) in &spokes {
-        open[p as usize] = true;
-        if junction_id[v as usize] == u32::MAX {
-            junction_id[v as usize] = junctions.len() as u32;
-            junctions.push(v);
+    /// Piece fans: the smaller label gets (apex, b, a), the larger the same triangle reversed.
+    fn add_fans(&self, r: [f64; 3], vertices: &[[f64; 3]], iface: &[IEdge], acc: &mut [f64; 256]) {
+        let pos = |v: u32| vertices[v as usize];
+        for (k, e) in iface.iter().enumerate() {
+            let d = det6(r, self.apex[self.of_edge[k] as usize], pos(e.b), pos(e.a));
+            acc[usize::from(e.lo)] += d;
+            acc[usize::from(e.hi)] -= d;
         }
     }
-    let mut cuf = UnionFind::new(np + junctions.len());
-    for &(p, v, _) in &spokes {
-        cuf.union(p as usize, np + junction_id[v as usize] as usize);
+
+    /// Junction clusters: pieces and junction vertices linked by spokes, one hub per cluster; each
+    /// spoke is closed by (apex, junction, hub) on both sides. Fills the piece and junction counts.
+    fn close_spokes(&self, r: [f64; 3], vertices: &[[f64; 3]], acc: &mut [f64; 256], caps: &mut CapStats) {
+        let pos = |v: u32| vertices[v as usize];
+        let np = self.count;
+        let mut open = vec![false; np];
+        let mut junction_id = vec![u32::MAX; vertices.len()];
+        let mut junctions: Vec<u32> = Vec::new();
+        for &(p, v, _) in &self.spokes {
+            open[p as usize] = true;
+            if junction_id[v as usize] == u32::MAX {
+                junction_id[v as usize] = junctions.len() as u32;
+                junctions.push(v);
+            }
+        }
+        let mut cuf = UnionFind::new(np + junctions.len());
+        for &(p, v, _) in &self.spokes {
+            cuf.union(p as usize, np + junction_id[v as usize] as usize);
+        }
+        let mut hub_sum = vec![[0.0f64; 3]; np + junctions.len()];
+        let mut hub_n = vec![0usize; np + junctions.len()];
+        for (j, &v) in junctions.iter().enumerate() {
+            let root = cuf.find(np + j);
+            hub_sum[root] = add(hub_sum[root], pos(v));
+            hub_n[root] += 1;
+        }
+        for &(p, v, d) in &self.spokes {
+            let root = cuf.find(p as usize);
+            let hub = scale(hub_sum[root], 1.0 / hub_n[root].max(1) as f64);
+            let w = f64::from(d) * det6(r, self.apex[p as usize], pos(v), hub);
+            let (lo, hi) = self.pair[p as usize];
+            acc[usize::from(lo)] += w;
+            acc[usize::from(hi)] -= w;
+        }
+        caps.open_pieces = open.iter().filter(|&&o| o).count();
+        caps.closed_loops = np - caps.open_pieces;
+        caps.junctions = junctions.len();
+        caps.clusters = (0..np + junctions.len()).filter(|&x| (x >= np || open[x]) && cuf.find(x) == x).count();
     }
-    let mut hub_sum = vec![[0.0f64; 3]; np + junctions.len()];
-    let mut hub_n = vec![0usize; np + junctions.len()];
-    for (j, &v) in junctions.iter().enumerate() {
-        let root = cuf.find(np + j);
-        hub_sum[root] = add(hub_sum[root], pos(v));
-        hub_n[root] += 1;
-    }
-    for &(p, v, d) in &spokes {
-        let root = cuf.find(p as usize);
-        let hub = scale(hub_sum[root], 1.0 / hub_n[root].max(1) as f64);
-        let w = f64::from(d) * det6(r, apex[p as usize], pos(v), hub);
-        let (lo, hi) = pair[p as usize];
-        acc[usize::from(lo)] += w;
-        acc[usize::from(hi)] -= w;
-    }
-    caps.open_pieces = open.iter().filter(|&&o| o).count();
-    caps.closed_loops = np - caps.open_pieces;
-    caps.junctions = junctions.len();
-    caps.clusters = (0..np + junctions.len()).filter(|&x| (x >= np || open[x]) && cuf.find(x) == x).count();
-    finish(acc, count, whole, caps)
 }
 
 fn finish(acc: [f64; 256], count: [usize; 256], whole: f64, caps: CapStats) -> LabelVolumes {

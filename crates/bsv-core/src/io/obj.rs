@@ -153,106 +153,125 @@ pub fn parse(bytes: &[u8]) -> Result<(TriMesh, ObjReport), ObjError> {
     if bytes.is_empty() {
         return Err(ObjError::Empty);
     }
-    let mut report = ObjReport::default();
-    let mut vertices: Vec<[f64; 3]> = Vec::new();
-    let mut triangles: Vec<[u32; 3]> = Vec::new();
-    let mut labels: Vec<u8> = Vec::new();
-    let mut any_segment_group = false;
-    let mut current = 0u8;
-    // Absolute indices that pointed past the vertices read so far: checked at the end.
-    let mut forward: Vec<(usize, i64, u32)> = Vec::new();
-    let mut poly: Vec<u32> = Vec::with_capacity(8);
+    let mut state = ObjParser::default();
     for (line_no, line) in lines(bytes) {
         let mut words = line.split_ascii_whitespace();
         let Some(keyword) = words.next() else { continue };
         match keyword {
-            "v" => vertices.push(parse_vertex(line_no, vertices.len(), words)?),
-            "f" => {
-                poly.clear();
-                for w in words {
-                    let head = w.split('/').next().unwrap_or("");
-                    let i: i64 = head.parse().map_err(|_| ObjError::BadFace {
-                        line: line_no,
-                        message: format!("{w:?} does not start with a vertex index"),
-                    })?;
-                    let n = vertices.len() as i64;
-                    let resolved = match i {
-                        0 => {
-                            return Err(ObjError::BadFace {
-                                line: line_no,
-                                message: "index 0 (OBJ indices start at 1)".into(),
-                            })
-                        }
-                        i if i < 0 => {
-                            if n + i < 0 {
-                                return Err(ObjError::IndexOutOfRange {
-                                    line: line_no,
-                                    index: i,
-                                    vertex_count: vertices.len(),
-                                });
-                            }
-                            n + i
-                        }
-                        i => i - 1,
-                    };
-                    let Ok(r) = u32::try_from(resolved) else {
-                        return Err(ObjError::IndexOutOfRange {
-                            line: line_no,
-                            index: i,
-                            vertex_count: vertices.len(),
-                        });
-                    };
-                    if resolved >= n {
-                        forward.push((line_no, i, r));
-                    }
-                    poly.push(r);
-                }
-                if poly.len() < 3 {
-                    return Err(ObjError::FaceTooSmall { line: line_no, n: poly.len() });
-                }
-                if poly.len() > 3 {
-                    report.polygons_triangulated += 1;
-                }
-                for k in 1..poly.len() - 1 {
-                    triangles.push([poly[0], poly[k], poly[k + 1]]);
-                    labels.push(current);
-                }
-            }
-            "g" | "o" => {
-                let names: Vec<&str> = words.collect();
-                match names.iter().find_map(|n| segment_of(n)) {
-                    Some(s) => {
-                        current = s.id();
-                        any_segment_group = true;
-                    }
-                    None => {
-                        current = 0;
-                        let name = names.join(" ");
-                        if !name.is_empty() && name != "default" && !report.unknown_groups.contains(&name) {
-                            report.unknown_groups.push(name);
-                        }
-                    }
-                }
-            }
+            "v" => state.vertices.push(parse_vertex(line_no, state.vertices.len(), words)?),
+            "f" => state.face(line_no, words)?,
+            "g" | "o" => state.group(words),
             "vt" | "vn" | "vp" | "s" | "usemtl" | "mtllib" => {}
-            _ => report.ignored_statements += 1,
+            _ => state.report.ignored_statements += 1,
         }
     }
-    if vertices.is_empty() {
-        return Err(ObjError::NoVertices);
-    }
-    if let Some(&(line, index, _)) = forward.iter().find(|f| f.2 as usize >= vertices.len()) {
-        return Err(ObjError::IndexOutOfRange { line, index, vertex_count: vertices.len() });
-    }
-    let mut mesh = TriMesh::new(vertices, triangles);
-    if any_segment_group {
-        if !labels.is_empty() && labels.iter().all(|&l| l != 0) {
-            mesh.vertex_labels = Some(vertex_labels_from_faces(mesh.n_vertices(), &mesh.triangles, &labels));
-            report.vertex_labels_derived = true;
+    state.finish()
+}
+
+/// What [`parse`] accumulates line by line.
+#[derive(Default)]
+struct ObjParser {
+    report: ObjReport,
+    vertices: Vec<[f64; 3]>,
+    triangles: Vec<[u32; 3]>,
+    /// One label per triangle: the segment of the group it was read under (0 outside segment groups).
+    labels: Vec<u8>,
+    any_segment_group: bool,
+    current: u8,
+    /// Absolute indices that pointed past the vertices read so far: checked at the end.
+    forward: Vec<(usize, i64, u32)>,
+    /// The current face's resolved indices (reused across lines).
+    poly: Vec<u32>,
+}
+
+impl ObjParser {
+    /// An `f` line: resolves its indices and fan-triangulates it under the current label.
+    fn face(&mut self, line_no: usize, words: std::str::SplitAsciiWhitespace<'_>) -> Result<(), ObjError> {
+        self.poly.clear();
+        for w in words {
+            let (i, resolved, r) = resolve_index(line_no, w, self.vertices.len())?;
+            if resolved >= self.vertices.len() as i64 {
+                self.forward.push((line_no, i, r));
+            }
+            self.poly.push(r);
         }
-        mesh.face_labels = Some(labels);
+        let poly = &self.poly;
+        if poly.len() < 3 {
+            return Err(ObjError::FaceTooSmall { line: line_no, n: poly.len() });
+        }
+        if poly.len() > 3 {
+            self.report.polygons_triangulated += 1;
+        }
+        for k in 1..poly.len() - 1 {
+            self.triangles.push([poly[0], poly[k], poly[k + 1]]);
+            self.labels.push(self.current);
+        }
+        Ok(())
     }
-    Ok((mesh, report))
+
+    /// A `g`/`o` line: the segment its names designate becomes the current label (else 0, and the
+    /// name is recorded as unknown).
+    fn group(&mut self, words: std::str::SplitAsciiWhitespace<'_>) {
+        let names: Vec<&str> = words.collect();
+        match names.iter().find_map(|n| segment_of(n)) {
+            Some(s) => {
+                self.current = s.id();
+                self.any_segment_group = true;
+            }
+            None => {
+                self.current = 0;
+                let name = names.join(" ");
+                if !name.is_empty() && name != "default" && !self.report.unknown_groups.contains(&name) {
+                    self.report.unknown_groups.push(name);
+                }
+            }
+        }
+    }
+
+    /// Checks forward references against the final vertex count and builds the mesh.
+    fn finish(self) -> Result<(TriMesh, ObjReport), ObjError> {
+        let ObjParser { mut report, vertices, triangles, labels, any_segment_group, forward, .. } = self;
+        if vertices.is_empty() {
+            return Err(ObjError::NoVertices);
+        }
+        if let Some(&(line, index, _)) = forward.iter().find(|f| f.2 as usize >= vertices.len()) {
+            return Err(ObjError::IndexOutOfRange { line, index, vertex_count: vertices.len() });
+        }
+        let mut mesh = TriMesh::new(vertices, triangles);
+        if any_segment_group {
+            if !labels.is_empty() && labels.iter().all(|&l| l != 0) {
+                mesh.vertex_labels = Some(vertex_labels_from_faces(mesh.n_vertices(), &mesh.triangles, &labels));
+                report.vertex_labels_derived = true;
+            }
+            mesh.face_labels = Some(labels);
+        }
+        Ok((mesh, report))
+    }
+}
+
+/// One face word (`v`, `v/vt`, `v//vn`, `v/vt/vn`) as `(index as written, resolved 0-based, as u32)`,
+/// given the vertices read so far.
+fn resolve_index(line_no: usize, w: &str, vertex_count: usize) -> Result<(i64, i64, u32), ObjError> {
+    let head = w.split('/').next().unwrap_or("");
+    let i: i64 = head.parse().map_err(|_| ObjError::BadFace {
+        line: line_no,
+        message: format!("{w:?} does not start with a vertex index"),
+    })?;
+    let n = vertex_count as i64;
+    let resolved = match i {
+        0 => return Err(ObjError::BadFace { line: line_no, message: "index 0 (OBJ indices start at 1)".into() }),
+        i if i < 0 => {
+            if n + i < 0 {
+                return Err(ObjError::IndexOutOfRange { line: line_no, index: i, vertex_count });
+            }
+            n + i
+        }
+        i => i - 1,
+    };
+    let Ok(r) = u32::try_from(resolved) else {
+        return Err(ObjError::IndexOutOfRange { line: line_no, index: i, vertex_count });
+    };
+    Ok((i, resolved, r))
 }
 
 /// Encodes a mesh as OBJ text (see the module docs for how labels become groups).

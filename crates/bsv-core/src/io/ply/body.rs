@@ -369,15 +369,8 @@ impl BlockIssues {
     }
 }
 
-/// Reads the vertex element from a fixed-stride binary body slice in one fused pass over blocks
-/// (parallel for large clouds), with readers specialised per type and endianness.
-fn vertices_fixed(
-    data: &[u8],
-    stride: usize,
-    el: &Element,
-    plan: &VertexPlan,
-    big: bool,
-) -> Result<VertexCols, PlyError> {
+/// Byte offset within a record of each kept vertex slot.
+fn slot_offsets(el: &Element, plan: &VertexPlan) -> [usize; N_SLOTS] {
     let mut offsets = [0usize; N_SLOTS];
     let mut off = 0;
     for (p, prop) in el.props.iter().enumerate() {
@@ -388,87 +381,139 @@ fn vertices_fixed(
             off += s.size();
         }
     }
-    let n = el.count;
-    let t = plan.types;
-    let mut points = vec![[0.0f64; 3]; n];
-    let mut normals = plan.has_normals.then(|| vec![[0.0f64; 3]; n]);
-    let mut colors = plan.has_colors.then(|| vec![[0u8; 3]; n]);
-    let mut labels = plan.has_label.then(|| vec![0u8; n]);
-    let run = |b: Block<'_>| -> BlockIssues {
+    offsets
+}
+
+/// Record layout of a fixed-stride binary vertex element: what each block decoder needs.
+#[derive(Clone, Copy)]
+struct FixedVertexLayout {
+    stride: usize,
+    offsets: [usize; N_SLOTS],
+    types: [Scalar; N_SLOTS],
+    big: bool,
+}
+
+impl FixedVertexLayout {
+    fn offsets3(&self, base: usize) -> [usize; 3] {
+        [self.offsets[base], self.offsets[base + 1], self.offsets[base + 2]]
+    }
+
+    fn types3(&self, base: usize) -> [Scalar; 3] {
+        [self.types[base], self.types[base + 1], self.types[base + 2]]
+    }
+
+    /// Decodes every column of one block and reports its problems.
+    fn read_block(&self, b: Block<'_>) -> BlockIssues {
         let mut issues = BlockIssues::default();
-        let o3 = |base: usize| [offsets[base], offsets[base + 1], offsets[base + 2]];
-        let t3 = |base: usize| [t[base], t[base + 1], t[base + 2]];
-        triple_column(b.data, stride, o3(X), t3(X), big, b.points);
+        triple_column(b.data, self.stride, self.offsets3(X), self.types3(X), self.big, b.points);
         issues.non_finite = b
             .points
             .iter()
             .position(|p| !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()))
             .map(|i| b.first + i);
         if let Some(nrm) = b.normals {
-            triple_column(b.data, stride, o3(NX), t3(NX), big, nrm);
+            triple_column(b.data, self.stride, self.offsets3(NX), self.types3(NX), self.big, nrm);
         }
         if let Some(col) = b.colors {
-            let (o, tt) = (o3(RED), t3(RED));
-            if tt.iter().all(|&x| x == Scalar::U8) {
-                for (r, c) in b.data.chunks_exact(stride).zip(col.iter_mut()) {
-                    *c = [r[o[0]], r[o[1]], r[o[2]]];
-                }
-            } else {
-                for (r, c) in b.data.chunks_exact(stride).zip(col.iter_mut()) {
-                    *c = [0, 1, 2].map(|k| to_color(decode(&r[o[k]..], tt[k], big), tt[k]));
-                }
-            }
+            self.read_colors(b.data, col);
         }
         if let Some(col) = b.labels {
-            let (o, ty) = (offsets[LABEL], t[LABEL]);
-            for (i, (r, l)) in b.data.chunks_exact(stride).zip(col.iter_mut()).enumerate() {
-                let label = if ty == Scalar::U8 {
-                    Some(r[o]).filter(|&l| usize::from(l) < SEGMENT_COUNT)
-                } else {
-                    to_label(decode(&r[o..], ty, big))
-                };
-                match label {
-                    Some(x) => *l = x,
-                    None => {
-                        issues.bad_label.get_or_insert(b.first + i);
-                    }
-                }
+            if let Some(i) = self.read_labels(b.data, col) {
+                issues.bad_label = Some(b.first + i);
             }
         }
         issues
-    };
-    let mut blocks = Vec::with_capacity(n / BLOCK + 1);
-    {
-        let mut pc = points.chunks_mut(BLOCK);
-        let mut nc = normals.as_mut().map(|v| v.chunks_mut(BLOCK));
-        let mut cc = colors.as_mut().map(|v| v.chunks_mut(BLOCK));
-        let mut lc = labels.as_mut().map(|v| v.chunks_mut(BLOCK));
-        for (k, d) in data.chunks(BLOCK * stride).enumerate() {
-            let Some(p) = pc.next() else { break };
-            blocks.push(Block {
-                first: k * BLOCK,
-                data: d,
-                points: p,
-                normals: nc.as_mut().and_then(Iterator::next),
-                colors: cc.as_mut().and_then(Iterator::next),
-                labels: lc.as_mut().and_then(Iterator::next),
-            });
+    }
+
+    /// Colour column of one block (a plain byte copy when all three channels are `uchar`).
+    fn read_colors(&self, data: &[u8], col: &mut [[u8; 3]]) {
+        let (o, tt, big) = (self.offsets3(RED), self.types3(RED), self.big);
+        if tt.iter().all(|&x| x == Scalar::U8) {
+            for (r, c) in data.chunks_exact(self.stride).zip(col.iter_mut()) {
+                *c = [r[o[0]], r[o[1]], r[o[2]]];
+            }
+        } else {
+            for (r, c) in data.chunks_exact(self.stride).zip(col.iter_mut()) {
+                *c = [0, 1, 2].map(|k| to_color(decode(&r[o[k]..], tt[k], big), tt[k]));
+            }
         }
     }
+
+    /// Label column of one block; the block-relative index of the first invalid label, if any.
+    fn read_labels(&self, data: &[u8], col: &mut [u8]) -> Option<usize> {
+        let mut bad_label = None;
+        let (o, ty, big) = (self.offsets[LABEL], self.types[LABEL], self.big);
+        for (i, (r, l)) in data.chunks_exact(self.stride).zip(col.iter_mut()).enumerate() {
+            let label = if ty == Scalar::U8 {
+                Some(r[o]).filter(|&l| usize::from(l) < SEGMENT_COUNT)
+            } else {
+                to_label(decode(&r[o..], ty, big))
+            };
+            match label {
+                Some(x) => *l = x,
+                None => {
+                    bad_label.get_or_insert(i);
+                }
+            }
+        }
+        bad_label
+    }
+}
+
+/// Cuts the records and every output column into aligned blocks of `BLOCK` records.
+fn split_blocks<'a>(data: &'a [u8], stride: usize, cols: &'a mut VertexCols) -> Vec<Block<'a>> {
+    let mut blocks = Vec::with_capacity(cols.points.len() / BLOCK + 1);
+    let mut pc = cols.points.chunks_mut(BLOCK);
+    let mut nc = cols.normals.as_mut().map(|v| v.chunks_mut(BLOCK));
+    let mut cc = cols.colors.as_mut().map(|v| v.chunks_mut(BLOCK));
+    let mut lc = cols.labels.as_mut().map(|v| v.chunks_mut(BLOCK));
+    for (k, d) in data.chunks(BLOCK * stride).enumerate() {
+        let Some(p) = pc.next() else { break };
+        blocks.push(Block {
+            first: k * BLOCK,
+            data: d,
+            points: p,
+            normals: nc.as_mut().and_then(Iterator::next),
+            colors: cc.as_mut().and_then(Iterator::next),
+            labels: lc.as_mut().and_then(Iterator::next),
+        });
+    }
+    blocks
+}
+
+/// Reads the vertex element from a fixed-stride binary body slice in one fused pass over blocks
+/// (parallel for large clouds), with readers specialised per type and endianness.
+fn vertices_fixed(
+    data: &[u8],
+    stride: usize,
+    el: &Element,
+    plan: &VertexPlan,
+    big: bool,
+) -> Result<VertexCols, PlyError> {
+    let layout = FixedVertexLayout { stride, offsets: slot_offsets(el, plan), types: plan.types, big };
+    let n = el.count;
+    let mut cols = VertexCols {
+        points: vec![[0.0f64; 3]; n],
+        normals: plan.has_normals.then(|| vec![[0.0f64; 3]; n]),
+        colors: plan.has_colors.then(|| vec![[0u8; 3]; n]),
+        labels: plan.has_label.then(|| vec![0u8; n]),
+    };
+    let blocks = split_blocks(data, stride, &mut cols);
+    let run = |b: Block<'_>| layout.read_block(b);
     let issues = if n >= PAR_MIN_RECORDS {
         blocks.into_par_iter().map(run).reduce(BlockIssues::default, BlockIssues::merge)
     } else {
         blocks.into_iter().map(run).fold(BlockIssues::default(), BlockIssues::merge)
     };
     if let Some(index) = issues.bad_label {
-        let value = decode(&data[index * stride + offsets[LABEL]..], t[LABEL], big);
+        let value = decode(&data[index * stride + layout.offsets[LABEL]..], layout.types[LABEL], big);
         return Err(PlyError::LabelOutOfRange { element: el.name.clone(), index, value });
     }
     if let Some(vertex) = issues.non_finite {
-        let value = points[vertex].iter().copied().find(|c| !c.is_finite()).unwrap_or(f64::NAN);
+        let value = cols.points[vertex].iter().copied().find(|c| !c.is_finite()).unwrap_or(f64::NAN);
         return Err(PlyError::NonFinite { vertex, value });
     }
-    Ok(VertexCols { points, normals, colors, labels })
+    Ok(cols)
 }
 
 /// Reads one record's list or scalar that BSV does not keep.
@@ -737,6 +782,13 @@ fn check_finite(points: &[[f64; 3]]) -> Result<(), PlyError> {
     }
 }
 
+/// The columns decoded from a body (each element is optional in the file).
+#[derive(Default)]
+struct BodyCols {
+    vertices: Option<VertexCols>,
+    faces: Option<FaceCols>,
+}
+
 /// Decodes the body that follows `header` in `bytes`.
 pub(super) fn read_body(bytes: &[u8], header: &Header) -> Result<PlyData, PlyError> {
     let body = bytes.get(header.body_offset..).unwrap_or(&[]);
@@ -747,95 +799,127 @@ pub(super) fn read_body(bytes: &[u8], header: &Header) -> Result<PlyData, PlyErr
         .ok_or_else(|| PlyError::MissingElement { element: "vertex".into() })?;
     let plan = vertex_plan(vertex_el)?;
     let n_vertices = vertex_el.count;
-    let mut data = PlyData { encoding: header.encoding, comments: header.comments.clone(), ..PlyData::default() };
-    let mut vcols = None;
-    let mut fcols = None;
-    match header.encoding {
-        PlyEncoding::Ascii => {
-            let mut src =
-                Ascii { text: body, pos: 0, line_no: header.lines, line: &[], cursor: 0, element: "", index: 0 };
-            for el in &header.elements {
-                let remaining = body.len() - src.pos.min(body.len());
-                match el.name.as_str() {
-                    "vertex" => {
-                        let cols = vertices_stream(&mut src, el, &plan, remaining)?;
-                        check_finite(&cols.points)?;
-                        vcols = Some(cols);
-                    }
-                    "face" => fcols = Some(faces_stream(&mut src, el, n_vertices, remaining)?),
-                    _ => skip_stream(&mut src, el)?,
-                }
-            }
-            let mut extra_lines = 0usize;
-            let first_extra = src.line_no + 1;
-            while src.next_line().is_some() {
-                extra_lines += 1;
-            }
-            if extra_lines > 0 {
-                return Err(extra_data(
-                    header,
-                    format!("{extra_lines} extra non-empty line(s) from line {first_extra}"),
-                ));
-            }
-        }
+    let data = PlyData { encoding: header.encoding, comments: header.comments.clone(), ..PlyData::default() };
+    let cols = match header.encoding {
+        PlyEncoding::Ascii => read_ascii_body(body, header, &plan, n_vertices)?,
         PlyEncoding::BinaryLittleEndian | PlyEncoding::BinaryBigEndian => {
             let big = header.encoding == PlyEncoding::BinaryBigEndian;
-            let mut src = Binary { body, pos: 0, big, element: "", count: 0, index: 0, record_start: 0 };
-            for el in &header.elements {
-                let remaining = body.len() - src.pos;
-                match (el.name.as_str(), el.fixed_size()) {
-                    ("face", _) => {
-                        let list = face_list_prop(el)?;
-                        match faces_fixed(&body[src.pos..], el, list, n_vertices, big) {
-                            Some(f) => {
-                                src.pos += f.triangles.len() * tri_layout(el, list).map_or(0, |l| l.stride);
-                                fcols = Some(f);
-                            }
-                            None => fcols = Some(faces_stream(&mut src, el, n_vertices, remaining)?),
-                        }
-                    }
-                    (name, Some(stride)) if stride > 0 => {
-                        let needed = stride.saturating_mul(el.count);
-                        if needed > remaining {
-                            return Err(PlyError::Truncated {
-                                element: el.name.clone(),
-                                index: remaining / stride,
-                                count: el.count,
-                                offset: src.pos,
-                                needed,
-                                available: remaining,
-                            });
-                        }
-                        if name == "vertex" {
-                            let span = &body[src.pos..src.pos + needed];
-                            vcols = Some(vertices_fixed(span, stride, el, &plan, big)?);
-                        }
-                        src.pos += needed;
-                    }
-                    ("vertex", _) => {
-                        let cols = vertices_stream(&mut src, el, &plan, remaining)?;
-                        check_finite(&cols.points)?;
-                        vcols = Some(cols);
-                    }
-                    _ => skip_stream(&mut src, el)?,
-                }
-            }
-            let extra = &body[src.pos..];
-            if extra.iter().any(|&b| b != 0 && !b.is_ascii_whitespace()) {
-                return Err(extra_data(header, format!("{} extra byte(s) at body offset {}", extra.len(), src.pos)));
-            }
+            read_binary_body(body, header, &plan, n_vertices, big)?
         }
-    }
-    let v = vcols.unwrap_or_default();
+    };
+    Ok(with_columns(data, cols))
+}
+
+/// Moves the decoded columns into `data`.
+fn with_columns(mut data: PlyData, cols: BodyCols) -> PlyData {
+    let v = cols.vertices.unwrap_or_default();
     data.points = v.points;
     data.normals = v.normals;
     data.colors = v.colors;
     data.vertex_labels = v.labels;
-    if let Some(f) = fcols {
+    if let Some(f) = cols.faces {
         data.triangles = Some(f.triangles);
         data.face_labels = f.labels;
     }
-    Ok(data)
+    data
+}
+
+/// Decodes an ascii body: every element streamed line by line, then no non-empty line may follow.
+fn read_ascii_body(body: &[u8], header: &Header, plan: &VertexPlan, n_vertices: usize) -> Result<BodyCols, PlyError> {
+    let mut cols = BodyCols::default();
+    let mut src = Ascii { text: body, pos: 0, line_no: header.lines, line: &[], cursor: 0, element: "", index: 0 };
+    for el in &header.elements {
+        let remaining = body.len() - src.pos.min(body.len());
+        match el.name.as_str() {
+            "vertex" => {
+                let v = vertices_stream(&mut src, el, plan, remaining)?;
+                check_finite(&v.points)?;
+                cols.vertices = Some(v);
+            }
+            "face" => cols.faces = Some(faces_stream(&mut src, el, n_vertices, remaining)?),
+            _ => skip_stream(&mut src, el)?,
+        }
+    }
+    let mut extra_lines = 0usize;
+    let first_extra = src.line_no + 1;
+    while src.next_line().is_some() {
+        extra_lines += 1;
+    }
+    if extra_lines > 0 {
+        return Err(extra_data(header, format!("{extra_lines} extra non-empty line(s) from line {first_extra}")));
+    }
+    Ok(cols)
+}
+
+/// Decodes a binary body: fixed-stride fast paths where the element allows, streaming otherwise;
+/// only zero or whitespace padding may follow.
+fn read_binary_body(
+    body: &[u8],
+    header: &Header,
+    plan: &VertexPlan,
+    n_vertices: usize,
+    big: bool,
+) -> Result<BodyCols, PlyError> {
+    let mut cols = BodyCols::default();
+    let mut src = Binary { body, pos: 0, big, element: "", count: 0, index: 0, record_start: 0 };
+    for el in &header.elements {
+        let remaining = body.len() - src.pos;
+        match (el.name.as_str(), el.fixed_size()) {
+            ("face", _) => cols.faces = Some(read_binary_faces(&mut src, el, n_vertices, remaining)?),
+            (name, Some(stride)) if stride > 0 => {
+                let span = fixed_span(&src, el, stride, remaining)?;
+                if name == "vertex" {
+                    cols.vertices = Some(vertices_fixed(span, stride, el, plan, big)?);
+                }
+                src.pos += span.len();
+            }
+            ("vertex", _) => {
+                let v = vertices_stream(&mut src, el, plan, remaining)?;
+                check_finite(&v.points)?;
+                cols.vertices = Some(v);
+            }
+            _ => skip_stream(&mut src, el)?,
+        }
+    }
+    let extra = &body[src.pos..];
+    if extra.iter().any(|&b| b != 0 && !b.is_ascii_whitespace()) {
+        return Err(extra_data(header, format!("{} extra byte(s) at body offset {}", extra.len(), src.pos)));
+    }
+    Ok(cols)
+}
+
+/// The face element of a binary body: the all-triangles fast path, else the streaming reader
+/// (which also reports the exact problem when the fast path rejects the element).
+fn read_binary_faces<'a>(
+    src: &mut Binary<'a>,
+    el: &'a Element,
+    n_vertices: usize,
+    remaining: usize,
+) -> Result<FaceCols, PlyError> {
+    let list = face_list_prop(el)?;
+    match faces_fixed(&src.body[src.pos..], el, list, n_vertices, src.big) {
+        Some(f) => {
+            src.pos += f.triangles.len() * tri_layout(el, list).map_or(0, |l| l.stride);
+            Ok(f)
+        }
+        None => faces_stream(src, el, n_vertices, remaining),
+    }
+}
+
+/// The bytes of a fixed-stride element at the cursor, or `Truncated` when the body is too short.
+fn fixed_span<'a>(src: &Binary<'a>, el: &Element, stride: usize, remaining: usize) -> Result<&'a [u8], PlyError> {
+    let needed = stride.saturating_mul(el.count);
+    if needed > remaining {
+        return Err(PlyError::Truncated {
+            element: el.name.clone(),
+            index: remaining / stride,
+            count: el.count,
+            offset: src.pos,
+            needed,
+            available: remaining,
+        });
+    }
+    Ok(&src.body[src.pos..src.pos + needed])
 }
 
 fn extra_data(header: &Header, extra: String) -> PlyError {

@@ -147,6 +147,13 @@ pub struct Header {
     pub lines: usize,
 }
 
+/// The words after a header keyword.
+type Words<'a> = std::str::SplitAsciiWhitespace<'a>;
+
+fn syntax(line: usize, message: String) -> PlyError {
+    PlyError::HeaderSyntax { line, message }
+}
+
 /// Parses the header at the start of `bytes`.
 pub fn parse_header(bytes: &[u8]) -> Result<Header, PlyError> {
     if bytes.is_empty() {
@@ -165,11 +172,7 @@ pub fn parse_header(bytes: &[u8]) -> Result<Header, PlyError> {
                 PlyError::HeaderNotTerminated { lines: line_no }
             });
         }
-        let rest = &bytes[pos..];
-        let (raw, next) = match rest.iter().position(|&b| b == b'\n') {
-            Some(i) => (&rest[..i], pos + i + 1),
-            None => (rest, bytes.len()),
-        };
+        let (raw, next) = split_line(bytes, pos);
         pos = next;
         line_no += 1;
         let line = String::from_utf8_lossy(raw);
@@ -180,75 +183,94 @@ pub fn parse_header(bytes: &[u8]) -> Result<Header, PlyError> {
             }
             continue;
         }
-        let syntax = |message: String| PlyError::HeaderSyntax { line: line_no, message };
         let mut words = line.split_ascii_whitespace();
         let Some(keyword) = words.next() else { continue };
         match keyword {
-            "format" => {
-                let (Some(fmt), version) = (words.next(), words.next()) else {
-                    return Err(syntax("`format` needs a format and a version".into()));
-                };
-                let enc = match fmt {
-                    "ascii" => PlyEncoding::Ascii,
-                    "binary_little_endian" => PlyEncoding::BinaryLittleEndian,
-                    "binary_big_endian" => PlyEncoding::BinaryBigEndian,
-                    other => return Err(PlyError::UnsupportedFormat { format: other.to_string() }),
-                };
-                if let Some(v) = version {
-                    if v != "1.0" && v != "1" {
-                        return Err(PlyError::UnsupportedFormat { format: format!("{fmt} {v}") });
-                    }
-                }
-                encoding = Some(enc);
-            }
+            "format" => encoding = Some(parse_format(words, line_no)?),
             "comment" | "obj_info" => {
                 let text = line.trim_start()[keyword.len()..].trim();
                 comments.push(text.to_string());
             }
-            "element" => {
-                let (Some(name), Some(count)) = (words.next(), words.next()) else {
-                    return Err(syntax("`element` needs a name and a count".into()));
-                };
-                let count: usize =
-                    count.parse().map_err(|_| syntax(format!("element `{name}` has an invalid count {count:?}")))?;
-                if elements.iter().any(|e| e.name == name) {
-                    return Err(syntax(format!("element `{name}` is declared twice")));
-                }
-                elements.push(Element { name: name.to_string(), count, props: Vec::new() });
-            }
+            "element" => elements.push(parse_element(words, line_no, &elements)?),
             "property" => {
                 let Some(element) = elements.last_mut() else {
-                    return Err(syntax("`property` before any `element`".into()));
+                    return Err(syntax(line_no, "`property` before any `element`".into()));
                 };
-                let ty = words.next().unwrap_or("");
-                let scalar = |name: &str| {
-                    Scalar::from_name(name)
-                        .ok_or_else(|| PlyError::UnknownType { line: line_no, name: name.to_string() })
-                };
-                let (kind, name) = if ty == "list" {
-                    let (Some(c), Some(i), Some(n)) = (words.next(), words.next(), words.next()) else {
-                        return Err(syntax("`property list` needs a count type, an item type and a name".into()));
-                    };
-                    let count = scalar(c)?;
-                    if count.is_float() {
-                        return Err(syntax(format!("list `{n}` has a floating-point count type `{c}`")));
-                    }
-                    (PropKind::List { count, item: scalar(i)? }, n)
-                } else {
-                    let Some(n) = words.next() else {
-                        return Err(syntax("`property` needs a type and a name".into()));
-                    };
-                    (PropKind::Scalar(scalar(ty)?), n)
-                };
-                if element.find(name).is_some() {
-                    return Err(syntax(format!("property `{name}` of element `{}` is declared twice", element.name)));
-                }
-                element.props.push(Property { name: name.to_string(), kind });
+                let property = parse_property(words, line_no, element)?;
+                element.props.push(property);
             }
             "end_header" => break,
-            other => return Err(syntax(format!("unknown header keyword `{other}`"))),
+            other => return Err(syntax(line_no, format!("unknown header keyword `{other}`"))),
         }
     }
     let encoding = encoding.ok_or(PlyError::MissingFormat)?;
     Ok(Header { encoding, elements, comments, body_offset: pos, lines: line_no })
+}
+
+/// The line starting at `pos` (without its `\n`) and the offset of the next one.
+fn split_line(bytes: &[u8], pos: usize) -> (&[u8], usize) {
+    let rest = &bytes[pos..];
+    match rest.iter().position(|&b| b == b'\n') {
+        Some(i) => (&rest[..i], pos + i + 1),
+        None => (rest, bytes.len()),
+    }
+}
+
+/// `format <encoding> <version>`.
+fn parse_format(mut words: Words<'_>, line_no: usize) -> Result<PlyEncoding, PlyError> {
+    let (Some(fmt), version) = (words.next(), words.next()) else {
+        return Err(syntax(line_no, "`format` needs a format and a version".into()));
+    };
+    let enc = match fmt {
+        "ascii" => PlyEncoding::Ascii,
+        "binary_little_endian" => PlyEncoding::BinaryLittleEndian,
+        "binary_big_endian" => PlyEncoding::BinaryBigEndian,
+        other => return Err(PlyError::UnsupportedFormat { format: other.to_string() }),
+    };
+    if let Some(v) = version {
+        if v != "1.0" && v != "1" {
+            return Err(PlyError::UnsupportedFormat { format: format!("{fmt} {v}") });
+        }
+    }
+    Ok(enc)
+}
+
+/// `element <name> <count>`, which must not repeat an earlier element's name.
+fn parse_element(mut words: Words<'_>, line_no: usize, elements: &[Element]) -> Result<Element, PlyError> {
+    let (Some(name), Some(count)) = (words.next(), words.next()) else {
+        return Err(syntax(line_no, "`element` needs a name and a count".into()));
+    };
+    let count: usize =
+        count.parse().map_err(|_| syntax(line_no, format!("element `{name}` has an invalid count {count:?}")))?;
+    if elements.iter().any(|e| e.name == name) {
+        return Err(syntax(line_no, format!("element `{name}` is declared twice")));
+    }
+    Ok(Element { name: name.to_string(), count, props: Vec::new() })
+}
+
+/// `property <type> <name>` or `property list <count type> <item type> <name>` of `element`.
+fn parse_property(mut words: Words<'_>, line_no: usize, element: &Element) -> Result<Property, PlyError> {
+    let ty = words.next().unwrap_or("");
+    let scalar = |name: &str| {
+        Scalar::from_name(name).ok_or_else(|| PlyError::UnknownType { line: line_no, name: name.to_string() })
+    };
+    let (kind, name) = if ty == "list" {
+        let (Some(c), Some(i), Some(n)) = (words.next(), words.next(), words.next()) else {
+            return Err(syntax(line_no, "`property list` needs a count type, an item type and a name".into()));
+        };
+        let count = scalar(c)?;
+        if count.is_float() {
+            return Err(syntax(line_no, format!("list `{n}` has a floating-point count type `{c}`")));
+        }
+        (PropKind::List { count, item: scalar(i)? }, n)
+    } else {
+        let Some(n) = words.next() else {
+            return Err(syntax(line_no, "`property` needs a type and a name".into()));
+        };
+        (PropKind::Scalar(scalar(ty)?), n)
+    };
+    if element.find(name).is_some() {
+        return Err(syntax(line_no, format!("property `{name}` of element `{}` is declared twice", element.name)));
+    }
+    Ok(Property { name: name.to_string(), kind })
 }

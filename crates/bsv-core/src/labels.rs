@@ -4,7 +4,8 @@
 //! Tie rules (deterministic, independent of hash order or threads):
 //! - face from vertices: the label shared by at least two corners; when the three corners all differ,
 //!   the label of the corner with the smallest vertex index;
-//! - vertex from faces: the most common label among the incident faces; ties go to the smallest id.
+//! - vertex from faces: the most common label among the incident faces; ties go to the smallest id
+//!   ([`most_common`], also the vote of the hole caps in `bsv-volume`).
 
 /// Label of a face from its three corners' labels: the label shared by at least two corners; when
 /// all three differ, the FIRST corner's label. On a mesh, pass the corners starting at the one with
@@ -70,6 +71,22 @@ pub fn vertex_labels_from_faces(n_vertices: usize, triangles: &[[u32; 3]], face_
     out
 }
 
+/// The most common label of `labels` (ties: the smallest id; 0 for none): the vertex rule's vote,
+/// also used for the labels of hole caps (`bsv-volume`).
+pub fn most_common(labels: &[u8]) -> u8 {
+    let mut counts = [0usize; 256];
+    for &l in labels {
+        counts[usize::from(l)] += 1;
+    }
+    let mut best = 0usize;
+    for (l, &c) in counts.iter().enumerate() {
+        if c > counts[best] {
+            best = l;
+        }
+    }
+    best as u8
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -90,5 +107,8 @@ mod tests {
         let tris = [[0, 1, 2], [0, 2, 1], [0, 2, 1]];
         assert_eq!(vertex_labels_from_faces(4, &tris, &[1, 2, 2]), vec![2, 2, 2, 0]);
         assert_eq!(vertex_labels_from_faces(3, &tris[..2], &[2, 1]), vec![1, 1, 1]);
+        assert_eq!(most_common(&[4, 2, 4, 2]), 2);
+        assert_eq!(most_common(&[5, 5, 1]), 5);
+        assert_eq!(most_common(&[]), 0);
     }
 }

@@ -3,6 +3,7 @@
 use crate::edges::{det6, used_centroid, validate, EdgeTable};
 use crate::VolumeError;
 use bsv_core::geometry::{add, dist2, scale};
+use bsv_core::labels::most_common;
 use bsv_core::TriMesh;
 use std::borrow::Cow;
 
@@ -94,11 +95,11 @@ pub(crate) fn prepare(mesh: &TriMesh, close: bool) -> Result<(Cow<'_, TriMesh>, 
             }
         }
         if let Some(fl) = &mut out.face_labels {
-            let lab = majority(&face_votes);
+            let lab = most_common(&face_votes);
             fl.extend(std::iter::repeat_n(lab, n));
         }
         if let Some(vl) = &mut out.vertex_labels {
-            vl.push(majority(&vertex_votes));
+            vl.push(most_common(&vertex_votes));
         }
         holes.push(Hole { centroid: c, edges: n, perimeter_m: perimeter });
     }
@@ -134,21 +135,6 @@ pub(crate) fn check_labels(mesh: &TriMesh) -> Result<(), VolumeError> {
         }
     }
     Ok(())
-}
-
-/// The most common value (ties: the smallest); 0 for an empty slice.
-pub(crate) fn majority(values: &[u8]) -> u8 {
-    let mut counts = [0usize; 256];
-    for &v in values {
-        counts[usize::from(v)] += 1;
-    }
-    let mut best = 0usize;
-    for (v, &c) in counts.iter().enumerate() {
-        if c > counts[best] {
-            best = v;
-        }
-    }
-    best as u8
 }
 
 fn loop_centroid(vertices: &[[f64; 3]], l: &[(u32, u32, u32)]) -> [f64; 3] {

@@ -1,6 +1,6 @@
 //! `bsv-cli info`: what a file holds and whether it is a usable mesh.
 
-use crate::output::{check_writable, CliError};
+use crate::output::{check_outputs, CliError, Output};
 use bsv_core::check::{check_mesh, repair_mesh};
 use bsv_core::geometry::Aabb;
 use bsv_core::io::{self, obj, ply, Format, ReadError};
@@ -81,6 +81,9 @@ fn read_file(path: &Path) -> Result<(PointCloud, Option<Result<TriMesh, ReadErro
 
 /// Runs `info`.
 pub fn run(a: Args) -> Result<(), CliError> {
+    if let Some(out) = &a.repair {
+        check_outputs(&[Output::file("--repair", out)], a.force)?;
+    }
     let (cloud, mesh) = read_file(&a.file)?;
     let (mesh, mesh_error) = match mesh {
         Some(Ok(m)) if m.n_triangles() > 0 => (Some(m), None),
@@ -97,32 +100,36 @@ pub fn run(a: Args) -> Result<(), CliError> {
         "vertex_labels": cloud.labels.as_deref().map(label_counts),
     });
     if !a.json {
-        println!("{}: {} vertices/points", a.file.display(), cloud.len());
-        println!("  normals: {}, colours: {}", cloud.normals.is_some(), cloud.colors.is_some());
+        say!("{}: {} vertices/points", a.file.display(), cloud.len());
+        say!("  normals: {}, colours: {}", cloud.normals.is_some(), cloud.colors.is_some());
         if let Some(b) = bbox {
             let e = b.extent();
-            println!(
+            say!(
                 "  bounding box: min {:.4?} max {:.4?} (extent {:.3} x {:.3} x {:.3} m)",
-                b.min, b.max, e[0], e[1], e[2]
+                b.min,
+                b.max,
+                e[0],
+                e[1],
+                e[2]
             );
             if e.iter().fold(0.0f64, |m, v| m.max(*v)) > 5.0 {
-                println!("  note: larger than 5 m: is it in millimetres? BSV expects metres");
+                say!("  note: larger than 5 m: is it in millimetres? BSV expects metres");
             }
         }
         match cloud.labels.as_deref() {
             Some(l) => {
-                println!("  labels:");
+                say!("  labels:");
                 for (name, c) in label_counts(l) {
-                    println!("    {name:<12} {c:>9}");
+                    say!("    {name:<12} {c:>9}");
                 }
             }
-            None => println!("  labels: none"),
+            None => say!("  labels: none"),
         }
     }
     if let Some(e) = &mesh_error {
         json["mesh_error"] = e.to_string().into();
         if !a.json {
-            println!("  faces: present but unreadable, showing the vertices only: {e}");
+            say!("  faces: present but unreadable, showing the vertices only: {e}");
         }
     }
     if let Some(mut m) = mesh {
@@ -132,16 +139,15 @@ pub fn run(a: Args) -> Result<(), CliError> {
             json["face_labels"] = serde_json::to_value(label_counts(fl))?;
         }
         if !a.json {
-            println!("{report}");
+            say!("{report}");
         }
         if let Some(out) = &a.repair {
-            check_writable(out, a.force)?;
             let log = repair_mesh(&mut m);
             io::write_mesh(out, &m)?;
             json["repair"] = serde_json::to_value(&log)?;
             if !a.json {
-                println!("{log}");
-                println!("repaired mesh written to {}", out.display());
+                say!("{log}");
+                say!("repaired mesh written to {}", out.display());
             }
         }
     } else if a.repair.is_some() {
@@ -151,7 +157,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         return Err(format!("{} has no faces: only meshes can be repaired", a.file.display()).into());
     }
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&json)?);
+        say!("{}", serde_json::to_string_pretty(&json)?);
     }
     Ok(())
 }

@@ -1,6 +1,6 @@
 //! `bsv-cli register`: fit the template to a cloud, write the fitted mesh, report volumes.
 
-use crate::output::{check_writable, write_json, CliError};
+use crate::output::{check_outputs, write_json, CliError, Output};
 use bsv_core::template::{template, TemplateKind};
 use bsv_core::{io, TriMesh};
 use bsv_register::{
@@ -112,7 +112,7 @@ fn with_flags(e: &RegisterError) -> String {
 
 fn print_iteration(it: &IterationLog, timings: bool) {
     let p2m = it.rms_points_to_mesh_mm.map_or_else(String::new, |v| format!("  p->m {v:6.2} mm"));
-    print!(
+    say_inline!(
         "  [{}:{:<3} {:>2}] m->p {:6.2} mm{p2m}  E {:.4e}  corr {:>6}",
         it.stage,
         format!("{:?}", it.kind).to_lowercase(),
@@ -123,21 +123,21 @@ fn print_iteration(it: &IterationLog, timings: bool) {
     );
     if timings {
         let t = &it.timings;
-        print!("  ({:.1} + {:.1} + {:.1} ms)", t.correspond * 1e3, t.local * 1e3, t.solve * 1e3);
+        say_inline!("  ({:.1} + {:.1} + {:.1} ms)", t.correspond * 1e3, t.local * 1e3, t.solve * 1e3);
     }
-    println!();
+    say!();
 }
 
 /// The lines after the fit: dropped extremities, time and distances (and the time split).
 fn print_summary(reg: &Registration, timings: bool) {
     if reg.extremities_dropped > 0 {
-        println!(
+        say!(
             "dropped {} head/hand/foot points (labels 1, 7, 8, 13, 14); --keep-extremities keeps them",
             reg.extremities_dropped
         );
     }
     let iter_secs: f64 = reg.log.iter().map(|l| l.timings.correspond + l.timings.local + l.timings.solve).sum();
-    println!(
+    say!(
         "done in {:.3} s (setup {:.0} ms, {} iterations, {:.1} ms/iteration): RMS mesh->points {:.2} mm, points->mesh {:.2} mm",
         reg.total_seconds,
         reg.setup_seconds * 1e3,
@@ -148,7 +148,7 @@ fn print_summary(reg: &Registration, timings: bool) {
     );
     if timings {
         let sum = |f: fn(&IterationLog) -> f64| reg.log.iter().map(f).sum::<f64>() * 1e3;
-        println!(
+        say!(
             "time split: setup {:.1} ms, correspondences {:.1} ms, local {:.1} ms, solve {:.1} ms",
             reg.setup_seconds * 1e3,
             sum(|l| l.timings.correspond),
@@ -171,21 +171,22 @@ fn read_template(a: &Args) -> Result<(TriMesh, String), CliError> {
 
 /// Runs `register`.
 pub fn run(a: Args) -> Result<(), CliError> {
-    for out in a.output.iter().chain(a.json.iter()) {
-        check_writable(out, a.force)?;
-    }
+    let outputs: Vec<Output<'_>> = (a.output.iter().map(|p| Output::file("--output", p)))
+        .chain(a.json.iter().map(|p| Output::file("--json", p)))
+        .collect();
+    check_outputs(&outputs, a.force)?;
     let mut cloud = io::read_point_cloud(&a.cloud)?;
     if a.units == "mm" {
         cloud.points.iter_mut().for_each(|p| *p = p.map(|v| v / 1000.0));
     }
     let labelled = cloud.labels.as_ref().is_some_and(|l| l.iter().any(|&v| v != 0));
     if !labelled {
-        println!("the cloud has no segment labels: volumes come from the template's labels");
+        say!("the cloud has no segment labels: volumes come from the template's labels");
         cloud.labels = None;
     }
     let (tmpl, tmpl_name) = read_template(&a)?;
     let params = params_from(&a, labelled)?;
-    println!(
+    say!(
         "registering {} ({} points) with {tmpl_name} ({} vertices), schedule {}",
         a.cloud.display(),
         cloud.len(),
@@ -213,15 +214,15 @@ pub fn run(a: Args) -> Result<(), CliError> {
         obj.insert("params".into(), serde_json::to_value(&params)?);
     }
     report.registration = Some(summary);
-    println!();
-    print!("{report}");
+    say!();
+    say_inline!("{report}");
     if let Some(out) = &a.output {
         io::write_mesh(out, &reg.mesh)?;
-        println!("fitted mesh written to {}", out.display());
+        say!("fitted mesh written to {}", out.display());
     }
     if let Some(out) = &a.json {
-        write_json(out, &serde_json::to_value(&report)?, true)?;
-        println!("volumes written to {}", out.display());
+        write_json(out, &serde_json::to_value(&report)?)?;
+        say!("volumes written to {}", out.display());
     }
     Ok(())
 }

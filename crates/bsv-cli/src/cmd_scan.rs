@@ -1,9 +1,9 @@
 //! `bsv-cli scan`: virtual two-camera capture of a labelled mesh.
 
-use crate::output::{check_writable, CliError};
-use bsv_capture::scanner::{scan, write_capture, Condition, Rig};
+use crate::output::{check_outputs, CliError, Output};
+use bsv_capture::scanner::{scan, write_capture, Condition, Rig, Scan};
 use bsv_core::io;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `scan`.
 #[derive(clap::Args, Debug)]
@@ -30,25 +30,40 @@ pub struct Args {
 /// Runs `scan`.
 pub fn run(a: Args) -> Result<(), CliError> {
     let condition: Condition = a.condition.parse()?;
-    check_writable(&a.output, a.force)?;
-    if let Some(dir) = &a.images {
-        if dir.read_dir().map(|mut d| d.next().is_some()).unwrap_or(false) && !a.force {
-            return Err(format!("{} is not empty; pass --force to write into it", dir.display()).into());
-        }
-    }
+    let mut outputs = vec![Output::file("--output", &a.output)];
+    outputs.extend(a.images.as_deref().map(|d| Output::folder("--images", d)));
+    check_outputs(&outputs, a.force)?;
     let mesh = io::read_mesh(&a.mesh)?;
     let t = std::time::Instant::now();
     let s = scan(&mesh, &Rig::paper_default(), condition, a.seed)?;
     let secs = t.elapsed().as_secs_f64();
     for v in &s.views {
-        println!("  {:<5} camera: {:>7} points", v.name, v.cloud_range.len());
+        say!("  {:<5} camera: {:>7} points", v.name, v.cloud_range.len());
     }
-    println!("scanned {} ({condition}, seed {}) in {secs:.2} s: {} points", a.mesh.display(), a.seed, s.cloud.len());
-    io::write_point_cloud(&a.output, &s.cloud)?;
-    println!("cloud written to {}", a.output.display());
+    say!("scanned {} ({condition}, seed {}) in {secs:.2} s: {} points", a.mesh.display(), a.seed, s.cloud.len());
     if let Some(dir) = &a.images {
-        write_capture(&s, dir)?;
-        println!("capture images written to {}", dir.display());
+        write_capture_atomic(&s, dir)?;
+        say!("capture images written to {}", dir.display());
     }
+    io::write_point_cloud(&a.output, &s.cloud)?;
+    say!("cloud written to {}", a.output.display());
+    Ok(())
+}
+
+/// Writes the capture into `dir` so that a failure leaves nothing new: into a fresh temporary folder
+/// beside `dir`, renamed to `dir` once complete (an existing empty `dir` is replaced). A non-empty
+/// `dir` (allowed by `--force`) is written in place.
+fn write_capture_atomic(s: &Scan, dir: &Path) -> Result<(), CliError> {
+    let in_place = dir.read_dir().map(|mut d| d.next().is_some()).unwrap_or(false);
+    if in_place {
+        return Ok(write_capture(s, dir)?);
+    }
+    let parent = dir.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let tmp = tempfile::Builder::new().prefix(".bsv-partial-").tempdir_in(parent)?;
+    write_capture(s, tmp.path())?;
+    if dir.is_dir() {
+        std::fs::remove_dir(dir)?;
+    }
+    std::fs::rename(tmp.path(), dir).map_err(|e| format!("cannot move the capture into {}: {e}", dir.display()))?;
     Ok(())
 }

@@ -1,6 +1,6 @@
 //! `bsv-cli template`: export an embedded template.
 
-use crate::output::{check_writable, CliError};
+use crate::output::{check_outputs, CliError, Output};
 use bsv_core::io;
 use bsv_core::template::{template, TemplateKind};
 use std::path::PathBuf;
@@ -25,10 +25,10 @@ pub struct Args {
 /// Runs `template`.
 pub fn run(a: Args) -> Result<(), CliError> {
     let kind = if a.full { TemplateKind::Full } else { TemplateKind::parse(&a.kind).unwrap_or_default() };
-    check_writable(&a.output, a.force)?;
+    check_outputs(&[Output::file("--output", &a.output)], a.force)?;
     let mesh = template(kind)?;
     io::write_mesh(&a.output, &mesh)?;
-    println!(
+    say!(
         "{kind:?} template ({} vertices, {} triangles) written to {}",
         mesh.n_vertices(),
         mesh.n_triangles(),

@@ -1,6 +1,6 @@
 //! `bsv-cli volume`: segment volumes of a closed labelled mesh.
 
-use crate::output::{check_writable, write_json, CliError};
+use crate::output::{check_outputs, write_json, CliError, Output};
 use bsv_core::io;
 use bsv_volume::{report_with, SegmentOptions};
 use std::path::PathBuf;
@@ -27,15 +27,15 @@ pub struct Args {
 /// Runs `volume`.
 pub fn run(a: Args) -> Result<(), CliError> {
     if let Some(out) = &a.json {
-        check_writable(out, a.force)?;
+        check_outputs(&[Output::file("--json", out)], a.force)?;
     }
     let mesh = io::read_mesh(&a.mesh)?;
     let opts = SegmentOptions { close_holes: a.close_holes, ..SegmentOptions::default() };
     let report = report_with(&mesh, a.density, &opts).map_err(|e| format!("{}: {e}", a.mesh.display()))?;
-    print!("{report}");
+    say_inline!("{report}");
     if let Some(out) = &a.json {
-        write_json(out, &serde_json::to_value(&report)?, true)?;
-        println!("volumes written to {}", out.display());
+        write_json(out, &serde_json::to_value(&report)?)?;
+        say!("volumes written to {}", out.display());
     }
     Ok(())
 }

@@ -1,14 +1,17 @@
 //! `bsv-cli`: the BSV command-line tool. Thin: parse arguments, call the library crates, print, write.
 
+#[macro_use]
+mod output;
 mod cmd_info;
 mod cmd_register;
 mod cmd_scan;
 mod cmd_template;
 mod cmd_volume;
-mod output;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 
 /// Body segment volumes from two RGB-D cameras.
 ///
@@ -39,7 +42,14 @@ enum Command {
     Template(cmd_template::Args),
 }
 
+/// Lets a file-size limit (`ulimit -f`) fail the write with an error instead of killing the process,
+/// so that the atomic writers remove their temporary file and the command reports it.
+fn catch_file_size_signal() {
+    let _ = signal_hook::flag::register(signal_hook::consts::SIGXFSZ, Arc::new(AtomicBool::new(false)));
+}
+
 fn main() -> ExitCode {
+    catch_file_size_signal();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Info(a) => cmd_info::run(a),
@@ -51,10 +61,10 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            output::print_err(format_args!("error: {e}\n"));
             let mut src = e.source();
             while let Some(s) = src {
-                eprintln!("  caused by: {s}");
+                output::print_err(format_args!("  caused by: {s}\n"));
                 src = s.source();
             }
             ExitCode::FAILURE

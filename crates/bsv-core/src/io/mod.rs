@@ -9,6 +9,7 @@ pub mod obj;
 pub mod ply;
 mod validate;
 
+use std::io::Write;
 use std::path::Path;
 
 use crate::{PointCloud, TriMesh};
@@ -82,7 +83,27 @@ pub fn read_point_cloud(path: &Path) -> Result<PointCloud, ReadError> {
 }
 
 fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
-    std::fs::write(path, bytes).map_err(|source| WriteError::Io { path: path.to_path_buf(), source })
+    write_file_atomic(path, |f| f.write_all(bytes))
+}
+
+/// Writes a file atomically: `write` fills a temporary file in `path`'s folder, which then replaces
+/// `path` by a rename. A failed or interrupted write (full disk, file-size limit, an error of `write`)
+/// leaves `path` as it was and removes the temporary file; readers never see a half-written file.
+/// Every writer of this module goes through it; front ends use it for their own files (JSON).
+pub fn write_file_atomic(
+    path: &Path,
+    write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
+) -> Result<(), WriteError> {
+    let io_err = |source| WriteError::Io { path: path.to_path_buf(), source };
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let mut tmp = tempfile::Builder::new().prefix(".bsv-partial-").tempfile_in(folder).map_err(io_err)?;
+    write(tmp.as_file_mut()).map_err(io_err)?;
+    tmp.as_file_mut().flush().map_err(io_err)?;
+    tmp.persist(path).map_err(|e| io_err(e.error))?;
+    Ok(())
 }
 
 /// Streams PLY into a new file at `path` (no file-sized buffer in memory) once `check` accepted the data.
@@ -92,9 +113,7 @@ fn write_ply_file(
     write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
 ) -> Result<(), WriteError> {
     check().map_err(|source| WriteError::Invalid { path: path.to_path_buf(), source })?;
-    let io_err = |source| WriteError::Io { path: path.to_path_buf(), source };
-    let mut file = std::fs::File::create(path).map_err(io_err)?;
-    write(&mut file).map_err(io_err)
+    write_file_atomic(path, write)
 }
 
 fn format_for_write(path: &Path) -> Result<Format, WriteError> {

@@ -439,6 +439,15 @@ fn other_bad_inputs_are_typed_errors() {
     // CRLF headers are fine.
     let crlf = b"ply\r\nformat ascii 1.0\r\nelement vertex 1\r\nproperty float x\r\nproperty float y\r\nproperty float z\r\nend_header\r\n1 2 3\r\n";
     assert_eq!(ply::parse_cloud(crlf).expect("crlf").points, vec![[1.0, 2.0, 3.0]]);
+    // Classic Mac line endings (a lone CR), header and ascii body.
+    let cr = b"ply\rformat ascii 1.0\relement vertex 2\rproperty float x\rproperty float y\rproperty float z\rend_header\r1 2 3\r4 5 6\r";
+    assert_eq!(ply::parse_cloud(cr).expect("cr").points, vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+    // And a CR-only header before a binary body.
+    let mut bin = b"ply\rformat binary_little_endian 1.0\relement vertex 1\rproperty float x\rproperty float y\rproperty float z\rend_header\r".to_vec();
+    for v in [1.0f32, 2.0, 3.0] {
+        bin.extend(v.to_le_bytes());
+    }
+    assert_eq!(ply::parse_cloud(&bin).expect("cr binary").points, vec![[1.0, 2.0, 3.0]]);
 }
 
 #[test]

@@ -111,10 +111,7 @@ impl<'a> Ascii<'a> {
     fn next_line(&mut self) -> Option<&'a [u8]> {
         while self.pos < self.text.len() {
             let rest = &self.text[self.pos..];
-            let (line, adv) = match rest.iter().position(|&b| b == b'\n') {
-                Some(i) => (&rest[..i], i + 1),
-                None => (rest, rest.len()),
-            };
+            let (line, adv) = super::header::next_line(rest);
             self.pos += adv;
             self.line_no += 1;
             if line.iter().any(|b| !b.is_ascii_whitespace()) {

@@ -209,10 +209,17 @@ pub fn parse_header(bytes: &[u8]) -> Result<Header, PlyError> {
 
 /// The line starting at `pos` (without its `\n`) and the offset of the next one.
 fn split_line(bytes: &[u8], pos: usize) -> (&[u8], usize) {
-    let rest = &bytes[pos..];
-    match rest.iter().position(|&b| b == b'\n') {
-        Some(i) => (&rest[..i], pos + i + 1),
-        None => (rest, bytes.len()),
+    let (line, adv) = next_line(&bytes[pos..]);
+    (line, pos + adv)
+}
+
+/// The first line of `rest` (without its terminator) and the bytes it spans with the terminator.
+/// Lines end with LF, CR LF or a lone CR (files saved with classic Mac line endings).
+pub(crate) fn next_line(rest: &[u8]) -> (&[u8], usize) {
+    match rest.iter().position(|&b| b == b'\n' || b == b'\r') {
+        Some(i) if rest[i] == b'\r' && rest.get(i + 1) == Some(&b'\n') => (&rest[..i], i + 2),
+        Some(i) => (&rest[..i], i + 1),
+        None => (rest, rest.len()),
     }
 }
 

@@ -125,6 +125,12 @@ fn bad_obj_input_is_typed_with_line_numbers() {
     ));
     let err = obj::parse(b"v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 1 0\n").unwrap_err();
     assert_eq!(err, ObjError::IndexOutOfRange { line: 3, index: -3, vertex_count: 2 });
+    // One enormous face line is refused, not triangulated into millions of triangles.
+    let mut huge = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf".to_vec();
+    for _ in 0..=obj::MAX_FACE_CORNERS {
+        huge.extend(b" 1 2 3");
+    }
+    assert_eq!(obj::parse(&huge).unwrap_err(), ObjError::FaceTooLarge { line: 4, max: obj::MAX_FACE_CORNERS });
     // Forward references are allowed when the vertex exists by the end.
     let (m, _) = obj::parse(b"f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n").expect("forward refs");
     assert_eq!(m.triangles, vec![[0, 1, 2]]);

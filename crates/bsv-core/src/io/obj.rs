@@ -85,6 +85,14 @@ pub enum ObjError {
         /// Vertices on the line.
         n: usize,
     },
+    /// A face with more corners than any real polygon has (bounds the memory of one line).
+    #[error("line {line}: face has more than {max} vertices; real polygons have a few dozen at most — the file is corrupt, export it again")]
+    FaceTooLarge {
+        /// 1-based line number.
+        line: usize,
+        /// The largest number of corners read for one face.
+        max: usize,
+    },
     /// A face index outside the vertex list.
     #[error("line {line}: face index {index} is out of range: the file has {vertex_count} vertices (valid 1..={vertex_count} or -1..=-{vertex_count} relative); the file is corrupt or truncated — export it again")]
     IndexOutOfRange {
@@ -168,6 +176,10 @@ pub fn parse(bytes: &[u8]) -> Result<(TriMesh, ObjReport), ObjError> {
     state.finish()
 }
 
+/// The most corners one `f` line may have: a bound on the work and memory of a single line (a corrupt
+/// 100 MB face line would otherwise become tens of millions of fan triangles).
+pub const MAX_FACE_CORNERS: usize = 1 << 16;
+
 /// What [`parse`] accumulates line by line.
 #[derive(Default)]
 struct ObjParser {
@@ -189,6 +201,9 @@ impl ObjParser {
     fn face(&mut self, line_no: usize, words: std::str::SplitAsciiWhitespace<'_>) -> Result<(), ObjError> {
         self.poly.clear();
         for w in words {
+            if self.poly.len() == MAX_FACE_CORNERS {
+                return Err(ObjError::FaceTooLarge { line: line_no, max: MAX_FACE_CORNERS });
+            }
             let (i, resolved, r) = resolve_index(line_no, w, self.vertices.len())?;
             if resolved >= self.vertices.len() as i64 {
                 self.forward.push((line_no, i, r));

@@ -434,13 +434,37 @@ def read_capture(folder: PathLike) -> dict[str, Any]:
     import cv2
 
     d = Path(folder)
-    try:
-        meta = json.loads((d / "camera.json").read_text())
-    except (OSError, json.JSONDecodeError) as e:
-        raise CaptureError(f"{d}: missing or malformed camera.json ({e}); capture or scan into it first") from e
+    meta = _camera_meta(d)
     depth = cv2.imread(str(d / meta.get("depth", "depth.png")), cv2.IMREAD_UNCHANGED)
     colour = cv2.imread(str(d / meta.get("color", "color.png")), cv2.IMREAD_COLOR)
     if depth is None or colour is None or depth.dtype != np.uint16:
         raise CaptureError(f"{d}: missing colour PNG or 16-bit depth PNG")
-    return {"colour": cv2.cvtColor(colour, cv2.COLOR_BGR2RGB), "depth_m": depth.astype(np.float64) * float(meta["depth_scale"]),
-            "intrinsics": Intrinsics.from_json(meta["intrinsics"], f"{d}/camera.json"), "meta": meta}
+    intrinsics = Intrinsics.from_json(meta["intrinsics"], f"{d}/camera.json")
+    if depth.shape != (intrinsics.height, intrinsics.width) or colour.shape[:2] != depth.shape:
+        raise CaptureError(f"{d}: depth {depth.shape[::-1]} and colour {colour.shape[1::-1]} images must both be "
+                           f"{intrinsics.width} x {intrinsics.height} as camera.json's intrinsics say; capture again")
+    return {"colour": cv2.cvtColor(colour, cv2.COLOR_BGR2RGB), "depth_m": depth.astype(np.float64) * meta["depth_scale"],
+            "intrinsics": intrinsics, "meta": meta}
+
+
+def _camera_meta(d: Path) -> dict[str, Any]:
+    """The checked contents of ``d/camera.json``: an object with ``intrinsics`` and a positive numeric
+    ``depth_scale``; image file names, when given, are strings."""
+    where = d / "camera.json"
+    try:
+        meta = json.loads(where.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise CaptureError(f"{d}: missing or malformed camera.json ({e}); capture or scan into it first") from e
+    if not isinstance(meta, dict):
+        raise CaptureError(f"{where}: expected a JSON object with intrinsics and depth_scale, got {type(meta).__name__}")
+    missing = [k for k in ("intrinsics", "depth_scale") if k not in meta]
+    if missing:
+        raise CaptureError(f"{where}: missing {', '.join(missing)}; write it with bsv capture (or bsv.scan) again")
+    scale = meta["depth_scale"]
+    if isinstance(scale, bool) or not isinstance(scale, int | float) or not (0 < scale < 1):
+        raise CaptureError(f"{where}: depth_scale {scale!r} must be a number of metres per depth unit, e.g. 0.00025 "
+                           "(L515) or 0.001 (D4xx)")
+    for key in ("depth", "color"):
+        if key in meta and not isinstance(meta[key], str):
+            raise CaptureError(f"{where}: {key} must be an image file name, got {meta[key]!r:.40}")
+    return meta

@@ -48,7 +48,7 @@ pub use prealign::Similarity;
 pub use prepare::{prepare, Prepared};
 pub use registrar::Registrar;
 pub use result::{LimbAlignment, Registration};
-pub use schedule::{CorrespondenceKind, Schedule, Stage, DEFAULT_SCHEDULE};
+pub use schedule::{CorrespondenceKind, Schedule, Stage, DEFAULT_SCHEDULE, MAX_ITERATIONS};
 pub use std::ops::ControlFlow;
 pub use surface::surface_correction;
 

@@ -212,7 +212,7 @@ impl<'a> Registrar<'a> {
             match_labels,
             setup_seconds,
             fit: FitState::new(rest, template),
-            log: Vec::with_capacity(params.schedule.total_iterations()),
+            log: Vec::with_capacity(params.schedule.total_iterations().min(crate::schedule::MAX_ITERATIONS)),
             cursor: Cursor::default(),
             input: prepared,
         })

@@ -64,10 +64,18 @@ impl<'de> Deserialize<'de> for Schedule {
             )
         })? {
             ScheduleRepr::Text(text) => Schedule::parse(&text).map_err(serde::de::Error::custom),
-            ScheduleRepr::Stages(stages) => Ok(Schedule(stages)),
+            ScheduleRepr::Stages(stages) => {
+                let s = Schedule(stages);
+                s.check().map_err(serde::de::Error::custom)?;
+                Ok(s)
+            }
         }
     }
 }
+
+/// The most iterations a schedule may have in total (a fit of this length takes hours; larger counts
+/// are typing errors, and would overflow the iteration counter or the log's allocation).
+pub const MAX_ITERATIONS: usize = 1_000_000;
 
 /// The paper's schedule: 5 m2p, 5 p2m, 10 m2p.
 pub const DEFAULT_SCHEDULE: &str = "m2p:5,p2m:5,m2p:10";
@@ -94,15 +102,27 @@ impl Schedule {
                 .map_err(|_| bad(format!("count {:?} is not a non-negative integer", count.trim())))?;
             stages.push(Stage { kind, iterations });
         }
-        if stages.iter().all(|s| s.iterations == 0) {
-            return Err(bad("the schedule has no iteration".to_string()));
-        }
-        Ok(Schedule(stages))
+        let schedule = Schedule(stages);
+        schedule.check()?;
+        Ok(schedule)
     }
 
-    /// Total number of iterations.
+    /// Checks that the schedule has at least one and at most [`MAX_ITERATIONS`] iterations.
+    pub fn check(&self) -> Result<(), ParameterError> {
+        let bad = |reason: String| ParameterError::BadSchedule { text: self.to_string(), reason };
+        let total = self.0.iter().try_fold(0usize, |acc, s| acc.checked_add(s.iterations));
+        match total {
+            Some(0) => Err(bad("the schedule has no iteration".to_string())),
+            Some(n) if n <= MAX_ITERATIONS => Ok(()),
+            _ => Err(bad(format!(
+                "it has more than {MAX_ITERATIONS} iterations in total; use fewer (the default has 20)"
+            ))),
+        }
+    }
+
+    /// Total number of iterations (saturating: [`Schedule::check`] bounds it).
     pub fn total_iterations(&self) -> usize {
-        self.0.iter().map(|s| s.iterations).sum()
+        self.0.iter().fold(0usize, |acc, s| acc.saturating_add(s.iterations))
     }
 }
 

@@ -200,7 +200,10 @@ impl Appearance {
             SurfaceKind::Person => [60.0, 75.0, 120.0],
         };
         let n = px.normal;
+        // The lights hang below the ceiling: it is lit indirectly (ambient plus a fixed bounce).
+        let bounce = if px.kind == SurfaceKind::Ceiling { 0.45 } else { 0.0 };
         let light: f64 = self.ambient
+            + bounce
             + self
                 .lights
                 .iter()

@@ -100,6 +100,6 @@ def test_bench_renders_a_room_on_the_camera_path_and_reports_far_points() -> Non
     runs = [Run("s0", "noer", "bsv", True, truth_l={"torso": 30.0}, estimated_l={"torso": 31.0},
                 cloud_far_2cm_pct=v, cloud_far_10cm_pct=v / 4) for v in (2.0, 4.0)]
     table = cloud_table(runs)
-    assert "| noer | bsv | 2 | 3.00 (4.00) | 0.75 (1.00) |" in table
+    assert "| noer | bsv | 2 | 3.00 (4.00) | 0.75 (1.00) | \u2013 | \u2013 |" in table
     assert "cloud_far_2cm_pct" in CSV_COLUMNS and rows(runs)[0]["cloud_far_10cm_pct"] == 0.5
     assert cloud_table([Run("s0", "noer", "bsv", True)]) == ""

@@ -133,6 +133,10 @@ class Run:
     #: (:func:`cloud_far_pct`); None when not measured.
     cloud_far_2cm_pct: float | None = None
     cloud_far_10cm_pct: float | None = None
+    #: The same for the lab path's cloud before the statistical outlier removal (what the person mask let
+    #: through: floor, wall, flying pixels); None on the raw path.
+    unfiltered_far_2cm_pct: float | None = None
+    unfiltered_far_10cm_pct: float | None = None
     error: str = ""
     info: dict[str, Any] = field(default_factory=dict)
 

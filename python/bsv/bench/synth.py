@@ -12,7 +12,9 @@ room by default (floor, walls, ceiling, a subject with a skin tone, underwear an
 scan seed; :func:`bsv.scan` with ``room=True``), so that the person mask meets a floor and a wall as in
 a real capture; ``room=False`` (``--no-room``) renders the body alone on grey. The oracle raw path
 scans without a room. Every run records the percent of its registered cloud's points farther than 2 cm
-and 10 cm from the true body surface (``cloud_far_2cm_pct``, ``cloud_far_10cm_pct``).
+and 10 cm from the true body surface (``cloud_far_2cm_pct``, ``cloud_far_10cm_pct``) and, on the lab
+path, of the same cloud before the statistical outlier removal (``unfiltered_far_*``: what the person
+mask let through).
 
 Segmentation: ``oracle`` labels every point with the scanner's true face label (isolating registration
 and volume error); ``camera`` runs the MediaPipe front-end on the rendered colour images and builds the cloud from the
@@ -100,6 +102,8 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
 
     runs: list[Run] = []
     floor: dict[str, float] = {}
+    truth_surface = mesh if truth_mesh is None else truth_mesh
+    unfiltered: tuple[float | None, float | None] = (None, None)
     lab = cloud_mode == "lab" or segmentation == "camera"
     need_files = condition in CALIBRATED or lab
     with tempfile.TemporaryDirectory(prefix="bsv-bench-") as tmp:
@@ -107,14 +111,17 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
         if condition in CALIBRATED:
             floor = floor_volumes(mesh if truth_mesh is None else truth_mesh, read_camera_poses(tmp))
         if lab:
-            from .camera import capture_cloud
+            from .camera import build_views_cloud, capture_views
 
-            raw = capture_cloud(tmp, segmentation)[0]
+            views = capture_views(tmp, segmentation)
+            raw = build_views_cloud(views, tmp)[0]
+            unfiltered = cloud_far_pct(keep_trunk_limbs(build_views_cloud(views, tmp, sor=False)[0]), truth_surface)
     cloud: PointCloud = keep_trunk_limbs(raw)
-    far2, far10 = cloud_far_pct(cloud, mesh if truth_mesh is None else truth_mesh)
+    far2, far10 = cloud_far_pct(cloud, truth_surface)
     for method in methods:
         run = Run(name, condition, method, False, truth_l=dict(truth), floor_l=dict(floor), n_points=len(cloud),
-                  cloud_far_2cm_pct=far2, cloud_far_10cm_pct=far10)
+                  cloud_far_2cm_pct=far2, cloud_far_10cm_pct=far10, unfiltered_far_2cm_pct=unfiltered[0],
+                  unfiltered_far_10cm_pct=unfiltered[1])
         try:
             fit = register_method(method, cloud, template, params)
             run.estimated_l, run.seconds, run.info, run.ok = fit.volumes_l, fit.seconds, fit.info, True

@@ -8,9 +8,12 @@ mesh checks, volumes, the virtual scanner, the ARAP registration) runs in the Ru
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any, Union
+
+import numpy as np
+import numpy.typing as npt
 
 from . import _bsv
 from ._bsv import RegisterParams, VolumeReport
@@ -214,23 +217,45 @@ def scan(
     *,
     images: PathLike | None = None,
     overwrite: bool = False,
+    room: bool | Mapping[str, Any] = False,
 ) -> PointCloud:
     """Virtual two-camera capture (DESIGN.md rig) of a labelled mesh: a merged, labelled cloud.
 
     ``condition``: "noer", "l515", "cali" or "l5ca". With ``images``, also writes per-camera depth and
     colour PNGs and camera JSON into that folder, as a real capture would.
+
+    ``room``: ``True`` puts the rig in a clinic room (a floor, walls 0.6 m behind each camera, side
+    walls, a ceiling; distances varied by ``seed``) and paints a varied subject (skin tone, underwear,
+    hair, two lights, chosen by ``seed``); a dict of room keys (``floor_width``, ``floor_length``,
+    ``back_wall_z``, ``front_wall_z``, ``side_wall_x``, ``wall_height``, ``ceiling``, ``objects``)
+    sets that room exactly (missing keys: the clinic's). The room shows in the images (depth, label 0,
+    colour); the returned cloud holds the body's points only. A bad value raises
+    :class:`bsv.ScanError` whose ``parameter`` names it (``"room.back_wall_z"``); an unknown key or a
+    wrong type raises :class:`bsv.InputError`.
     """
     m = as_mesh(mesh)
     if not 0 <= int(seed) < 2**64:
         raise InputError(f"seed must be a whole number in 0 .. 2**64 - 1, got {seed}")
+    if not isinstance(room, (bool, Mapping)):
+        raise InputError(f"room must be True, False or a dict of room keys, got {type(room).__name__}")
     img = None if images is None else str(images)
     if img is not None and Path(img).exists():
         if not Path(img).is_dir():
             raise OutputExistsError(f"{img} is a file; images= needs a folder")
         if any(Path(img).iterdir()) and not overwrite:
             raise OutputExistsError(f"{img} is not empty; pass overwrite=True to write into it")
-    p, n, c, lab = _bsv.scan(m.vertices, m.faces, m.vertex_labels, m.face_labels, condition, int(seed), img)
+    rm: bool | dict[str, Any] = dict(room) if isinstance(room, Mapping) else bool(room)
+    p, n, c, lab = _bsv.scan(m.vertices, m.faces, m.vertex_labels, m.face_labels, condition, int(seed), img, rm)
     return PointCloud(p, n, c, lab)
+
+
+def surface_distances(points: Any, mesh: Any) -> npt.NDArray[np.float64]:
+    """Exact distance (metres) from every point (an (n, 3) array or a :class:`PointCloud`) to the
+    surface of ``mesh`` (point-to-triangle; a point inside a closed mesh gets its distance to the
+    surface). Benchmarks count cloud points more than 2 cm from the true body with it."""
+    pts = points.points if isinstance(points, PointCloud) else np.asarray(points, dtype=np.float64)
+    m = as_mesh(mesh)
+    return _bsv.surface_distances(np.ascontiguousarray(pts, dtype=np.float64).reshape(-1, 3), m.vertices, m.faces)
 
 
 __all__ = [
@@ -262,6 +287,7 @@ __all__ = [
     "read_point_cloud",
     "register",
     "scan",
+    "surface_distances",
     "volume_report",
     "volumes",
     "write_mesh",

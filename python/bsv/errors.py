@@ -97,7 +97,12 @@ class RegistrationStopped(RegistrationError):
 
 
 class ScanError(BsvError):
-    """The virtual scanner rejected its inputs or failed."""
+    """The virtual scanner rejected its inputs or failed.
+
+    ``parameter``: the rig parameter at fault (a noise parameter, or ``"room.<key>"`` for the room),
+    when there is one."""
+
+    parameter: str | None = None
 
 
 class OutputExistsError(BsvError, FileExistsError):

@@ -1,12 +1,12 @@
 //! Speed of the capture side: the virtual two-camera scan of a ~27k-triangle labelled body (each
-//! condition), the paper's statistical outlier removal (k = 600, std ratio 0.05) on a camera view and
-//! on 300k surface samples, and the bounded-radius k-NN mean distances against the plain kiddo
+//! condition, and l515 inside the clinic room), the paper's statistical outlier removal (k = 600,
+//! std ratio 0.05) on a camera view and on 300k surface samples, and the bounded-radius k-NN mean distances against the plain kiddo
 //! `nearest_n` query (the peer, same points, same run). `cargo bench -p bsv-capture --bench scan`.
 #![allow(missing_docs, clippy::unwrap_used)]
 
 use bsv_capture::clean::{mean_knn_distances, mean_knn_distances_naive, statistical_outliers, SorParams};
 use bsv_capture::sample::sample_surface;
-use bsv_capture::scanner::{scan, Condition, Rig};
+use bsv_capture::scanner::{scan, Condition, Rig, Room};
 use bsv_core::shapes;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use std::time::Duration;
@@ -19,6 +19,11 @@ fn scans(c: &mut Criterion) {
     for cond in Condition::ALL {
         g.bench_function(BenchmarkId::from_parameter(cond.name()), |b| b.iter(|| scan(&mesh, &rig, cond, 1).unwrap()));
     }
+    // The same rig inside the clinic room: a second BVH per ray and the room's pixels in the noise.
+    let roomed = Rig::paper_default().with_room(Room::clinic());
+    g.bench_function(BenchmarkId::from_parameter("l515_room"), |b| {
+        b.iter(|| scan(&mesh, &roomed, Condition::L515, 1).unwrap())
+    });
     g.finish();
 }
 

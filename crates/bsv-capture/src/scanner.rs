@@ -7,24 +7,35 @@
 //! with the ESTIMATED extrinsics, which in `cali`/`l5ca` are the true ones perturbed by a drawn
 //! [`ExtrinsicError`]: the cloud is what a miscalibrated rig would give. Deterministic for a seed.
 //! [`write_capture`] writes what a real capture writes (depth/colour/label PNGs, camera JSON).
+//!
+//! With a [`Room`] on the rig, each ray is also cast at the room's own BVH and the nearer hit kept:
+//! room pixels carry depth (with the same noise and flying pixels, so pixels straddling the body and
+//! the wall appear) but label 0, and the scan's cloud keeps only the body's pixels (an oracle person
+//! mask). The colour render then uses an [`Appearance`] drawn from the seed.
 
+mod appearance;
 mod capture;
+mod cast;
 mod noise;
 mod rig;
+mod room;
 
+pub use appearance::{Appearance, BodyHeights, Light, SurfacePixel, UnderwearStyle, SKIN_TONES};
 pub use capture::{write_capture, CaptureCamera, DEPTH_SCALE};
+pub use cast::SurfaceImage;
 pub use rig::{
     Condition, DepthNoise, ExtrinsicError, ExtrinsicSigma, Rig, RigCamera, PAPER_CAMERA_DISTANCE, PAPER_CAMERA_HEIGHT,
     PAPER_HEIGHT, PAPER_HFOV_DEG, PAPER_VFOV_DEG, PAPER_WIDTH,
 };
+pub use room::{Room, RoomObject, SurfaceKind};
 
 use crate::camera::{CameraError, Extrinsics, Intrinsics};
 use bsv_core::labels::face_labels_from_vertices;
 use bsv_core::{MeshInvariant, PointCloud, Segment, TriMesh};
 use parry3d_f64::math::Vector;
-use parry3d_f64::query::{Ray, RayCast};
 use rand::SeedableRng;
 use rayon::prelude::*;
+use room::RoomScene;
 use std::ops::Range;
 use std::path::PathBuf;
 
@@ -73,6 +84,26 @@ pub enum ScanError {
         /// The offending value.
         value: f64,
     },
+    /// A room parameter is out of range.
+    #[error("room parameter `{param}` is {value}: {remedy}")]
+    BadRoom {
+        /// Parameter name.
+        param: &'static str,
+        /// The offending value.
+        value: f64,
+        /// What to do.
+        remedy: &'static str,
+    },
+    /// A camera of the rig stands outside the room.
+    #[error("camera `{camera}` is outside the room (room parameter `{param}`): {remedy}")]
+    CameraOutsideRoom {
+        /// Camera name.
+        camera: String,
+        /// The room parameter that puts it outside.
+        param: &'static str,
+        /// What to do.
+        remedy: &'static str,
+    },
     /// An unknown condition name.
     #[error("unknown scan condition `{0}`: use one of noer, l515, cali, l5ca")]
     UnknownCondition(String),
@@ -110,7 +141,7 @@ pub struct CameraView {
     pub error: ExtrinsicError,
     /// Measured depth per pixel, metres, row-major; 0 = no return.
     pub depth: Vec<f32>,
-    /// Segment label of the hit face per pixel (0 = none).
+    /// Segment label of the hit face per pixel (0 = none, or the room).
     pub labels: Vec<u8>,
     /// Lambert shade |n · ray| per pixel in [0, 1] (0 = no hit).
     pub shade: Vec<f32>,
@@ -118,6 +149,8 @@ pub struct CameraView {
     pub cloud_range: Range<usize>,
     /// Pixel index (row-major) of each of this camera's points.
     pub pixels: Vec<u32>,
+    /// With a room: what each pixel hit (kind, world normal and point) for the colour render.
+    pub surface: Option<SurfaceImage>,
 }
 
 /// Result of a virtual scan: the merged world-frame cloud and each camera's images.
@@ -131,6 +164,9 @@ pub struct Scan {
     pub cloud: PointCloud,
     /// One view per rig camera, in rig order.
     pub views: Vec<CameraView>,
+    /// With a room: the look of the colour render ([`Appearance::from_seed`]) and the body heights
+    /// that place underwear and hair; `None`: the plain skin-on-grey render.
+    pub appearance: Option<(Appearance, BodyHeights)>,
 }
 
 /// The parry mesh (BVH) of `mesh`, after checking indices and coordinates.
@@ -182,108 +218,112 @@ pub(crate) fn mix_seed(seed: u64, a: u64, b: u64) -> u64 {
 const STREAM_CALIBRATION: u64 = 0xCA11;
 pub(crate) const STREAM_NOISE: u64 = 0x0153;
 
-/// True depth, label and shade of every pixel of one camera (f64 depth, 0 = no hit).
-struct RayImage {
-    depth: Vec<f64>,
-    labels: Vec<u8>,
-    shade: Vec<f32>,
-}
-
-fn cast_camera(bvh: &parry3d_f64::shape::TriMesh, labels: &[u8], intr: &Intrinsics, ext: &Extrinsics) -> RayImage {
-    let (w, h) = (intr.width as usize, intr.height as usize);
-    let mut out = RayImage { depth: vec![0.0; w * h], labels: vec![0; w * h], shade: vec![0.0; w * h] };
-    let o = ext.translation;
-    let origin = Vector::new(o[0], o[1], o[2]);
-    out.depth
-        .par_chunks_mut(w)
-        .zip(out.labels.par_chunks_mut(w))
-        .zip(out.shade.par_chunks_mut(w))
+/// The world points of a camera's valid pixels: (pixel index, point, label), row-major. With a
+/// `body_mask` (scans with a room), only the pixels whose ray hit the body.
+fn view_points(
+    depth: &[f64],
+    labels: &[u8],
+    body_mask: Option<&[u8]>,
+    intr: &Intrinsics,
+    estimated: &Extrinsics,
+) -> Vec<(u32, [f64; 3], u8)> {
+    let w = intr.width as usize;
+    let body = SurfaceKind::Body as u8;
+    let per_row: Vec<Vec<(u32, [f64; 3], u8)>> = depth
+        .par_chunks(w)
         .enumerate()
-        .for_each(|(v, ((drow, lrow), srow))| {
-            for u in 0..w {
-                let [x, y] = intr.pixel_ray([u as f64, v as f64]);
-                let d = ext.transform_vector([x, y, 1.0]);
-                let ray = Ray::new(origin, Vector::new(d[0], d[1], d[2]));
-                if let Some(hit) = bvh.cast_local_ray_and_get_normal(&ray, 1.0e3, false) {
-                    drow[u] = hit.time_of_impact;
-                    lrow[u] = labels.get(hit.subshape as usize).copied().unwrap_or(0);
-                    let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-                    let n = hit.normal;
-                    let c = ((n.x * d[0] + n.y * d[1] + n.z * d[2]) / (len * n.length().max(1e-300))).abs();
-                    srow[u] = c.min(1.0) as f32;
-                }
-            }
-        });
-    out
+        .map(|(v, row)| {
+            row.iter()
+                .enumerate()
+                .filter(|(u, z)| **z > 0.0 && body_mask.is_none_or(|m| m[v * w + u] == body))
+                .map(|(u, &z)| {
+                    let p = estimated.transform_point(intr.deproject([u as f64, v as f64], z));
+                    let i = v * w + u;
+                    (i as u32, p, labels[i])
+                })
+                .collect()
+        })
+        .collect();
+    per_row.into_iter().flatten().collect()
 }
 
-/// Scans `mesh` with every camera of `rig` under `condition`; deterministic for `seed`.
+/// One camera's view and its points (world frame, estimated extrinsics).
+fn scan_camera(
+    bvh: &parry3d_f64::shape::TriMesh,
+    labels: &[u8],
+    room: Option<&RoomScene>,
+    rig: &Rig,
+    ci: usize,
+    condition: Condition,
+    seed: u64,
+) -> (CameraView, Vec<(u32, [f64; 3], u8)>) {
+    let cam = &rig.cameras[ci];
+    let intr = cam.intrinsics;
+    let rays = match room {
+        Some(r) => cast::cast_camera_room(bvh, labels, r, &intr, &cam.camera_to_world),
+        None => cast::cast_camera(bvh, labels, &intr, &cam.camera_to_world),
+    };
+    let depth = if condition.has_depth_noise() {
+        noise::apply(&rays.depth, intr.width, intr.height, &rig.noise, mix_seed(seed, STREAM_NOISE, ci as u64))
+    } else {
+        rays.depth
+    };
+    let error = if condition.has_calibration_error() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(mix_seed(seed, STREAM_CALIBRATION, ci as u64));
+        cam.calibration_sigma.draw(&mut rng)
+    } else {
+        ExtrinsicError::default()
+    };
+    let estimated = error.apply(&cam.camera_to_world);
+    let mask = rays.surface.as_ref().map(|s| s.kind.as_slice());
+    let points = view_points(&depth, &rays.labels, mask, &intr, &estimated);
+    let mut view_labels = rays.labels;
+    for (l, z) in view_labels.iter_mut().zip(&depth) {
+        if *z <= 0.0 {
+            *l = 0;
+        }
+    }
+    let view = CameraView {
+        name: cam.name.clone(),
+        intrinsics: intr,
+        true_extrinsics: cam.camera_to_world,
+        estimated_extrinsics: estimated,
+        error,
+        depth: depth.iter().map(|&z| z as f32).collect(),
+        labels: view_labels,
+        shade: rays.shade,
+        cloud_range: 0..0,
+        pixels: Vec::new(),
+        surface: rays.surface,
+    };
+    (view, points)
+}
+
+/// Scans `mesh` with every camera of `rig` under `condition`; deterministic for `seed`. With a room
+/// on the rig, the room is rendered too, the cloud holds the body's pixels only and the scan carries
+/// the [`Appearance`] of `seed`.
 pub fn scan(mesh: &TriMesh, rig: &Rig, condition: Condition, seed: u64) -> Result<Scan, ScanError> {
     rig.validate()?;
     let labels = face_labels(mesh)?;
     let bvh = parry_mesh(mesh)?;
+    let room = rig.room.as_ref().map(RoomScene::build).transpose()?;
     let mut cloud = PointCloud::new(Vec::new());
     let mut cloud_labels = Vec::new();
     let mut views = Vec::with_capacity(rig.cameras.len());
-    for (ci, cam) in rig.cameras.iter().enumerate() {
-        let intr = cam.intrinsics;
-        let w = intr.width as usize;
-        let rays = cast_camera(&bvh, &labels, &intr, &cam.camera_to_world);
-        let depth = if condition.has_depth_noise() {
-            noise::apply(&rays.depth, intr.width, intr.height, &rig.noise, mix_seed(seed, STREAM_NOISE, ci as u64))
-        } else {
-            rays.depth
-        };
-        let error = if condition.has_calibration_error() {
-            let mut rng = rand::rngs::StdRng::seed_from_u64(mix_seed(seed, STREAM_CALIBRATION, ci as u64));
-            cam.calibration_sigma.draw(&mut rng)
-        } else {
-            ExtrinsicError::default()
-        };
-        let estimated = error.apply(&cam.camera_to_world);
+    for ci in 0..rig.cameras.len() {
+        let (mut view, points) = scan_camera(&bvh, &labels, room.as_ref(), rig, ci, condition, seed);
         let start = cloud.points.len();
-        let per_row: Vec<Vec<(u32, [f64; 3], u8)>> = depth
-            .par_chunks(w)
-            .enumerate()
-            .map(|(v, row)| {
-                row.iter()
-                    .enumerate()
-                    .filter(|(_, z)| **z > 0.0)
-                    .map(|(u, &z)| {
-                        let p = estimated.transform_point(intr.deproject([u as f64, v as f64], z));
-                        let i = v * w + u;
-                        (i as u32, p, rays.labels[i])
-                    })
-                    .collect()
-            })
-            .collect();
-        let mut pixels = Vec::new();
-        for (i, p, l) in per_row.into_iter().flatten() {
-            pixels.push(i);
+        for (i, p, l) in points {
+            view.pixels.push(i);
             cloud.points.push(p);
             cloud_labels.push(l);
         }
-        let mut view_labels = rays.labels;
-        for (l, z) in view_labels.iter_mut().zip(&depth) {
-            if *z <= 0.0 {
-                *l = 0;
-            }
-        }
-        views.push(CameraView {
-            name: cam.name.clone(),
-            intrinsics: intr,
-            true_extrinsics: cam.camera_to_world,
-            estimated_extrinsics: estimated,
-            error,
-            depth: depth.iter().map(|&z| z as f32).collect(),
-            labels: view_labels,
-            shade: rays.shade,
-            cloud_range: start..cloud.points.len(),
-            pixels,
-        });
+        view.cloud_range = start..cloud.points.len();
+        views.push(view);
     }
     cloud.colors =
         Some(cloud_labels.iter().map(|&l| Segment::from_id(l).unwrap_or(Segment::Unlabelled).color()).collect());
     cloud.labels = Some(cloud_labels);
-    Ok(Scan { condition, seed, cloud, views })
+    let appearance = rig.room.as_ref().map(|_| (Appearance::from_seed(seed), BodyHeights::of(mesh, &labels)));
+    Ok(Scan { condition, seed, cloud, views, appearance })
 }

@@ -1,7 +1,7 @@
 //! `bsv-cli scan`: virtual two-camera capture of a labelled mesh.
 
 use crate::output::{check_outputs, CliError, Output};
-use bsv_capture::scanner::{scan, write_capture, Condition, Rig, Scan};
+use bsv_capture::scanner::{scan, write_capture, Condition, Rig, Room, Scan};
 use bsv_core::io;
 use std::path::{Path, PathBuf};
 
@@ -22,6 +22,13 @@ pub struct Args {
     /// Also write what a real capture writes (per camera depth PNG, colour PNG, label PNG, camera.json) here.
     #[arg(long, value_name = "DIR")]
     images: Option<PathBuf>,
+    /// Put the rig in a clinic room (floor, walls, ceiling; distances varied by the seed): the images
+    /// show the room with label 0 and the colour render a varied subject; the cloud keeps the body only.
+    #[arg(long)]
+    room: bool,
+    /// With --room: also a chair-sized block and a second person partly in the front camera's view.
+    #[arg(long, requires = "room")]
+    room_objects: bool,
     /// Overwrite outputs that exist.
     #[arg(long)]
     force: bool,
@@ -35,12 +42,18 @@ pub fn run(a: Args) -> Result<(), CliError> {
     check_outputs(&outputs, a.force)?;
     let mesh = io::read_mesh(&a.mesh)?;
     let t = std::time::Instant::now();
-    let s = scan(&mesh, &Rig::paper_default(), condition, a.seed)?;
+    let mut rig = Rig::paper_default();
+    if a.room {
+        let base = if a.room_objects { Room::clinic_with_objects() } else { Room::clinic() };
+        rig = rig.with_room(base.varied(a.seed));
+    }
+    let s = scan(&mesh, &rig, condition, a.seed)?;
     let secs = t.elapsed().as_secs_f64();
     for v in &s.views {
         say!("  {:<5} camera: {:>7} points", v.name, v.cloud_range.len());
     }
-    say!("scanned {} ({condition}, seed {}) in {secs:.2} s: {} points", a.mesh.display(), a.seed, s.cloud.len());
+    let room = if a.room { ", in a room" } else { "" };
+    say!("scanned {} ({condition}, seed {}{room}) in {secs:.2} s: {} points", a.mesh.display(), a.seed, s.cloud.len());
     if let Some(dir) = &a.images {
         write_capture_atomic(&s, dir)?;
         say!("capture images written to {}", dir.display());

@@ -102,3 +102,20 @@ fn info_reports_unreadable_faces() {
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(j.get("mesh").is_none() && j.get("mesh_error").is_none(), "{j}");
 }
+
+#[test]
+fn scan_in_a_room_writes_the_room_into_the_images_not_the_cloud() {
+    let d = tmpdir("room");
+    let o = bsv(&["template", "-o", "t.ply"], &d);
+    assert!(o.status.success(), "{}", text(&o));
+    let o = bsv(&["scan", "t.ply", "-o", "plain.ply"], &d);
+    assert!(o.status.success(), "{}", text(&o));
+    let o = bsv(&["scan", "t.ply", "--room", "--room-objects", "-o", "room.ply", "--images", "cap"], &d);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("in a room"), "{}", text(&o));
+    assert_eq!(std::fs::read(d.join("plain.ply")).unwrap(), std::fs::read(d.join("room.ply")).unwrap());
+    assert!(d.join("cap/front/color.png").is_file() && d.join("cap/back/depth.png").is_file());
+    let o = bsv(&["scan", "t.ply", "--room-objects", "-o", "x.ply"], &d);
+    assert!(!o.status.success());
+    assert!(text(&o).contains("--room"), "{}", text(&o));
+}

@@ -197,7 +197,25 @@ fn register_class(e: &RegisterError) -> (&'static str, Vec<(&'static str, Field)
 
 impl ToPyErr for bsv_capture::scanner::ScanError {
     fn to_py_err(&self) -> PyErr {
-        exception("ScanError", message(self), Vec::new())
+        use bsv_capture::scanner::ScanError as S;
+        let fields = match self {
+            S::BadRoom { param, .. } | S::CameraOutsideRoom { param, .. } => {
+                vec![("parameter", Field::Str(format!("room.{param}")))]
+            }
+            S::BadNoise { param, .. } => vec![("parameter", Field::Str((*param).to_string()))],
+            _ => Vec::new(),
+        };
+        exception("ScanError", message(self), fields)
+    }
+}
+
+impl ToPyErr for bsv_capture::distance::DistanceError {
+    fn to_py_err(&self) -> PyErr {
+        use bsv_capture::distance::DistanceError as D;
+        match self {
+            D::NonFinitePoint(i) => input_error("points", Some(*i), message(self)),
+            D::Mesh(_) => input_error("mesh", None, message(self)),
+        }
     }
 }
 

@@ -1,15 +1,15 @@
 //! The functions of `bsv._bsv` (see `python/bsv/_bsv.pyi`): conversion, one library call, conversion.
 
-use crate::classes::{to_py, PyVolumeReport};
+use crate::classes::{from_kwargs, to_py, PyVolumeReport};
 use crate::convert::{cloud_from, cloud_to, label_values, mesh_from, mesh_to, points_from, triangles_from};
 use crate::errors::{input_error, py_err};
-use bsv_capture::scanner::{self, Condition, Rig};
+use bsv_capture::scanner::{self, Condition, Rig, Room};
 use bsv_core::io::{self, PlyEncoding};
 use bsv_core::template::{template, TemplateKind};
 use bsv_core::TriMesh;
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
-use pyo3::types::PyTuple;
+use pyo3::types::{PyDict, PyTuple};
 use std::path::PathBuf;
 
 fn encoding(ascii: bool) -> PlyEncoding {
@@ -125,10 +125,25 @@ fn default_template<'py>(py: Python<'py>, full: bool) -> PyResult<Bound<'py, PyT
     mesh_to(py, &mesh)
 }
 
-/// Virtual two-camera capture: the merged labelled cloud; optionally writes the capture files.
+/// The rig's room from the `room` argument: absent, `None` or `False`: no room; `True`: the clinic
+/// room varied by `seed`; a dict: `Room` keys (missing keys take the clinic's values, no variation).
+fn room_from(room: Option<&Bound<'_, PyAny>>, seed: u64) -> PyResult<Option<Room>> {
+    let Some(r) = room.filter(|r| !r.is_none()) else { return Ok(None) };
+    if let Ok(flag) = r.extract::<bool>() {
+        return Ok(flag.then(|| Room::clinic().varied(seed)));
+    }
+    let Ok(d) = r.cast::<PyDict>() else {
+        return Err(input_error("room", None, "room must be True, False or a dict of Room keys".into()));
+    };
+    let room: Room = from_kwargs("room", d)?;
+    Ok(Some(room))
+}
+
+/// Virtual two-camera capture: the merged labelled cloud (the body's points only); optionally writes
+/// the capture files; `room` puts the rig in a room (see [`room_from`]).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (vertices, faces, vertex_labels=None, face_labels=None, condition="noer", seed=0, images_dir=None))]
+#[pyo3(signature = (vertices, faces, vertex_labels=None, face_labels=None, condition="noer", seed=0, images_dir=None, room=None))]
 fn scan<'py>(
     py: Python<'py>,
     vertices: &Bound<'py, PyAny>,
@@ -138,12 +153,15 @@ fn scan<'py>(
     condition: &str,
     seed: u64,
     images_dir: Option<PathBuf>,
+    room: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let mesh = mesh_from(vertices, faces, vertex_labels, face_labels)?;
     let condition: Condition = condition.parse().map_err(py_err)?;
+    let mut rig = Rig::paper_default();
+    rig.room = room_from(room, seed)?;
     let s = py
         .detach(|| {
-            let s = scanner::scan(&mesh, &Rig::paper_default(), condition, seed)?;
+            let s = scanner::scan(&mesh, &rig, condition, seed)?;
             if let Some(dir) = &images_dir {
                 scanner::write_capture(&s, dir)?;
             }
@@ -151,6 +169,22 @@ fn scan<'py>(
         })
         .map_err(py_err)?;
     cloud_to(py, &s.cloud)
+}
+
+/// Exact distance (metres) from every point to the surface of the mesh (point-to-triangle).
+#[pyfunction]
+fn surface_distances<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    vertices: &Bound<'py, PyAny>,
+    faces: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let p = points_from(points, "points")?;
+    let v = points_from(vertices, "vertices")?;
+    let t = triangles_from(faces, v.len(), "faces")?;
+    let mesh = TriMesh::new(v, t);
+    let d = py.detach(|| bsv_capture::distance::surface_distances(&p, &mesh)).map_err(py_err)?;
+    Ok(PyArray1::from_vec(py, d))
 }
 
 /// Face labels from vertex labels: the one rule of `bsv_volume::face_labels_from_vertices` (the
@@ -210,6 +244,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(volumes, m)?)?;
     m.add_function(wrap_pyfunction!(default_template, m)?)?;
     m.add_function(wrap_pyfunction!(scan, m)?)?;
+    m.add_function(wrap_pyfunction!(surface_distances, m)?)?;
     m.add_function(wrap_pyfunction!(face_labels_from_vertices, m)?)?;
     m.add_function(wrap_pyfunction!(vertex_labels_from_faces, m)?)?;
     m.add_function(wrap_pyfunction!(vertex_normals, m)?)?;

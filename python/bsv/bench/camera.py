@@ -47,10 +47,28 @@ def capture_cloud(capture_dir: str | Path, segmentation: str = "oracle",
 
     ``segmentation``: ``oracle`` (each camera's ``labels.png``) or ``camera`` (MediaPipe); ``labels``
     overrides both with per-camera (height, width) uint8 segment-id images."""
+    return build_views_cloud(capture_views(capture_dir, segmentation, labels), capture_dir, sor=sor)
+
+
+def build_views_cloud(views: list[dict[str, Any]], capture_dir: str | Path = "",
+                      sor: bool = True) -> tuple[PointCloud, dict[str, Any]]:
+    """The cloud of :func:`capture_views`' views, built as ``bsv process`` builds it (``sor``: with the
+    statistical outlier removal); failures become :class:`BenchError` naming ``capture_dir``."""
+    from ..pipeline import build_cloud
+
+    try:
+        return build_cloud(views, sor=sor)
+    except Exception as exc:  # typed bsv errors carry the reason
+        raise BenchError(f"{capture_dir}: building the cloud failed: {exc}") from exc
+
+
+def capture_views(capture_dir: str | Path, segmentation: str = "oracle",
+                  labels: Mapping[str, np.ndarray] | None = None) -> list[dict[str, Any]]:
+    """Per-camera view dicts of :func:`bsv.pipeline.build_cloud` for a capture folder, labelled as
+    :func:`capture_cloud` says (the segmentation runs once; build several clouds from the result)."""
     from PIL import Image
 
     from ..frontend.capture import read_capture
-    from ..pipeline import build_cloud
 
     d = Path(capture_dir)
     views = []
@@ -74,7 +92,4 @@ def capture_cloud(capture_dir: str | Path, segmentation: str = "oracle",
                       "camera_to_world": cap["meta"]["camera_to_world"],
                       "depth": np.ascontiguousarray(depth, dtype=np.float32), "labels": lab,
                       "colors": np.ascontiguousarray(cap["colour"], dtype=np.uint8)})
-    try:
-        return build_cloud(views, sor=sor)
-    except Exception as exc:  # typed bsv errors carry the reason
-        raise BenchError(f"{d}: building the cloud failed: {exc}") from exc
+    return views

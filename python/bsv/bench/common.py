@@ -44,6 +44,23 @@ def keep_trunk_limbs(cloud: PointCloud) -> PointCloud:
     )
 
 
+#: Distances (metres) of the cloud-quality columns: a point farther than this from the true body is
+#: off the body (floor, wall, mask spill, flying pixel).
+FAR_THRESHOLDS_M: tuple[float, float] = (0.02, 0.10)
+
+
+def cloud_far_pct(cloud: PointCloud, truth: Mesh) -> tuple[float, float]:
+    """Percent of ``cloud``'s points farther than 2 cm and than 10 cm from the surface of ``truth``
+    (exact point-to-triangle distances, :func:`bsv.surface_distances`); (0, 0) for an empty cloud."""
+    from .. import surface_distances
+
+    if len(cloud) == 0:
+        return 0.0, 0.0
+    d = surface_distances(cloud.points, truth)
+    near, far = FAR_THRESHOLDS_M
+    return float(np.mean(d > near) * 100.0), float(np.mean(d > far) * 100.0)
+
+
 def load_template(name: str) -> Mesh:
     """``default`` (9 segments, 4,177 vertices), ``fine`` (its midpoint subdivision) or a mesh file path."""
     from .. import default_template, read_mesh
@@ -112,6 +129,14 @@ class Run:
     floor_l: dict[str, float] = field(default_factory=dict)
     seconds: float = 0.0
     n_points: int = 0
+    #: Percent of the registered cloud's points farther than 2 cm / 10 cm from the true body surface
+    #: (:func:`cloud_far_pct`); None when not measured.
+    cloud_far_2cm_pct: float | None = None
+    cloud_far_10cm_pct: float | None = None
+    #: The same for the lab path's cloud before the statistical outlier removal (what the person mask let
+    #: through: floor, wall, flying pixels); None on the raw path.
+    unfiltered_far_2cm_pct: float | None = None
+    unfiltered_far_10cm_pct: float | None = None
     error: str = ""
     info: dict[str, Any] = field(default_factory=dict)
 

@@ -13,6 +13,7 @@ from .common import Run
 from .figures import rve_bars, trunk_limbs_histogram
 from .tables import (
     bias_table,
+    cloud_table,
     p2pv_table,
     paper_table,
     rows,
@@ -96,6 +97,14 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
            "✓ = better than both P2PV numbers (BUFF, PDT13).", "", p2pv_table(summary), "",
            "## Signed error of trunk_limbs (%, mean ± std; negative = the fit shrinks the body)", "",
            bias_table(summary), "", "## Registration time per subject (s)", "", timing_table(runs), ""]
+    far = cloud_table(runs)
+    if far:
+        md += ["## Cloud points off the body (% of the registered cloud)", "",
+               ("Points farther than 2 cm / 10 cm from the true body surface (exact point-to-triangle distance): "
+                "floor, wall or mask spill, flying pixels and calibration shifts that survived the cloud building; "
+                "`before SOR`: the lab path's cloud before the statistical outlier removal (what the person mask "
+                "let through)."),
+               "", far, ""]
     if checks:
         md += ["## Targets (bsv)", "", targets_md(checks), ""]
     if failures:

@@ -7,6 +7,15 @@ noise), the head, hand and foot points are dropped, the template is registered a
 are compared with the body's ground truth. For cali and l5ca the error floor (:mod:`bsv.bench.floor`)
 is measured from the capture's per-camera true and estimated extrinsics.
 
+Room: the camera path (``--segmentation camera`` or ``--cloud lab``) renders the rig inside a clinic
+room by default (floor, walls, ceiling, a subject with a skin tone, underwear and hair drawn from the
+scan seed; :func:`bsv.scan` with ``room=True``), so that the person mask meets a floor and a wall as in
+a real capture; ``room=False`` (``--no-room``) renders the body alone on grey. The oracle raw path
+scans without a room. Every run records the percent of its registered cloud's points farther than 2 cm
+and 10 cm from the true body surface (``cloud_far_2cm_pct``, ``cloud_far_10cm_pct``) and, on the lab
+path, of the same cloud before the statistical outlier removal (``unfiltered_far_*``: what the person
+mask let through).
+
 Segmentation: ``oracle`` labels every point with the scanner's true face label (isolating registration
 and volume error); ``camera`` runs the MediaPipe front-end on the rendered colour images and builds the cloud from the
 depth images as a lab would (:mod:`bsv.bench.camera`; it needs ``bsv.frontend.segment`` and fails with
@@ -42,6 +51,14 @@ class SynthConfig:
     params: dict[str, Any] = field(default_factory=dict)
     local: bool = True
     cloud: str = "raw"
+    #: Render the rig inside a room; None: yes on the camera path (camera segmentation or lab cloud), no on the raw path.
+    room: bool | None = None
+
+    def uses_room(self) -> bool:
+        """Whether the scans render a room (:attr:`room`, or its default for the path)."""
+        if self.room is not None:
+            return self.room
+        return self.segmentation == "camera" or self.cloud == "lab"
 
     def validate(self) -> None:
         """Raise BenchError on an unknown condition, segmentation or method, or a bad count."""
@@ -71,31 +88,40 @@ def scan_seed(seed: int, index: int) -> int:
 def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition: str, seed: int,
                       template: Mesh, methods: Iterable[str], segmentation: str = "oracle",
                       params: dict[str, Any] | None = None, truth_mesh: Mesh | None = None,
-                      cloud_mode: str = "raw") -> list[Run]:
+                      cloud_mode: str = "raw", room: bool = False) -> list[Run]:
     """Scan ``mesh`` in one condition, compute the floor if calibrated, register with every method.
 
     ``cloud_mode``: ``raw`` registers the scanner's cloud; ``lab`` (forced by camera segmentation) rebuilds
     it from the capture images like ``bsv process`` (statistical outlier removal included).
-    The floor moves ``truth_mesh`` (default ``mesh``: it must be closed and labelled like the truth).
+    ``room``: scan inside a clinic room (:func:`bsv.scan`). The floor moves ``truth_mesh`` (default ``mesh``:
+    it must be closed and labelled like the truth); the cloud's far-point percentages are measured against it.
     Never raises for a failed registration: the Run carries ``ok=False`` and the error text."""
     from .. import scan
+    from .common import cloud_far_pct
     from .floor import floor_volumes, read_camera_poses
 
     runs: list[Run] = []
     floor: dict[str, float] = {}
+    truth_surface = mesh if truth_mesh is None else truth_mesh
+    unfiltered: tuple[float | None, float | None] = (None, None)
     lab = cloud_mode == "lab" or segmentation == "camera"
     need_files = condition in CALIBRATED or lab
     with tempfile.TemporaryDirectory(prefix="bsv-bench-") as tmp:
-        raw = scan(mesh, condition, seed, images=tmp if need_files else None, overwrite=True)
+        raw = scan(mesh, condition, seed, images=tmp if need_files else None, overwrite=True, room=room)
         if condition in CALIBRATED:
             floor = floor_volumes(mesh if truth_mesh is None else truth_mesh, read_camera_poses(tmp))
         if lab:
-            from .camera import capture_cloud
+            from .camera import build_views_cloud, capture_views
 
-            raw = capture_cloud(tmp, segmentation)[0]
+            views = capture_views(tmp, segmentation)
+            raw = build_views_cloud(views, tmp)[0]
+            unfiltered = cloud_far_pct(keep_trunk_limbs(build_views_cloud(views, tmp, sor=False)[0]), truth_surface)
     cloud: PointCloud = keep_trunk_limbs(raw)
+    far2, far10 = cloud_far_pct(cloud, truth_surface)
     for method in methods:
-        run = Run(name, condition, method, False, truth_l=dict(truth), floor_l=dict(floor), n_points=len(cloud))
+        run = Run(name, condition, method, False, truth_l=dict(truth), floor_l=dict(floor), n_points=len(cloud),
+                  cloud_far_2cm_pct=far2, cloud_far_10cm_pct=far10, unfiltered_far_2cm_pct=unfiltered[0],
+                  unfiltered_far_10cm_pct=unfiltered[1])
         try:
             fit = register_method(method, cloud, template, params)
             run.estimated_l, run.seconds, run.info, run.ok = fit.volumes_l, fit.seconds, fit.info, True
@@ -135,7 +161,8 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] |
     for cond in cfg.conditions:
         try:
             runs += measure_condition(name, mesh, truth, cond, scan_seed(cfg.seed, index), template,
-                                      cfg.methods, cfg.segmentation, cfg.params, cloud_mode=cfg.cloud)
+                                      cfg.methods, cfg.segmentation, cfg.params, cloud_mode=cfg.cloud,
+                                      room=cfg.uses_room())
         except Exception as exc:  # a failed scan/floor is reported, the run goes on
             runs += [Run(name, cond, m, False, truth_l=truth, error=f"{type(exc).__name__}: {exc}")
                      for m in cfg.methods]

@@ -19,7 +19,8 @@ from .reference import CALIBRATED, CONDITIONS, MEASURED, P2PV_BUFF, P2PV_PDT13, 
 #: Columns of results.csv, in order.
 CSV_COLUMNS: tuple[str, ...] = (
     "subject", "condition", "method", "segment", "estimated_l", "true_l", "rve_pct", "signed_pct",
-    "floor_l", "floor_rve_pct", "excess_pct", "seconds",
+    "floor_l", "floor_rve_pct", "excess_pct", "seconds", "cloud_far_2cm_pct", "cloud_far_10cm_pct",
+    "unfiltered_far_2cm_pct", "unfiltered_far_10cm_pct",
 )
 
 #: Marks a table cell without a value (an en dash).
@@ -47,6 +48,8 @@ def rows(runs: Iterable[Run], segments: Sequence[str] = MEASURED) -> list[dict[s
                 "subject": r.subject, "condition": r.condition, "method": r.method, "segment": seg,
                 "estimated_l": est, "true_l": tru, "rve_pct": rve(est, tru), "signed_pct": signed_error(est, tru),
                 "floor_l": None, "floor_rve_pct": None, "excess_pct": None, "seconds": r.seconds,
+                "cloud_far_2cm_pct": r.cloud_far_2cm_pct, "cloud_far_10cm_pct": r.cloud_far_10cm_pct,
+                "unfiltered_far_2cm_pct": r.unfiltered_far_2cm_pct, "unfiltered_far_10cm_pct": r.unfiltered_far_10cm_pct,
             }
             if seg in r.floor_l:
                 fl = float(r.floor_l[seg])
@@ -213,6 +216,31 @@ def timing_table(runs: Sequence[Run]) -> str:
         v = [r.seconds for r in runs if r.condition == c and r.method == m and r.ok]
         means.append(f"{np.mean(v):.2f}" if v else EMPTY_CELL)
     lines.append("| " + " | ".join(means) + " |")
+    return "\n".join(lines)
+
+
+def _mean_max(values: Sequence[float | None]) -> str:
+    v = [float(x) for x in values if x is not None]
+    return f"{np.mean(v):.2f} ({max(v):.2f})" if v else EMPTY_CELL
+
+
+def cloud_table(runs: Sequence[Run]) -> str:
+    """Markdown: per condition x method, the mean (and worst) percent of the registered cloud's points
+    farther than 2 cm and than 10 cm from the true body surface, and the same before the outlier
+    removal when measured (lab path); empty when no run measured it."""
+    measured = [r for r in runs if r.cloud_far_2cm_pct is not None and r.cloud_far_10cm_pct is not None]
+    if not measured:
+        return ""
+    head = ("| condition | method | runs | > 2 cm mean (max) | > 10 cm mean (max) | before SOR > 2 cm | "
+            "before SOR > 10 cm |")
+    lines = [head, "|---|---|---|---|---|---|---|"]
+    for c in [c for c in CONDITIONS if any(r.condition == c for r in measured)]:
+        for m in sorted({r.method for r in measured if r.condition == c}):
+            rs = [r for r in measured if r.condition == c and r.method == m]
+            cells = [_mean_max([r.cloud_far_2cm_pct for r in rs]), _mean_max([r.cloud_far_10cm_pct for r in rs]),
+                     _mean_max([r.unfiltered_far_2cm_pct for r in rs]),
+                     _mean_max([r.unfiltered_far_10cm_pct for r in rs])]
+            lines.append(f"| {c} | {m} | {len(rs)} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 

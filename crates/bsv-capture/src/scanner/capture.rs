@@ -3,7 +3,8 @@
 //!
 //! Layout of `dir`:
 //! - `<camera>/depth.png`: 16-bit depth, metres = value x `depth_scale` (0.00025, like the L515), 0 = none;
-//! - `<camera>/color.png`: 8-bit RGB, the body in a Lambert-shaded skin tone on a mid-grey background;
+//! - `<camera>/color.png`: 8-bit RGB, the body in a Lambert-shaded skin tone on a mid-grey background,
+//!   or, for a scan with a room, the subject and the room as its [`super::Appearance`] paints them;
 //! - `<camera>/labels.png`: 8-bit grey, the segment id of each pixel (0 = background/unlabelled);
 //! - `<camera>/camera.json`: [`CaptureCamera`] (intrinsics, the estimated extrinsics a calibration
 //!   would give, the true ones, the applied error, the depth scale, file names);
@@ -11,7 +12,7 @@
 //!   with the estimated extrinsics;
 //! - `scan.json`: condition and seed.
 
-use super::{ExtrinsicError, Scan, ScanError};
+use super::{CameraView, ExtrinsicError, Scan, ScanError, SurfaceKind, SurfacePixel};
 use crate::camera::{CameraCalibration, Extrinsics, Intrinsics};
 use image::{ImageBuffer, Luma, Rgb};
 use serde::{Deserialize, Serialize};
@@ -76,6 +77,40 @@ fn image_err(path: &Path) -> impl FnOnce(image::ImageError) -> ScanError + '_ {
     move |e| ScanError::Image { path: path.to_path_buf(), message: e.to_string() }
 }
 
+/// The plain render (no room): the body in a Lambert-shaded skin tone on mid-grey.
+fn plain_colour(view: &CameraView) -> Vec<u8> {
+    let mut rgb = Vec::with_capacity(view.depth.len() * 3);
+    for (z, s) in view.depth.iter().zip(&view.shade) {
+        if *z > 0.0 {
+            let f = 0.3 + 0.7 * f64::from(*s);
+            rgb.extend(SKIN.map(|c| (c * f).round().clamp(0.0, 255.0) as u8));
+        } else {
+            rgb.extend(BACKGROUND);
+        }
+    }
+    rgb
+}
+
+/// The colour image of `view`: with a room, every pixel shaded by the scan's [`Appearance`] (the
+/// true surface, so a flying pixel keeps its surface's colour); else [`plain_colour`].
+fn colour_image(scan: &Scan, view: &CameraView) -> Vec<u8> {
+    let (Some((app, heights)), Some(surf)) = (&scan.appearance, &view.surface) else {
+        return plain_colour(view);
+    };
+    let f = |a: [f32; 3]| a.map(f64::from);
+    let mut rgb = Vec::with_capacity(surf.kind.len() * 3);
+    for i in 0..surf.kind.len() {
+        let px = SurfacePixel {
+            kind: SurfaceKind::from_code(surf.kind[i]),
+            label: view.labels.get(i).copied().unwrap_or(0),
+            point: f(surf.point[i]),
+            normal: f(surf.normal[i]),
+        };
+        rgb.extend(app.shade(heights, &px));
+    }
+    rgb
+}
+
 /// Writes the capture folder described in the module docs (creating `dir` and sub-folders).
 pub fn write_capture(scan: &Scan, dir: &Path) -> Result<(), ScanError> {
     std::fs::create_dir_all(dir).map_err(io_err(dir))?;
@@ -99,15 +134,7 @@ pub fn write_capture(scan: &Scan, dir: &Path) -> Result<(), ScanError> {
         img.save(&depth_path).map_err(image_err(&depth_path))?;
 
         let color_path = cdir.join("color.png");
-        let mut rgb = Vec::with_capacity(view.depth.len() * 3);
-        for (z, s) in view.depth.iter().zip(&view.shade) {
-            if *z > 0.0 {
-                let f = 0.3 + 0.7 * f64::from(*s);
-                rgb.extend(SKIN.map(|c| (c * f).round().clamp(0.0, 255.0) as u8));
-            } else {
-                rgb.extend(BACKGROUND);
-            }
-        }
+        let rgb = colour_image(scan, view);
         let img: ImageBuffer<Rgb<u8>, _> = ImageBuffer::from_raw(w, h, rgb).ok_or_else(|| size_err(&color_path))?;
         img.save(&color_path).map_err(image_err(&color_path))?;
 

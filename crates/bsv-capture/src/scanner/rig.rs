@@ -10,6 +10,7 @@
 //! normal errors). Example: the back camera's 0.28 deg about the vertical (paper x) is a yaw about
 //! our camera Y axis.
 
+use super::room::Room;
 use super::ScanError;
 use crate::camera::{Extrinsics, Intrinsics};
 use rand::Rng;
@@ -200,6 +201,8 @@ pub struct Rig {
     pub cameras: Vec<RigCamera>,
     /// Depth noise of the L515/L5Ca conditions.
     pub noise: DepthNoise,
+    /// The room around the subject; `None`: the body alone on an empty background.
+    pub room: Option<Room>,
 }
 
 /// Image width of the portrait L515-like camera.
@@ -249,10 +252,17 @@ impl Rig {
                 cam("back", -d, ExtrinsicSigma::from_paper([0.15, 0.02, 0.34], [0.28, 0.11, 0.10])),
             ],
             noise: DepthNoise::default(),
+            room: None,
         }
     }
 
-    /// Checks every camera and the noise model.
+    /// This rig inside `room`.
+    pub fn with_room(mut self, room: Room) -> Rig {
+        self.room = Some(room);
+        self
+    }
+
+    /// Checks every camera, the noise model and the room (every camera inside it).
     pub fn validate(&self) -> Result<(), ScanError> {
         if self.cameras.is_empty() {
             return Err(ScanError::NoCameras);
@@ -267,6 +277,13 @@ impl Rig {
                 }
             }
         }
-        self.noise.validate()
+        self.noise.validate()?;
+        if let Some(room) = &self.room {
+            room.validate()?;
+            for c in &self.cameras {
+                room.check_inside(&c.name, c.camera_to_world.translation)?;
+            }
+        }
+        Ok(())
     }
 }

@@ -1,0 +1,214 @@
+//! How a scan with a room looks in the colour render: the subject's skin tone, underwear and hair, the
+//! floor and wall colours, and the lighting (two directional lights and ambient, Lambert). Chosen
+//! deterministically from the scan seed ([`Appearance::from_seed`]), so that a segmentation front-end
+//! meets varied subjects in a room rather than one skin tone on grey.
+
+use super::mix_seed;
+use super::room::SurfaceKind;
+use bsv_core::{Segment, TriMesh};
+use rand::{Rng, SeedableRng};
+use serde::{Deserialize, Serialize};
+
+/// Stream id of the appearance draws.
+const STREAM_APPEARANCE: u64 = 0xA9;
+
+/// Skin tones, light to dark (sRGB).
+pub const SKIN_TONES: [[u8; 3]; 7] =
+    [[255, 224, 196], [234, 192, 160], [224, 172, 140], [198, 140, 105], [160, 105, 72], [112, 72, 48], [80, 52, 36]];
+const UNDERWEAR_COLOURS: [[u8; 3]; 6] =
+    [[25, 25, 28], [30, 40, 80], [235, 235, 235], [120, 120, 125], [150, 30, 35], [40, 80, 150]];
+const HAIR_COLOURS: [[u8; 3]; 6] =
+    [[20, 18, 18], [55, 38, 28], [100, 70, 45], [200, 170, 110], [160, 160, 160], [140, 60, 30]];
+const FLOOR_COLOURS: [[u8; 3]; 4] = [[150, 150, 145], [190, 175, 150], [150, 110, 70], [110, 120, 130]];
+const WALL_COLOURS: [[u8; 3]; 4] = [[225, 222, 215], [200, 215, 200], [200, 210, 225], [215, 205, 185]];
+
+/// Cut of the underwear.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum UnderwearStyle {
+    /// Briefs: a band from just below the crotch to the waist.
+    Briefs,
+    /// Trunks: down over the upper thighs.
+    Trunks,
+}
+
+/// A directional light.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Light {
+    /// Unit world-frame direction from the surface toward the light.
+    pub toward: [f64; 3],
+    /// Intensity (1 = full albedo on a surface facing it).
+    pub intensity: f64,
+}
+
+/// The look of a scan with a room.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Appearance {
+    /// Skin albedo (sRGB).
+    pub skin: [u8; 3],
+    /// Underwear colour (sRGB).
+    pub underwear: [u8; 3],
+    /// Underwear cut.
+    pub underwear_style: UnderwearStyle,
+    /// Height of the waistband above the crotch, metres.
+    pub waist_rise_m: f64,
+    /// Hair colour (sRGB).
+    pub hair: [u8; 3],
+    /// How far hair comes down from the top of the head, metres (0 = bald); at the back of the head
+    /// it comes down 2.5 times as far.
+    pub hair_length_m: f64,
+    /// Floor albedo (sRGB).
+    pub floor: [u8; 3],
+    /// Floor tile size, metres.
+    pub floor_tile_m: f64,
+    /// Wall albedo (sRGB).
+    pub wall: [u8; 3],
+    /// Ambient light (fraction of the albedo everywhere).
+    pub ambient: f64,
+    /// The two directional lights.
+    pub lights: [Light; 2],
+}
+
+fn unit(v: [f64; 3]) -> [f64; 3] {
+    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    v.map(|x| x / n)
+}
+
+impl Appearance {
+    /// The appearance of scan seed `seed`: a skin tone of [`SKIN_TONES`], underwear (briefs or
+    /// trunks, six colours), hair (six colours, 1 in 8 bald), floor and wall colours, a key light
+    /// from the front left above and a fill light from the back right above. Deterministic.
+    pub fn from_seed(seed: u64) -> Appearance {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(mix_seed(seed, STREAM_APPEARANCE, 0));
+        let mut pick = |n: usize| rng.random_range(0..n);
+        let skin = SKIN_TONES[pick(SKIN_TONES.len())];
+        let underwear = UNDERWEAR_COLOURS[pick(UNDERWEAR_COLOURS.len())];
+        let underwear_style = if pick(2) == 0 { UnderwearStyle::Briefs } else { UnderwearStyle::Trunks };
+        let hair = HAIR_COLOURS[pick(HAIR_COLOURS.len())];
+        let bald = pick(8) == 0;
+        let floor = FLOOR_COLOURS[pick(FLOOR_COLOURS.len())];
+        let wall = WALL_COLOURS[pick(WALL_COLOURS.len())];
+        let tile = [0.3, 0.4, 0.5, 0.6][pick(4)];
+        let waist_rise_m = rng.random_range(0.10..0.18);
+        let hair_length_m = if bald { 0.0 } else { rng.random_range(0.04..0.08) };
+        let key = rng.random_range(0.5..0.65);
+        Appearance {
+            skin,
+            underwear,
+            underwear_style,
+            waist_rise_m,
+            hair,
+            hair_length_m,
+            floor,
+            floor_tile_m: tile,
+            wall,
+            ambient: 0.3,
+            lights: [
+                Light { toward: unit([0.5, 0.8, 0.7]), intensity: key },
+                Light { toward: unit([-0.5, 0.7, -0.7]), intensity: 0.9 - key },
+            ],
+        }
+    }
+}
+
+/// Heights of a body that place underwear and hair.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct BodyHeights {
+    /// Height of the crotch: the lowest torso vertex, metres.
+    pub crotch_y: f64,
+    /// Height of the top of the head (the highest vertex), metres.
+    pub top_y: f64,
+}
+
+impl BodyHeights {
+    /// From the mesh and its face labels: the crotch is the lowest corner of a torso face (47 % of
+    /// the height above the lowest vertex when nothing is labelled torso), the top the highest vertex.
+    pub fn of(mesh: &TriMesh, face_labels: &[u8]) -> BodyHeights {
+        let ys = || mesh.vertices.iter().map(|p| p[1]);
+        let top_y = ys().fold(f64::NEG_INFINITY, f64::max);
+        let low_y = ys().fold(f64::INFINITY, f64::min);
+        let torso = Segment::Torso as u8;
+        let crotch = mesh
+            .triangles
+            .iter()
+            .zip(face_labels)
+            .filter(|(_, &l)| l == torso)
+            .flat_map(|(t, _)| t.iter().filter_map(|&i| mesh.vertices.get(i as usize).map(|p| p[1])))
+            .fold(f64::INFINITY, f64::min);
+        let crotch_y = if crotch.is_finite() { crotch } else { low_y + 0.47 * (top_y - low_y) };
+        BodyHeights { crotch_y, top_y }
+    }
+}
+
+/// One pixel's surface for the colour render.
+#[derive(Debug, Clone, Copy)]
+pub struct SurfacePixel {
+    /// What was hit.
+    pub kind: SurfaceKind,
+    /// Segment label (body pixels).
+    pub label: u8,
+    /// World hit point.
+    pub point: [f64; 3],
+    /// Unit world normal toward the camera.
+    pub normal: [f64; 3],
+}
+
+/// A small deterministic hash of two integers into [0, 1).
+fn hash01(a: i64, b: i64) -> f64 {
+    (mix_seed(a as u64, 0x7113, b as u64) >> 11) as f64 / (1u64 << 53) as f64
+}
+
+impl Appearance {
+    /// Albedo of a body pixel: hair on the top and back of the head, underwear over the pelvis, skin elsewhere.
+    fn body_albedo(&self, heights: &BodyHeights, label: u8, p: [f64; 3], n: [f64; 3]) -> [f64; 3] {
+        let y = p[1];
+        if label == Segment::Head as u8 && self.hair_length_m > 0.0 {
+            let reach = if n[2] < -0.2 { 2.5 * self.hair_length_m } else { self.hair_length_m };
+            if y > heights.top_y - reach {
+                return self.hair.map(f64::from);
+            }
+        }
+        let pelvis = [Segment::Torso as u8, Segment::ThighL as u8, Segment::ThighR as u8];
+        let drop = match self.underwear_style {
+            UnderwearStyle::Briefs => 0.02,
+            UnderwearStyle::Trunks => 0.12,
+        };
+        if pelvis.contains(&label) && y >= heights.crotch_y - drop && y <= heights.crotch_y + self.waist_rise_m {
+            return self.underwear.map(f64::from);
+        }
+        self.skin.map(f64::from)
+    }
+
+    /// Albedo of a floor pixel: tiles of `floor_tile_m` with +-5 % variation and darker grout lines.
+    fn floor_albedo(&self, p: [f64; 3]) -> [f64; 3] {
+        let (sx, sz) = (p[0] / self.floor_tile_m, p[2] / self.floor_tile_m);
+        let (ix, iz) = (sx.floor(), sz.floor());
+        let edge = (sx - ix).min(1.0 - (sx - ix)).min((sz - iz).min(1.0 - (sz - iz))) * self.floor_tile_m;
+        let f = if edge < 0.006 { 0.7 } else { 0.95 + 0.1 * hash01(ix as i64, iz as i64) };
+        self.floor.map(|c| f64::from(c) * f)
+    }
+
+    /// The sRGB colour of one pixel: albedo x (ambient + sum of the lights' Lambert terms).
+    pub fn shade(&self, heights: &BodyHeights, px: &SurfacePixel) -> [u8; 3] {
+        let albedo = match px.kind {
+            SurfaceKind::None => return [0, 0, 0],
+            SurfaceKind::Body => self.body_albedo(heights, px.label, px.point, px.normal),
+            SurfaceKind::Floor => self.floor_albedo(px.point),
+            SurfaceKind::Wall => self.wall.map(f64::from),
+            SurfaceKind::Ceiling => [235.0, 235.0, 232.0],
+            SurfaceKind::Block => [110.0, 80.0, 55.0],
+            SurfaceKind::Person => [60.0, 75.0, 120.0],
+        };
+        let n = px.normal;
+        // The lights hang below the ceiling: it is lit indirectly (ambient plus a fixed bounce).
+        let bounce = if px.kind == SurfaceKind::Ceiling { 0.45 } else { 0.0 };
+        let light: f64 = self.ambient
+            + bounce
+            + self
+                .lights
+                .iter()
+                .map(|l| l.intensity * (n[0] * l.toward[0] + n[1] * l.toward[1] + n[2] * l.toward[2]).max(0.0))
+                .sum::<f64>();
+        albedo.map(|c| (c * light).round().clamp(0.0, 255.0) as u8)
+    }
+}

@@ -1,0 +1,126 @@
+//! The rig with a room: room pixels carry depth but label 0, the oracle cloud holds the body only,
+//! the colour render paints the subject and the room, and room parameters are checked.
+
+#![allow(clippy::unwrap_used)]
+
+use bsv_capture::distance::surface_distances;
+use bsv_capture::scanner::{
+    scan, write_capture, Appearance, Condition, Rig, Room, RoomObject, ScanError, SurfaceKind, SKIN_TONES,
+};
+use bsv_core::shapes;
+use std::collections::HashSet;
+
+fn kinds_seen(s: &bsv_capture::scanner::Scan, view: usize) -> HashSet<u8> {
+    s.views[view].surface.as_ref().unwrap().kind.iter().copied().collect()
+}
+
+#[test]
+fn room_pixels_have_depth_and_label_0_and_the_cloud_is_the_body() {
+    let body = shapes::capsule_body(false, false);
+    let plain = scan(&body, &Rig::paper_default(), Condition::NoEr, 3).unwrap();
+    let roomed = scan(&body, &Rig::paper_default().with_room(Room::clinic()), Condition::NoEr, 3).unwrap();
+    // No room point reaches the cloud: in noer it is exactly the body-only cloud.
+    assert_eq!(roomed.cloud, plain.cloud);
+    assert!(plain.appearance.is_none() && roomed.appearance.is_some());
+    for (vi, v) in roomed.views.iter().enumerate() {
+        let surf = v.surface.as_ref().unwrap();
+        let seen = kinds_seen(&roomed, vi);
+        assert!(seen.contains(&(SurfaceKind::Floor as u8)) && seen.contains(&(SurfaceKind::Wall as u8)), "{seen:?}");
+        let mut room_px = 0;
+        for (i, &k) in surf.kind.iter().enumerate() {
+            if k != SurfaceKind::Body as u8 && k != SurfaceKind::None as u8 {
+                assert_eq!(v.labels[i], 0);
+                assert!(v.depth[i] > 0.0);
+                room_px += 1;
+            }
+        }
+        // The room fills most of the image; the empty-background scan had no depth there.
+        assert!(room_px > 500_000, "{} room pixels {room_px}", v.name);
+        assert!(plain.views[vi].depth.iter().filter(|&&z| z > 0.0).count() < 200_000);
+        assert_eq!(v.pixels, plain.views[vi].pixels);
+    }
+}
+
+#[test]
+fn l515_with_a_room_flies_between_body_and_room_but_keeps_body_pixels_only() {
+    let body = shapes::capsule_body(false, false);
+    let s = scan(&body, &Rig::paper_default().with_room(Room::clinic()), Condition::L515, 5).unwrap();
+    let d = surface_distances(&s.cloud.points, &body).unwrap();
+    let far = d.iter().filter(|&&x| x > 0.1).count();
+    // Flying pixels at the outline reach toward the wall (beyond the 0.3 m silhouette tail).
+    assert!(far > 50 && far < d.len() / 50, "{far} of {} points > 10 cm", d.len());
+    assert!(d.iter().any(|&x| x > 0.35));
+    for v in &s.views {
+        let surf = v.surface.as_ref().unwrap();
+        assert!(v.pixels.iter().all(|&p| surf.kind[p as usize] == SurfaceKind::Body as u8));
+    }
+}
+
+#[test]
+fn objects_are_seen_by_the_front_camera_only_as_room() {
+    let body = shapes::capsule_body(false, false);
+    let s = scan(&body, &Rig::paper_default().with_room(Room::clinic_with_objects()), Condition::NoEr, 0).unwrap();
+    let front = kinds_seen(&s, 0);
+    assert!(front.contains(&(SurfaceKind::Block as u8)) && front.contains(&(SurfaceKind::Person as u8)), "{front:?}");
+    let plain = scan(&body, &Rig::paper_default(), Condition::NoEr, 0).unwrap();
+    assert_eq!(s.cloud.len(), plain.cloud.len());
+}
+
+#[test]
+fn appearance_is_deterministic_and_varied() {
+    assert_eq!(Appearance::from_seed(11), Appearance::from_seed(11));
+    let all: Vec<Appearance> = (0..200).map(Appearance::from_seed).collect();
+    let tones: HashSet<[u8; 3]> = all.iter().map(|a| a.skin).collect();
+    assert_eq!(tones.len(), SKIN_TONES.len());
+    assert!(all.iter().any(|a| a.hair_length_m == 0.0) && all.iter().any(|a| a.hair_length_m > 0.0));
+    assert!(all.windows(2).any(|w| w[0] != w[1]));
+    // Room variation is deterministic and keeps the walls beyond the cameras.
+    let r = Room::clinic().varied(4);
+    assert_eq!(r, Room::clinic().varied(4));
+    assert_ne!(r, Room::clinic().varied(5));
+    assert!(r.back_wall_z < -2.3 && r.front_wall_z > 2.3);
+}
+
+#[test]
+fn the_colour_render_shows_the_room_and_is_deterministic() {
+    let body = shapes::capsule_body(false, false);
+    let dir = std::env::temp_dir().join(format!("bsv-room-{}", std::process::id()));
+    let rig = Rig::paper_default().with_room(Room::clinic());
+    for (sub, r) in [("plain", Rig::paper_default()), ("room", rig.clone()), ("again", rig)] {
+        write_capture(&scan(&body, &r, Condition::NoEr, 2).unwrap(), &dir.join(sub)).unwrap();
+    }
+    let read = |sub: &str| image::open(dir.join(sub).join("front/color.png")).unwrap().to_rgb8();
+    let (plain, room, again) = (read("plain"), read("room"), read("again"));
+    assert_eq!(room, again);
+    // The plain render's background is uniform grey; the room's is not.
+    let corner = |img: &image::RgbImage| *img.get_pixel(5, 1000);
+    assert_eq!(corner(&plain).0, [128, 128, 128]);
+    assert_ne!(corner(&room).0, [128, 128, 128]);
+    let distinct: HashSet<[u8; 3]> = room.pixels().map(|p| p.0).collect();
+    assert!(distinct.len() > 200, "{} colours", distinct.len());
+    let depth = image::open(dir.join("room/front/depth.png")).unwrap().to_luma16();
+    assert!(depth.pixels().filter(|p| p.0[0] > 0).count() > 900_000 * 3 / 4);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_room_parameters_name_the_parameter_and_the_remedy() {
+    let body = shapes::capsule_body(false, false);
+    let mut room = Room::clinic();
+    room.back_wall_z = -1.5;
+    let e = scan(&body, &Rig::paper_default().with_room(room), Condition::NoEr, 0).unwrap_err();
+    assert!(matches!(e, ScanError::CameraOutsideRoom { param: "back_wall_z", .. }), "{e}");
+    assert!(e.to_string().contains("back") && e.to_string().contains("smaller z"));
+    let room = Room { wall_height: f64::NAN, ..Room::clinic() };
+    let e = scan(&body, &Rig::paper_default().with_room(room), Condition::NoEr, 0).unwrap_err();
+    assert!(e.to_string().contains("wall_height"), "{e}");
+    let room = Room {
+        objects: vec![RoomObject::Person { center_xz: [0.0, -1.0], height: 0.3, radius: 0.2 }],
+        ..Room::clinic()
+    };
+    let e = scan(&body, &Rig::paper_default().with_room(room), Condition::NoEr, 0).unwrap_err();
+    assert!(matches!(e, ScanError::BadRoom { param: "objects.person.height", .. }), "{e}");
+    let json: Room = serde_json::from_str(r#"{"back_wall_z": -3.0}"#).unwrap();
+    assert_eq!(json, Room { back_wall_z: -3.0, ..Room::clinic() });
+    assert!(serde_json::from_str::<Room>(r#"{"bak_wall_z": -3.0}"#).is_err());
+}

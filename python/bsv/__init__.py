@@ -54,8 +54,12 @@ _LAZY_SUBMODULES = ("bodies", "frontend", "bench", "report", "cli")
 
 
 def _out_path(path: PathLike, overwrite: bool) -> str:
+    """The checked output path: never a folder, never an existing file or link unless ``overwrite``
+    (the file is then replaced atomically by the Rust writer)."""
     p = Path(path)
-    if p.exists() and not overwrite:
+    if p.is_dir():
+        raise OutputExistsError(f"{p} is a folder; give a file path")
+    if (p.exists() or p.is_symlink()) and not overwrite:
         raise OutputExistsError(f"{p} already exists; pass overwrite=True to replace it")
     return str(p)
 

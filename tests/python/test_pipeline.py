@@ -179,6 +179,16 @@ def test_a_tilted_camera_is_flagged_and_a_second_person_is_an_error(capture):
     assert e.value.camera == "front"
 
 
+def test_process_cleaning_switches_reach_cloud_building(capture, tmp_path, capsys):
+    cap, _ = capture
+    args = [str(cap), "-c", str(cap / "calibration.json"), "-o", str(tmp_path / "out"), "--segmentation", "oracle",
+            "--quiet", "--keep-floor", "--no-isolate"]
+    assert pipeline.main_process([*args, "--cloud-param", "link_mm=3"]) == 2
+    assert "link_mm" in capsys.readouterr().err
+    assert pipeline.main_process([*args, "--cloud-param", "link_m=0"]) == 2
+    assert "link_m" in capsys.readouterr().err
+
+
 # ----------------------------------------------------------------------------------------------------
 # process: errors come before any heavy work
 

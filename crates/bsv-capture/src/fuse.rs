@@ -29,6 +29,7 @@ use crate::camera::{CameraError, Extrinsics, Intrinsics};
 use crate::clean::{statistical_outliers, CleanError, SorParams};
 use bsv_core::{PointCloud, Segment, SEGMENT_COUNT};
 use deproject::{deproject_view, ViewPoints};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -282,10 +283,16 @@ pub fn build_cloud(views: &[DepthView], params: &FuseParams) -> Result<(PointClo
     for &l in &params.drop_labels {
         drop[usize::from(l)] = true;
     }
+    // Views are cleaned in parallel, merged in input order; the first failing view's error wins.
+    let fused: Vec<Result<(ViewPoints, ViewReport), FuseError>> =
+        views.par_iter().map(|view| fuse_view(view, params)).collect();
     let mut world = ViewPoints::default();
     let mut reports = Vec::with_capacity(views.len());
-    for view in views {
-        reports.push(fuse_view(view, params, &drop, &mut world)?);
+    for f in fused {
+        let (vp, mut report) = f?;
+        report.dropped = append_to_world(&vp, params, &drop, &mut world);
+        report.kept = vp.points.len() - report.dropped.values().sum::<usize>();
+        reports.push(report);
     }
     if world.points.is_empty() {
         return Err(FuseError::EmptyCloud { dropped: params.drop_labels.iter().map(|&l| segment_name(l)).collect() });
@@ -335,14 +342,9 @@ fn floor_agreement(reports: &[ViewReport]) -> Vec<FloorAgreement> {
     out
 }
 
-/// One view: deprojects its mask into the world, keeps only the person, removes its outliers, and
-/// appends the points of the kept segments to `world`.
-fn fuse_view(
-    view: &DepthView,
-    params: &FuseParams,
-    drop: &[bool; SEGMENT_COUNT],
-    world: &mut ViewPoints,
-) -> Result<ViewReport, FuseError> {
+/// One view: deprojects its mask into the world, keeps only the person, removes its outliers; its
+/// points and report (`dropped` and `kept` are filled when the points are merged).
+fn fuse_view(view: &DepthView, params: &FuseParams) -> Result<(ViewPoints, ViewReport), FuseError> {
     let camera = || view.name.clone();
     let t = Instant::now();
     let (mut vp, mask_pixels, no_depth) = deproject_view(view, params);
@@ -365,10 +367,8 @@ fn fuse_view(
         sor_removed = vp.retain(&res.keep);
     }
     let seconds_sor = t.elapsed().as_secs_f64();
-    let dropped = append_to_world(&vp, params, drop, world);
-    let kept = vp.points.len() - dropped.values().sum::<usize>();
     let warnings = floor.warnings(&view.name, params);
-    Ok(ViewReport {
+    let report = ViewReport {
         name: view.name.clone(),
         mask_pixels,
         no_depth,
@@ -377,12 +377,13 @@ fn fuse_view(
         cleaning,
         sor_removed,
         sor_threshold_m,
-        dropped,
-        kept,
+        dropped: BTreeMap::new(),
+        kept: 0,
         warnings,
         seconds_deproject,
         seconds_sor,
-    })
+    };
+    Ok((vp, report))
 }
 
 /// Appends the points whose label is not dropped to `world`; the count of dropped points per

@@ -144,8 +144,11 @@ def test_floor_spill_is_removed_and_reported(capture):
     assert len(rep["floor_agreement"]) == 1 and rep["warnings"] == []
     page = cleaning_html(rep)
     assert "Cloud cleaning" in page and "No calibration warning" in page
-    # Without a floor in view nothing is removed as floor and the report says so.
-    _, plain = pipeline.build_cloud(_views(cap))
+    # Without a floor in view nothing is removed as floor and the report says so; and the cleaned cloud
+    # of the spilled capture is exactly the cloud of the unspilled one.
+    unspilled, plain = pipeline.build_cloud(_views(cap))
+    np.testing.assert_array_equal(cloud.points, unspilled.points)
+    np.testing.assert_array_equal(cloud.labels, unspilled.labels)
     assert all(v["floor"]["status"] == "not_seen" and v["cleaning"]["floor_removed"] == 0 for v in plain["views"])
     assert "not seen" in cleaning_html(plain)
 

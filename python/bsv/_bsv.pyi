@@ -131,4 +131,7 @@ def build_cloud(
     # Merged labelled world cloud from per-camera dicts {name, intrinsics (dict), camera_to_world
     # {rotation, translation}, depth (H, W) uint16 + depth_scale or float32 metres, labels (H, W) uint8,
     # colors (H, W, 3) uint8 optional} and ``FuseParams`` keywords: (points, normals, colors, labels, report).
+    # Only the person is kept (remove_floor, isolate_person: on by default); the report dict holds per view
+    # ``floor`` (the calibration check), ``cleaning`` (points removed), ``warnings``, and in total
+    # ``floor_agreement`` and ``warnings``. Raises PersonIsolationError when the person cannot be isolated.
     ...

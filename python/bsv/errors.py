@@ -105,6 +105,15 @@ class ScanError(BsvError):
     parameter: str | None = None
 
 
+class PersonIsolationError(BsvError):
+    """Cloud building cannot keep only the person in a camera's view (``camera``): the person mask holds
+    two comparable separate 3-D parts (a second person, a large object), or the cleaning left no point.
+    Clear the scene or check the segmentation; ``isolate_person=False`` / ``remove_floor=False``
+    (``--no-isolate`` / ``--keep-floor``) keep the points for diagnosis."""
+
+    camera: str | None = None
+
+
 class OutputExistsError(BsvError, FileExistsError):
     """An output file or folder exists and overwriting was not asked for (``overwrite=True``, ``--overwrite``)."""
 
@@ -206,7 +215,7 @@ __all__ = [
     "AssetError", "BenchError", "BlurredImageError", "BsvError", "CalibrationError", "CalibrationFileError",
     "CaptureError", "FloorError", "FormatError", "FrontendError", "InputError", "LabelError",
     "LandmarkMissingError", "MarkerNotFoundError", "MeshError", "NoCameraError", "OutputExistsError",
-    "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",
+    "PersonIsolationError", "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",
     "RegistrationInputError", "RegistrationNumericError", "RegistrationParameterError",
     "RegistrationResourceError", "RegistrationStopped", "ScanError", "SegmentationError", "SolveError",
     "TemplateError", "VolumeError", "WriteError", "WrongMarkerError",

@@ -2,7 +2,9 @@
 
 process: per camera, segmentation of the colour image (MediaPipe, :mod:`bsv.frontend.segment`; or the
 virtual scanner's own label image, "oracle") -> cloud building in Rust (``bsv._bsv.build_cloud``: masked
-deprojection, statistical outlier removal, calibration, merge, head/hands/feet dropped) -> registration
+deprojection, calibration, only the person (each camera's floor fitted, checked against the calibration
+and removed; depth-edge, far and separate pixels of the mask dropped), optional statistical outlier
+removal, merge, head/hands/feet dropped) -> registration
 (:func:`bsv.register`) -> volumes. Writes into OUT: ``cloud.ply`` (labelled), ``fitted.ply`` (labelled
 fitted template), ``volumes.json`` (DESIGN.md "Formats" with the "registration" and "cloud" sections),
 the one-page ``report.html`` with its PNG figures (:mod:`bsv.report`) and, with camera segmentation,
@@ -26,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from . import _bsv
-from .errors import OutputExistsError
+from .errors import OutputExistsError, PersonIsolationError
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
 from .types import TRUNK_LIMBS, Mesh, PointCloud, Registration
 
@@ -186,13 +188,44 @@ def build_cloud(
     sor_std_ratio: float = 0.05,
     normals: bool = True,
     colors: str = "palette",
+    remove_floor: bool = True,
+    isolate_person: bool = True,
     **params: Any,
 ) -> tuple[PointCloud, dict[str, Any]]:
-    """Merged labelled world cloud from camera views (dicts of ``bsv._bsv.build_cloud``) and its report."""
+    """Merged labelled world cloud from camera views (dicts of ``bsv._bsv.build_cloud``) and its report.
+
+    ``remove_floor``: drop the person points on and just above each camera's fitted floor (the floor is
+    fitted and checked against the calibration either way). ``isolate_person``: drop mask pixels on depth
+    edges, far behind the person and in 3-D parts separate from it; two comparable parts raise
+    :class:`bsv.errors.PersonIsolationError`. Other keywords are ``FuseParams`` fields (thresholds:
+    ``floor_margin_m``, ``edge_step_m``, ``far_m``, ``link_m``, ``second_part_ratio``, ...).
+
+    The report (a dict) has per view ``floor`` (``status`` "seen"/"not_seen", ``tilt_deg``, ``pitch_deg``,
+    ``roll_deg``, ``height_mm`` at the subject), ``cleaning`` (``floor_removed``, ``edge_removed``,
+    ``far_removed``, ``separate_removed``, ...), ``sor_removed`` and ``warnings``; in total
+    ``floor_agreement`` between cameras and every ``warnings`` string."""
     p = {"sor": bool(sor), "sor_k": int(sor_k), "sor_std_ratio": float(sor_std_ratio), "normals": bool(normals),
-         "colors": colors, "drop_labels": [] if keep_extremities else list(EXTREMITY_IDS), **params}
+         "colors": colors, "drop_labels": [] if keep_extremities else list(EXTREMITY_IDS),
+         "remove_floor": bool(remove_floor), "isolate_person": bool(isolate_person), **params}
     pts, nrm, col, lab, report = _bsv.build_cloud(list(views), p)
     return PointCloud(pts, nrm, col, lab), report
+
+
+def cleaning_summary(view: dict[str, Any]) -> str:
+    """One line of what cloud building removed from a camera's mask (a view of the report)."""
+    c, f = view["cleaning"], view["floor"]
+    floor = (f"floor seen (tilt {f['tilt_deg']:.2f} deg, {f['height_mm']:+.0f} mm)" if f["status"] == "seen"
+             else "floor not seen")
+    return (f"{view['name']} {view['kept']} kept: floor -{c['floor_removed']}, edges -{c['edge_removed']}, "
+            f"far -{c['far_removed']}, separate -{c['separate_removed']}, SOR -{view['sor_removed']}; {floor}")
+
+
+def _print_cloud(points: int, report: dict[str, Any]) -> None:
+    print(f"[bsv]   {points} points", flush=True)
+    for v in report["views"]:
+        print(f"[bsv]   {cleaning_summary(v)}", flush=True)
+    for w in report.get("warnings", []):
+        print(f"[bsv]   warning: {w}", flush=True)
 
 
 def output_files(cameras: Sequence[str] = ("front", "back"), demo: bool = False) -> list[str]:
@@ -231,6 +264,9 @@ def process(
     sor: bool = False,
     sor_k: int = 600,
     sor_std_ratio: float = 0.05,
+    remove_floor: bool = True,
+    isolate_person: bool = True,
+    cloud_params: dict[str, Any] | None = None,
     density: float = 1000.0,
     segment_params: dict[str, Any] | None = None,
     title: str = "BSV report",
@@ -246,7 +282,11 @@ def process(
     ``sor``: the paper's k-NN statistical outlier removal (k = 600, std ratio 0.05) before merging. Off by
     default: with k = 600 it erodes the sparse, obliquely seen sides of each view (it removed 19-48 % of
     clean virtual scans and biased trunk_limbs by -3 to -5 % in the demo), while the registration's own
-    voxel-density filter removes flying pixels without eroding (``bsv.register``'s ``outlier_voxel_m``)."""
+    voxel-density filter removes flying pixels without eroding (``bsv.register``'s ``outlier_voxel_m``).
+
+    ``remove_floor`` / ``isolate_person`` (on by default; ``--keep-floor`` / ``--no-isolate`` for diagnosis)
+    and ``cloud_params`` (more ``FuseParams`` thresholds): only the person reaches the registration, see
+    :func:`build_cloud`. The floor check's warnings are printed and shown in the report."""
     from . import register as bsv_register
     from . import write_mesh, write_point_cloud
     from .frontend.capture import read_capture
@@ -283,12 +323,12 @@ def process(
                       "depth": np.ascontiguousarray(d["depth_m"], dtype=np.float32), "labels": labels,
                       "colors": np.ascontiguousarray(d["colour"], dtype=np.uint8)})
 
-    cloud, cloud_report = steps.run("cloud", "building the cloud (deprojection, outlier removal, merge)",
-                                    lambda: build_cloud(views, keep_extremities=keep_extremities, sor=sor,
-                                                        sor_k=sor_k, sor_std_ratio=sor_std_ratio))
+    cloud, cloud_report = steps.run(
+        "cloud", "building the cloud (deprojection, only the person, merge)",
+        lambda: build_cloud(views, keep_extremities=keep_extremities, sor=sor, sor_k=sor_k, sor_std_ratio=sor_std_ratio,
+                            remove_floor=remove_floor, isolate_person=isolate_person, **(cloud_params or {})))
     if progress:
-        per = ", ".join(f"{v['name']} {v['kept']} (SOR -{v['sor_removed']})" for v in cloud_report["views"])
-        print(f"[bsv]   {len(cloud)} points: {per}", flush=True)
+        _print_cloud(len(cloud), cloud_report)
 
     reg: Registration = steps.run(
         "register", "registering the template (ARAP)",
@@ -386,11 +426,11 @@ def demo(
 # Command line
 
 
-def _register_args(values: Sequence[str]) -> dict[str, Any]:
+def _register_args(values: Sequence[str], flag: str = "--param") -> dict[str, Any]:
     out: dict[str, Any] = {}
     for kv in values:
         if "=" not in kv:
-            raise SystemExit(f"--param expects KEY=VALUE, got {kv!r}")
+            raise SystemExit(f"{flag} expects KEY=VALUE, got {kv!r}")
         k, v = kv.split("=", 1)
         try:
             out[k] = json.loads(v)
@@ -414,6 +454,12 @@ def main_process(argv: Sequence[str] | None = None) -> int:
                          "sparse sides; the registration removes flying pixels itself)")
     ap.add_argument("--sor-k", type=int, default=600, help="with --sor: neighbours (default 600, the paper)")
     ap.add_argument("--sor-std", type=float, default=0.05, help="with --sor: std ratio (default 0.05, the paper)")
+    ap.add_argument("--keep-floor", action="store_true",
+                    help="keep the person-mask points on the floor (diagnosis; the floor is still fitted and checked)")
+    ap.add_argument("--no-isolate", action="store_true",
+                    help="keep depth-edge, far and separate mask pixels, never fail on a second person (diagnosis)")
+    ap.add_argument("--cloud-param", action="append", default=[], metavar="KEY=VALUE",
+                    help="cloud-building parameter, e.g. floor_margin_m=0.03, link_m=0.03 (repeatable)")
     ap.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="registration parameter (repeatable)")
     ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT")
     ap.add_argument("--quiet", action="store_true", help="no progress output")
@@ -422,10 +468,20 @@ def main_process(argv: Sequence[str] | None = None) -> int:
     from .exitcodes import run_command
 
     def run() -> int:
+        try:
+            return process_and_print()
+        except PersonIsolationError as e:
+            err = PersonIsolationError(f"{e} (command line: --no-isolate, --keep-floor)")
+            err.camera = e.camera
+            raise err from e
+
+    def process_and_print() -> int:
         res = process(a.capture_dir, a.calibration, a.out, segmentation=a.segmentation,
                       template=read_mesh(a.template) if a.template else None, progress=not a.quiet,
                       overwrite=a.overwrite, keep_extremities=a.keep_extremities, sor=a.sor, sor_k=a.sor_k,
-                      sor_std_ratio=a.sor_std, **_register_args(a.param))
+                      sor_std_ratio=a.sor_std, remove_floor=not a.keep_floor, isolate_person=not a.no_isolate,
+                      cloud_params=_register_args(a.cloud_param, "--cloud-param"),
+                      **_register_args(a.param))
         _print_process(res)
         return 0
 
@@ -472,6 +528,7 @@ __all__ = [
     "SEGMENTATION_DIR",
     "ProcessResult",
     "build_cloud",
+    "cleaning_summary",
     "compare",
     "comparison_table",
     "demo",

@@ -3,7 +3,9 @@
 Figures: the segmented fitted body seen from the front and from the subject's left side (a flat-shaded
 painter's-algorithm render of the labelled mesh in palette colours), the cloud over the fitted mesh,
 volume bars per segment (with the true volumes when known). Tables: volumes, ratios and left/right
-asymmetry, estimated mass, cloud and registration figures.
+asymmetry, estimated mass, cloud and registration figures, and "Cloud cleaning": per camera what was
+removed from the person mask (floor, depth edges, far, separate parts, outliers) and the floor check of
+the calibration (tilt, height at the subject, agreement between cameras), with its warnings.
 """
 
 from __future__ import annotations
@@ -154,6 +156,33 @@ def _volume_figure(path: Path, volumes_l: dict[str, float], truth: dict[str, flo
     plt.close(fig)
 
 
+def _opt(x: Any, digits: int) -> str:
+    return "" if x is None else _fmt(x, digits)
+
+
+def cleaning_html(cloud_report: dict[str, Any]) -> str:
+    """The "Cloud cleaning" section: one row per camera (points removed at each step, the floor check),
+    the floor agreement between cameras and the warnings (highlighted)."""
+    rows = []
+    for v in cloud_report.get("views", []):
+        c = v.get("cleaning") or {}
+        f = v.get("floor") or {}
+        seen = f.get("status") == "seen"
+        rows.append([html.escape(str(v.get("name", ""))), v.get("deprojected", ""), c.get("floor_removed", ""),
+                     c.get("edge_removed", ""), c.get("far_removed", ""), c.get("separate_removed", ""),
+                     v.get("sor_removed", ""), "seen" if seen else "not seen",
+                     _opt(f.get("pitch_deg"), 2), _opt(f.get("roll_deg"), 2), _opt(f.get("height_mm"), 1)])
+    table = _table(["camera", "mask points", "floor", "edges", "far", "separate", "outliers (SOR)", "floor check",
+                    "pitch deg", "roll deg", "floor height mm"], rows)
+    agree = [[html.escape(" / ".join(a.get("cameras", []))), _fmt(a.get("tilt_deg"), 2), _fmt(a.get("height_mm"), 1)]
+             for a in cloud_report.get("floor_agreement", [])]
+    agree_html = _table(["cameras", "floor angle deg", "height difference mm"], agree) if agree else ""
+    warnings = cloud_report.get("warnings", [])
+    warn_html = ("<ul class=\"warn\">" + "".join(f"<li>{html.escape(str(w))}</li>" for w in warnings) + "</ul>"
+                 if warnings else "<p class=\"note\">No calibration warning.</p>")
+    return f"<h2>Cloud cleaning</h2>{table}{agree_html}{warn_html}"
+
+
 def _fmt(x: Any, digits: int = 3) -> str:
     if isinstance(x, (int, float)) and math.isfinite(float(x)):
         return f"{float(x):.{digits}f}"
@@ -170,7 +199,7 @@ CSS = """body{font-family:sans-serif;font-size:12px;margin:16px;max-width:1100px
 h1{font-size:18px;margin:0 0 6px}h2{font-size:13px;margin:10px 0 4px}
 table{border-collapse:collapse;margin:2px 0 8px}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}
 th{background:#f0f0f0}td:first-child{text-align:left}.row{display:flex;gap:14px;align-items:flex-start;flex-wrap:wrap}
-img{max-height:420px}.note{color:#555}"""
+img{max-height:420px}.note{color:#555}.warn{color:#a00000;font-weight:bold}"""
 
 
 def write_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", overwrite: bool = False) -> dict[str, Path]:
@@ -243,6 +272,7 @@ def write_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", o
 <h2>Registration</h2>{_table(["", ""], reg_rows)}
 <h2>Timings (s)</h2>{_table(["step", "s"], timing_rows)}</div>
 </div>
+<div class="row"><div>{cleaning_html(cr)}</div></div>
 {f"<h2>Notes</h2><ul>{notes}</ul>" if notes else ""}
 </body></html>
 """
@@ -250,4 +280,4 @@ def write_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", o
     return {"report": report, **paths}
 
 
-__all__ = ["FIGURES", "VIEWS", "face_labels", "palette", "render_mesh", "write_report"]
+__all__ = ["FIGURES", "VIEWS", "cleaning_html", "face_labels", "palette", "render_mesh", "write_report"]

@@ -59,7 +59,7 @@ def _views(cap: Path, labels_from: str = "labels.png") -> list[dict]:
 
 def test_binding_rebuilds_the_scanner_cloud(capture):
     cap, scanned = capture
-    params = {"sor": False, "drop_labels": [], "normals": False}
+    params = {"sor": False, "drop_labels": [], "normals": False, "isolate_person": False}
     pts, normals, colors, labels, report = bsv._bsv.build_cloud(_views(cap), params)
     assert normals is None and colors is not None
     assert pts.shape == scanned.points.shape
@@ -96,6 +96,100 @@ def test_binding_errors_are_input_errors(capture):
         bsv._bsv.build_cloud([dict(v[0], camera_to_world={"rotation": [[1, 0], [0, 1]], "translation": [0, 0, 0]})], {})
     with pytest.raises(bsv.InputError, match="unknown field"):
         bsv._bsv.build_cloud(v, {"sor_kk": 3})
+
+
+# ----------------------------------------------------------------------------------------------------
+# Only the person (issue 11): a floor added under the virtual capture, the mask spilled onto it
+
+
+def _with_floor_and_spill(views: list[dict], spill: int = 4) -> list[dict]:
+    """The views with a floor at y = 0 in every background pixel that looks down (depth of the pixel
+    ray's hit, 16-bit units) and the label image grown by ``spill`` pixels (a MediaPipe-like spill)."""
+    import cv2
+
+    out = []
+    for v in views:
+        k = v["intrinsics"]
+        rot = np.asarray(v["camera_to_world"]["rotation"], dtype=np.float64)
+        t = np.asarray(v["camera_to_world"]["translation"], dtype=np.float64)
+        h, w = v["depth"].shape
+        uu, vv = np.meshgrid(np.arange(w), np.arange(h))
+        rays = np.stack([(uu - k["cx"]) / k["fx"], (vv - k["cy"]) / k["fy"], np.ones_like(uu, dtype=np.float64)], -1)
+        dy = rays @ rot[1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z = np.where(dy < -1e-6, -t[1] / dy, 0.0)
+        depth = v["depth"].copy()
+        floor = (depth == 0) & (z > 0) & (z < 6.0)
+        depth[floor] = np.round(z[floor] / v["depth_scale"]).astype(np.uint16)
+        grown = cv2.dilate(v["labels"], np.ones((2 * spill + 1, 2 * spill + 1), np.uint8))
+        labels = np.where(v["labels"] > 0, v["labels"], grown).astype(np.uint8)
+        out.append(dict(v, depth=depth, labels=labels))
+    return out
+
+
+def test_floor_spill_is_removed_and_reported(capture):
+    from bsv.report import cleaning_html
+
+    cap, _ = capture
+    views = _with_floor_and_spill(_views(cap))
+    dirty, _ = pipeline.build_cloud(views, remove_floor=False, isolate_person=False)
+    cloud, rep = pipeline.build_cloud(views)
+    low = lambda c: int((c.points[:, 1] < 0.02).sum())  # noqa: E731
+    assert low(dirty) > 1000 and low(cloud) == 0, (low(dirty), low(cloud))
+    for v in rep["views"]:
+        assert v["floor"]["status"] == "seen" and v["floor"]["tilt_deg"] < 0.1 and abs(v["floor"]["height_mm"]) < 2
+        assert v["cleaning"]["floor_removed"] > 0 and v["warnings"] == []
+        assert set(v["cleaning"]) >= {"floor_removed", "edge_removed", "far_removed", "separate_removed"}
+        assert "floor seen" in pipeline.cleaning_summary(v)
+    assert len(rep["floor_agreement"]) == 1 and rep["warnings"] == []
+    page = cleaning_html(rep)
+    assert "Cloud cleaning" in page and "No calibration warning" in page
+    # Without a floor in view nothing is removed as floor and the report says so; and the cleaned cloud
+    # of the spilled capture is exactly the cloud of the unspilled one.
+    unspilled, plain = pipeline.build_cloud(_views(cap))
+    np.testing.assert_array_equal(cloud.points, unspilled.points)
+    np.testing.assert_array_equal(cloud.labels, unspilled.labels)
+    assert all(v["floor"]["status"] == "not_seen" and v["cleaning"]["floor_removed"] == 0 for v in plain["views"])
+    assert "not seen" in cleaning_html(plain)
+
+
+def test_a_tilted_camera_is_flagged_and_a_second_person_is_an_error(capture):
+    from bsv.errors import PersonIsolationError
+    from bsv.report import cleaning_html
+
+    cap, _ = capture
+    views = _with_floor_and_spill(_views(cap))
+    c, s = np.cos(np.radians(1.0)), np.sin(np.radians(1.0))
+    rot = np.asarray(views[1]["camera_to_world"]["rotation"]) @ np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+    views[1] = dict(views[1], camera_to_world={"rotation": rot.tolist(),
+                                               "translation": views[1]["camera_to_world"]["translation"]})
+    _, rep = pipeline.build_cloud(views)
+    assert rep["views"][0]["warnings"] == [] and any("tilts" in w for w in rep["views"][1]["warnings"])
+    assert any("disagree" in w for w in rep["warnings"])
+    assert 'class="warn"' in cleaning_html(rep)
+    # A copy of the person 500 pixels to the side in the front view (its left part stays in the image):
+    # dropped as a separate part, or an error when parts that large must not be dropped silently.
+    front = dict(views[0])
+    depth, labels = front["depth"].copy(), front["labels"].copy()
+    person = labels > 0
+    depth[:, 500:][person[:, :-500]] = front["depth"][:, :-500][person[:, :-500]]
+    labels[:, 500:][person[:, :-500]] = front["labels"][:, :-500][person[:, :-500]]
+    two = [dict(front, depth=depth, labels=labels), views[1]]
+    _, rep = pipeline.build_cloud(two)
+    assert rep["views"][0]["cleaning"]["separate_removed"] > 1000
+    with pytest.raises(PersonIsolationError, match="isolate_person") as e:
+        pipeline.build_cloud(two, second_part_ratio=0.02)
+    assert e.value.camera == "front"
+
+
+def test_process_cleaning_switches_reach_cloud_building(capture, tmp_path, capsys):
+    cap, _ = capture
+    args = [str(cap), "-c", str(cap / "calibration.json"), "-o", str(tmp_path / "out"), "--segmentation", "oracle",
+            "--quiet", "--keep-floor", "--no-isolate"]
+    assert pipeline.main_process([*args, "--cloud-param", "link_mm=3"]) == 2
+    assert "link_mm" in capsys.readouterr().err
+    assert pipeline.main_process([*args, "--cloud-param", "link_m=0"]) == 2
+    assert "link_m" in capsys.readouterr().err
 
 
 # ----------------------------------------------------------------------------------------------------

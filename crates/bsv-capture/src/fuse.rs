@@ -1,17 +1,34 @@
 //! Cloud building (DESIGN.md "Data flow", step 4): per camera, deproject the colour-aligned depth
-//! image with the intrinsics, keep the pixels that carry a segment label (the person mask),
-//! remove statistical outliers, transform to the world with the calibration; then merge the cameras
-//! and drop head, hand and foot points. Optional per-point normals (from the depth image's pixel
-//! neighbours, facing the camera) and colours (the colour image or the segment palette).
+//! image with the intrinsics, keep the pixels that carry a segment label (the person mask), transform
+//! to the world with the calibration, keep only the person, remove statistical outliers; then merge
+//! the cameras and drop head, hand and foot points. Optional per-point normals (from the depth
+//! image's pixel neighbours, facing the camera) and colours (the colour image or the segment palette).
+//!
+//! "Only the person" (issue 11: a real person mask spills onto the floor and the wall, and those
+//! pixels would be fitted as body): each camera fits its floor from all its valid depth pixels
+//! ([`floor`]) — also a check of its calibration, reported and warned about — and drops the person
+//! points on and just above it; then mask pixels on depth edges, far behind the person, or in 3-D
+//! parts separate from the person are dropped ([`isolate`]); two comparable parts are an error
+//! ([`FuseError::PersonNotIsolated`]), never a guess. Everything removed is counted in the report.
 //!
 //! The order is the paper's: outlier removal runs on each camera's whole person cloud (extremities
-//! included), in the camera frame; segments are dropped after merging. Points keep the row-major
-//! pixel order of each camera, cameras in the order given.
+//! included); segments are dropped after merging. Points keep the row-major pixel order of each
+//! camera, cameras in the order given.
+
+mod deproject;
+pub mod floor;
+pub mod isolate;
+mod params;
+mod person;
+mod report;
+
+pub use params::FuseParams;
+pub use report::{CleaningReport, FloorAgreement, FloorReport, FloorStatus, FuseReport, ViewReport};
 
 use crate::camera::{CameraError, Extrinsics, Intrinsics};
 use crate::clean::{statistical_outliers, CleanError, SorParams};
-use bsv_core::geometry::{cross, dot, norm, scale, sub};
-use bsv_core::{PointCloud, Segment, EXTREMITIES, SEGMENT_COUNT};
+use bsv_core::{PointCloud, Segment, SEGMENT_COUNT};
+use deproject::{deproject_view, ViewPoints};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -107,6 +124,34 @@ pub enum FuseError {
         /// What is expected.
         hint: &'static str,
     },
+    /// The person mask holds two comparable separate 3-D parts: which one is the person is unknown.
+    #[error("camera `{camera}`: the person cannot be isolated: the labelled pixels form two separate 3-D parts of {person_points} and {other_points} points, {distance_m:.2} m apart (a second person or a large object inside the person mask; parts of at least second_part_ratio = {ratio} of the person are not dropped silently); clear the scene around the subject and check the segmentation mask, or set isolate_person = false to keep every labelled point")]
+    PersonNotIsolated {
+        /// Camera name.
+        camera: String,
+        /// Points of the largest part.
+        person_points: usize,
+        /// Points of the second-largest part.
+        other_points: usize,
+        /// Distance between the two parts' centroids, metres.
+        distance_m: f64,
+        /// The `second_part_ratio` parameter.
+        ratio: f64,
+    },
+    /// The cleaning removed every labelled point of a view.
+    #[error("camera `{camera}`: all {deprojected} labelled points were removed as floor ({floor}), depth edges ({edges}) or far behind the person ({far}): the mask does not cover a person standing on the floor; check the segmentation and the calibration, or set remove_floor = false or isolate_person = false to diagnose")]
+    NothingLeft {
+        /// Camera name.
+        camera: String,
+        /// Labelled points with a valid depth.
+        deprojected: usize,
+        /// Removed as floor.
+        floor: usize,
+        /// Removed as depth edges.
+        edges: usize,
+        /// Removed as far.
+        far: usize,
+    },
     /// Nothing is left after dropping segments.
     #[error("no point is left after dropping segments {dropped:?}: the segmentation labelled only dropped segments; check it, or keep the extremities")]
     EmptyCloud {
@@ -188,161 +233,6 @@ pub enum ColorMode {
     Image,
 }
 
-/// Parameters of cloud building; JSON keys are the field names, every one optional.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct FuseParams {
-    /// Run statistical outlier removal on each camera's cloud.
-    pub sor: bool,
-    /// Neighbours of the outlier removal (the paper: 600).
-    pub sor_k: usize,
-    /// Standard-deviation ratio of the outlier removal (the paper: 0.05).
-    pub sor_std_ratio: f64,
-    /// Segment ids dropped after merging (default: head, hands, feet; empty = keep all).
-    pub drop_labels: Vec<u8>,
-    /// Depths below this (metres) are ignored.
-    pub min_depth: f64,
-    /// Depths above this (metres) are ignored (`None` = no limit).
-    pub max_depth: Option<f64>,
-    /// Estimate a normal per point from its pixel neighbours (oriented toward the camera).
-    pub normals: bool,
-    /// Largest depth step (metres) between neighbouring pixels used for a normal.
-    pub normal_max_step: f64,
-    /// Point colours.
-    pub colors: ColorMode,
-}
-
-impl Default for FuseParams {
-    /// The paper's pipeline: SOR (600, 0.05), head/hands/feet dropped, normals, palette colours.
-    fn default() -> Self {
-        FuseParams {
-            sor: true,
-            sor_k: 600,
-            sor_std_ratio: 0.05,
-            drop_labels: EXTREMITIES.iter().map(|s| s.id()).collect(),
-            min_depth: 0.0,
-            max_depth: None,
-            normals: true,
-            normal_max_step: 0.03,
-            colors: ColorMode::Palette,
-        }
-    }
-}
-
-impl FuseParams {
-    /// Parses JSON parameters (missing keys take their defaults).
-    pub fn from_json(text: &str) -> Result<Self, serde_json::Error> {
-        if text.trim().is_empty() {
-            return Ok(FuseParams::default());
-        }
-        serde_json::from_str(text)
-    }
-
-    /// Checks every parameter's range.
-    pub fn validate(&self) -> Result<(), FuseError> {
-        if self.sor && self.sor_k == 0 {
-            return Err(FuseError::BadParam {
-                param: "sor_k",
-                value: 0.0,
-                hint: "use k >= 1 (the paper uses 600) or sor = false",
-            });
-        }
-        if !self.sor_std_ratio.is_finite() {
-            return Err(FuseError::BadParam {
-                param: "sor_std_ratio",
-                value: self.sor_std_ratio,
-                hint: "use a finite number (the paper uses 0.05)",
-            });
-        }
-        if !(self.min_depth.is_finite() && self.min_depth >= 0.0) {
-            return Err(FuseError::BadParam {
-                param: "min_depth",
-                value: self.min_depth,
-                hint: "use a finite depth >= 0 in metres",
-            });
-        }
-        if let Some(m) = self.max_depth {
-            if !(m.is_finite() && m > self.min_depth) {
-                return Err(FuseError::BadParam {
-                    param: "max_depth",
-                    value: m,
-                    hint: "use a finite depth in metres above min_depth, or null",
-                });
-            }
-        }
-        if !(self.normal_max_step.is_finite() && self.normal_max_step > 0.0) {
-            return Err(FuseError::BadParam {
-                param: "normal_max_step",
-                value: self.normal_max_step,
-                hint: "use a positive length in metres (e.g. 0.03)",
-            });
-        }
-        if let Some(&l) = self.drop_labels.iter().find(|&&l| usize::from(l) >= SEGMENT_COUNT) {
-            return Err(FuseError::BadParam {
-                param: "drop_labels",
-                value: f64::from(l),
-                hint: "use segment ids 0..=14",
-            });
-        }
-        Ok(())
-    }
-}
-
-/// What cloud building did with one camera.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ViewReport {
-    /// Camera name.
-    pub name: String,
-    /// Pixels with a segment label (the person mask).
-    pub mask_pixels: usize,
-    /// Mask pixels without a valid depth (0, non-finite, out of range).
-    pub no_depth: usize,
-    /// Points deprojected (mask pixels with a valid depth).
-    pub deprojected: usize,
-    /// Points removed by statistical outlier removal.
-    pub sor_removed: usize,
-    /// The outlier threshold on the mean neighbour distance (metres), when SOR ran.
-    pub sor_threshold_m: Option<f64>,
-    /// Points dropped per segment name.
-    pub dropped: BTreeMap<String, usize>,
-    /// Points of this camera in the final cloud.
-    pub kept: usize,
-    /// Wall time of deprojection (and normals), seconds.
-    pub seconds_deproject: f64,
-    /// Wall time of outlier removal, seconds.
-    pub seconds_sor: f64,
-}
-
-/// What cloud building did, per camera and in total.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct FuseReport {
-    /// One report per view, in input order.
-    pub views: Vec<ViewReport>,
-    /// Points in the final cloud.
-    pub points: usize,
-    /// Points in the final cloud per segment name.
-    pub points_per_segment: BTreeMap<String, usize>,
-    /// Points dropped per segment name (all cameras).
-    pub dropped: BTreeMap<String, usize>,
-    /// Total wall time, seconds.
-    pub seconds: f64,
-}
-
-impl FuseReport {
-    /// Pretty JSON text.
-    pub fn to_json(&self) -> String {
-        serde_json::to_string_pretty(self).unwrap_or_default()
-    }
-}
-
-/// One camera's points before merging (camera frame until transformed).
-struct ViewPoints {
-    points: Vec<[f64; 3]>,
-    normals: Vec<[f64; 3]>,
-    colors: Vec<[u8; 3]>,
-    labels: Vec<u8>,
-}
-
 fn check_view(view: &DepthView, params: &FuseParams) -> Result<(), FuseError> {
     let camera = || view.name.clone();
     view.intrinsics.validate().map_err(|source| FuseError::Camera { camera: camera(), source })?;
@@ -375,119 +265,6 @@ fn check_view(view: &DepthView, params: &FuseParams) -> Result<(), FuseError> {
     Ok(())
 }
 
-/// The normal at pixel (u, v) from its valid neighbours (central differences where possible),
-/// oriented toward the camera; the direction back to the camera when no neighbour pair is usable.
-fn pixel_normal(
-    view: &DepthView,
-    params: &FuseParams,
-    depth_ok: &dyn Fn(f64) -> bool,
-    u: usize,
-    v: usize,
-    p: [f64; 3],
-) -> [f64; 3] {
-    let intr = &view.intrinsics;
-    let (w, h) = (intr.width as usize, intr.height as usize);
-    let z0 = p[2];
-    let at = |uu: usize, vv: usize| -> Option<[f64; 3]> {
-        let z = view.depth.metres(vv * w + uu);
-        (depth_ok(z) && (z - z0).abs() <= params.normal_max_step).then(|| intr.deproject([uu as f64, vv as f64], z))
-    };
-    let diff = |a: Option<[f64; 3]>, b: Option<[f64; 3]>| match (a, b) {
-        (Some(a), Some(b)) => Some(sub(a, b)),
-        (Some(a), None) => Some(sub(a, p)),
-        (None, Some(b)) => Some(sub(p, b)),
-        (None, None) => None,
-    };
-    let du = diff((u + 1 < w).then(|| at(u + 1, v)).flatten(), (u > 0).then(|| at(u - 1, v)).flatten());
-    let dv = diff((v + 1 < h).then(|| at(u, v + 1)).flatten(), (v > 0).then(|| at(u, v - 1)).flatten());
-    let toward_camera = scale(p, -1.0 / norm(p).max(1e-300));
-    let (Some(du), Some(dv)) = (du, dv) else { return toward_camera };
-    let n = cross(du, dv);
-    let len = norm(n);
-    if !(len > 0.0 && len.is_finite()) {
-        return toward_camera;
-    }
-    let n = scale(n, 1.0 / len);
-    if dot(n, p) > 0.0 {
-        scale(n, -1.0)
-    } else {
-        n
-    }
-}
-
-/// Deprojects the mask pixels of one view (camera frame), with normals and colours as asked.
-fn deproject_view(view: &DepthView, params: &FuseParams) -> (ViewPoints, usize, usize) {
-    let intr = &view.intrinsics;
-    let w = intr.width as usize;
-    let max = params.max_depth.unwrap_or(f64::INFINITY);
-    let min = params.min_depth;
-    let depth_ok = move |z: f64| z > 0.0 && z >= min && z <= max;
-    type Row = (Vec<([f64; 3], [f64; 3], [u8; 3], u8)>, usize, usize);
-    let rows: Vec<Row> = view
-        .labels
-        .par_chunks(w)
-        .enumerate()
-        .map(|(v, lrow)| {
-            let mut out = Vec::new();
-            let (mut mask, mut missing) = (0usize, 0usize);
-            for (u, &l) in lrow.iter().enumerate() {
-                if l == 0 {
-                    continue;
-                }
-                mask += 1;
-                let i = v * w + u;
-                let z = view.depth.metres(i);
-                if !depth_ok(z) {
-                    missing += 1;
-                    continue;
-                }
-                let p = intr.deproject([u as f64, v as f64], z);
-                let n = if params.normals { pixel_normal(view, params, &depth_ok, u, v, p) } else { [0.0; 3] };
-                let c = match params.colors {
-                    ColorMode::None => [0; 3],
-                    ColorMode::Palette => Segment::from_id(l).unwrap_or(Segment::Unlabelled).color(),
-                    ColorMode::Image => view.colors.as_ref().map_or([0; 3], |c| c[i]),
-                };
-                out.push((p, n, c, l));
-            }
-            (out, mask, missing)
-        })
-        .collect();
-    let (mut mask, mut missing) = (0, 0);
-    let n: usize = rows.iter().map(|r| r.0.len()).sum();
-    let mut vp = ViewPoints {
-        points: Vec::with_capacity(n),
-        normals: Vec::with_capacity(if params.normals { n } else { 0 }),
-        colors: Vec::with_capacity(n),
-        labels: Vec::with_capacity(n),
-    };
-    for (row, m, x) in rows {
-        mask += m;
-        missing += x;
-        for (p, nn, c, l) in row {
-            vp.points.push(p);
-            if params.normals {
-                vp.normals.push(nn);
-            }
-            vp.colors.push(c);
-            vp.labels.push(l);
-        }
-    }
-    (vp, mask, missing)
-}
-
-fn retain<T: Copy>(v: &mut Vec<T>, keep: &[bool]) {
-    if v.len() != keep.len() {
-        return;
-    }
-    let mut i = 0;
-    v.retain(|_| {
-        let k = keep[i];
-        i += 1;
-        k
-    });
-}
-
 fn segment_name(id: u8) -> String {
     Segment::from_id(id).map_or_else(|| format!("id_{id}"), |s| s.name().to_string())
 }
@@ -506,15 +283,21 @@ pub fn build_cloud(views: &[DepthView], params: &FuseParams) -> Result<(PointClo
     for &l in &params.drop_labels {
         drop[usize::from(l)] = true;
     }
-    let mut world = ViewPoints { points: Vec::new(), normals: Vec::new(), colors: Vec::new(), labels: Vec::new() };
+    // Views are cleaned in parallel, merged in input order; the first failing view's error wins.
+    let fused: Vec<Result<(ViewPoints, ViewReport), FuseError>> =
+        views.par_iter().map(|view| fuse_view(view, params)).collect();
+    let mut world = ViewPoints::default();
     let mut reports = Vec::with_capacity(views.len());
-    for view in views {
-        reports.push(fuse_view(view, params, &drop, &mut world)?);
+    for f in fused {
+        let (vp, mut report) = f?;
+        report.dropped = append_to_world(&vp, params, &drop, &mut world);
+        report.kept = vp.points.len() - report.dropped.values().sum::<usize>();
+        reports.push(report);
     }
     if world.points.is_empty() {
         return Err(FuseError::EmptyCloud { dropped: params.drop_labels.iter().map(|&l| segment_name(l)).collect() });
     }
-    let ViewPoints { points, normals, colors, labels } = world;
+    let ViewPoints { points, normals, colors, labels, .. } = world;
     let mut cloud = PointCloud::new(points);
     if params.normals {
         cloud.normals = Some(normals);
@@ -533,8 +316,13 @@ pub fn build_cloud(views: &[DepthView], params: &FuseParams) -> Result<(PointClo
             *dropped.entry(k.clone()).or_default() += v;
         }
     }
+    let floor_agreement = floor_agreement(&reports);
+    let mut warnings: Vec<String> = reports.iter().flat_map(|r| r.warnings.iter().cloned()).collect();
+    warnings.extend(floor_agreement.iter().filter_map(|a| a.warning(params)));
     let report = FuseReport {
         views: reports,
+        floor_agreement,
+        warnings,
         points: cloud.len(),
         points_per_segment: per_segment,
         dropped,
@@ -543,14 +331,20 @@ pub fn build_cloud(views: &[DepthView], params: &FuseParams) -> Result<(PointClo
     Ok((cloud, report))
 }
 
-/// One view: deprojects its mask, removes its outliers, and appends its kept points to `world`
-/// in the world frame.
-fn fuse_view(
-    view: &DepthView,
-    params: &FuseParams,
-    drop: &[bool; SEGMENT_COUNT],
-    world: &mut ViewPoints,
-) -> Result<ViewReport, FuseError> {
+/// The floor agreement of every pair of views that both saw the floor.
+fn floor_agreement(reports: &[ViewReport]) -> Vec<FloorAgreement> {
+    let mut out = Vec::new();
+    for (i, a) in reports.iter().enumerate() {
+        for b in &reports[i + 1..] {
+            out.extend(FloorAgreement::between((&a.name, &a.floor), (&b.name, &b.floor)));
+        }
+    }
+    out
+}
+
+/// One view: deprojects its mask into the world, keeps only the person, removes its outliers; its
+/// points and report (`dropped` and `kept` are filled when the points are merged).
+fn fuse_view(view: &DepthView, params: &FuseParams) -> Result<(ViewPoints, ViewReport), FuseError> {
     let camera = || view.name.clone();
     let t = Instant::now();
     let (mut vp, mask_pixels, no_depth) = deproject_view(view, params);
@@ -562,40 +356,40 @@ fn fuse_view(
         return Err(FuseError::NoValidDepth { camera: camera(), mask_pixels });
     }
     let deprojected = vp.points.len();
+    let (floor, cleaning) = person::clean_view(view, params, &mut vp)?;
     let t = Instant::now();
     let mut sor_threshold_m = None;
+    let mut sor_removed = 0;
     if params.sor {
         let res = statistical_outliers(&vp.points, SorParams { k: params.sor_k, std_ratio: params.sor_std_ratio })
             .map_err(|source| FuseError::Clean { camera: camera(), source })?;
         sor_threshold_m = res.threshold.is_finite().then_some(res.threshold);
-        retain(&mut vp.points, &res.keep);
-        retain(&mut vp.normals, &res.keep);
-        retain(&mut vp.colors, &res.keep);
-        retain(&mut vp.labels, &res.keep);
+        sor_removed = vp.retain(&res.keep);
     }
     let seconds_sor = t.elapsed().as_secs_f64();
-    let sor_removed = deprojected - vp.points.len();
-    let dropped = append_to_world(&vp, &view.camera_to_world, params, drop, world);
-    let kept = vp.points.len() - dropped.values().sum::<usize>();
-    Ok(ViewReport {
+    let warnings = floor.warnings(&view.name, params);
+    let report = ViewReport {
         name: view.name.clone(),
         mask_pixels,
         no_depth,
         deprojected,
+        floor,
+        cleaning,
         sor_removed,
         sor_threshold_m,
-        dropped,
-        kept,
+        dropped: BTreeMap::new(),
+        kept: 0,
+        warnings,
         seconds_deproject,
         seconds_sor,
-    })
+    };
+    Ok((vp, report))
 }
 
-/// Appends the camera-frame points whose label is not dropped to `world` (transformed by `ext`);
-/// the count of dropped points per segment name.
+/// Appends the points whose label is not dropped to `world`; the count of dropped points per
+/// segment name.
 fn append_to_world(
     vp: &ViewPoints,
-    ext: &Extrinsics,
     params: &FuseParams,
     drop: &[bool; SEGMENT_COUNT],
     world: &mut ViewPoints,
@@ -606,12 +400,13 @@ fn append_to_world(
             *dropped.entry(segment_name(l)).or_default() += 1;
             continue;
         }
-        world.points.push(ext.transform_point(p));
+        world.points.push(p);
         if params.normals {
-            world.normals.push(ext.transform_vector(vp.normals[k]));
+            world.normals.push(vp.normals[k]);
         }
         world.colors.push(vp.colors[k]);
         world.labels.push(l);
+        world.pixels.push(vp.pixels[k]);
     }
     dropped
 }

@@ -10,9 +10,17 @@ use bsv_capture::fuse::{build_cloud, ColorMode, DepthImage, DepthView, FuseError
 use bsv_capture::scanner::{scan, write_capture, CameraView, Condition, Rig, DEPTH_SCALE};
 use bsv_core::shapes;
 
-/// Parameters that keep every point (no SOR, no dropping, no normals, palette colours).
+/// Parameters that keep every point (no SOR, no floor removal or isolation, no dropping, no
+/// normals, palette colours).
 fn keep_all() -> FuseParams {
-    FuseParams { sor: false, drop_labels: vec![], normals: false, ..FuseParams::default() }
+    FuseParams {
+        sor: false,
+        remove_floor: false,
+        isolate_person: false,
+        drop_labels: vec![],
+        normals: false,
+        ..FuseParams::default()
+    }
 }
 
 /// The scan's view as cloud-building input with exact (f32) depth and the estimated extrinsics.
@@ -106,7 +114,8 @@ fn rebuilding_from_written_16_bit_pngs_reproduces_the_scanner_cloud_to_quantisat
 fn extremities_are_dropped_by_default_and_counted() {
     let s = scan(&shapes::capsule_body(false, true), &Rig::paper_default(), Condition::NoEr, 0).unwrap();
     let views: Vec<DepthView> = s.views.iter().map(exact_view).collect();
-    let params = FuseParams { sor: false, ..FuseParams::default() };
+    // The capsule body's head and hands float free of it: keep them (no isolation) to count them.
+    let params = FuseParams { sor: false, isolate_person: false, ..FuseParams::default() };
     let (cloud, report) = build_cloud(&views, &params).unwrap();
     let labels = cloud.labels.as_ref().unwrap();
     assert!(labels.iter().all(|l| ![1, 7, 8, 13, 14].contains(l)));
@@ -137,7 +146,9 @@ fn outlier_removal_removes_injected_flying_points() {
     }
     v.colors = Some(colors);
     views[1].colors = Some(vec![[0, 0, 0]; views[1].labels.len()]);
-    let params = FuseParams { drop_labels: vec![], colors: ColorMode::Image, ..FuseParams::default() };
+    // Isolation alone would remove them as separate parts; this tests SOR.
+    let params =
+        FuseParams { drop_labels: vec![], colors: ColorMode::Image, isolate_person: false, ..FuseParams::default() };
     let (cloud, report) = build_cloud(&views, &params).unwrap();
     let red = cloud.colors.as_ref().unwrap().iter().filter(|c| c[0] == 255).count();
     assert_eq!(red, 0, "{red} injected outliers survived");

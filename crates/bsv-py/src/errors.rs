@@ -219,9 +219,17 @@ impl ToPyErr for bsv_capture::distance::DistanceError {
     }
 }
 
+/// The person could not be isolated in a view: `PersonIsolationError` (`camera`); every other cloud
+/// building error is about the inputs: `InputError` (`argument` "views").
 impl ToPyErr for bsv_capture::fuse::FuseError {
     fn to_py_err(&self) -> PyErr {
-        exception("InputError", message(self), vec![("argument", Field::Str("views".into()))])
+        use bsv_capture::fuse::FuseError as F;
+        match self {
+            F::PersonNotIsolated { camera, .. } | F::NothingLeft { camera, .. } => {
+                exception("PersonIsolationError", message(self), vec![("camera", Field::Str(camera.clone()))])
+            }
+            _ => exception("InputError", message(self), vec![("argument", Field::Str("views".into()))]),
+        }
     }
 }
 

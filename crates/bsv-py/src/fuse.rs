@@ -165,7 +165,9 @@ fn view_from(obj: &Bound<'_, PyAny>, index: usize) -> PyResult<DepthView> {
 }
 
 /// Builds the merged labelled world cloud from per-camera views and `FuseParams` keywords:
-/// `(points, normals | None, colors | None, labels | None, report dict)`.
+/// `(points, normals | None, colors | None, labels | None, report dict)`. Only the person is kept
+/// (floor removal and isolation, on by default); the report dict carries each camera's floor check,
+/// what the cleaning removed and the warnings (`bsv_capture::fuse::FuseReport`).
 #[pyfunction]
 #[pyo3(signature = (views, params=None))]
 fn build_cloud<'py>(

@@ -389,11 +389,14 @@ def demo(
     segmentation: str = "camera",
     progress: bool = True,
     overwrite: bool = False,
+    room: bool = True,
     **process_params: Any,
 ) -> ProcessResult:
     """The whole chain on synthetic subject ``subject`` of the cohort of ``seed``: virtual capture images in
     ``OUT/capture`` (condition "noer", "l515", "cali" or "l5ca") -> segmentation -> cloud -> registration ->
-    report in OUT; prints estimated against true volumes and returns the result (``comparison`` rows)."""
+    report in OUT; prints estimated against true volumes and returns the result (``comparison`` rows).
+    ``room``: the rig stands in a clinic room (floor, walls, a subject with skin tone, underwear and hair
+    drawn from the seed; :func:`bsv.scan`), as a real capture sees it; False: the body alone on grey."""
     from . import bodies, scan
 
     out = Path(out_dir)
@@ -403,15 +406,16 @@ def demo(
     subj = steps.run("subject", f"synthetic subject {subject} (cohort seed {seed})", lambda: bodies.subject(subject, seed))
     if progress:
         print(f"[bsv]   {subj.sex}, {subj.body.stature:.2f} m, {subj.body.volume_l:.1f} L", flush=True)
-    steps.run("scan", f"virtual two-camera capture ({condition}) into {cap}",
-              lambda: scan(subj.body.mesh(), condition, seed, images=cap, overwrite=overwrite))
+    where = " in a room" if room else ""
+    steps.run("scan", f"virtual two-camera capture ({condition}{where}) into {cap}",
+              lambda: scan(subj.body.mesh(), condition, seed, images=cap, overwrite=overwrite, room=room))
     truth = subj.volumes_l()
     res = process(cap, cap / "calibration.json", out, segmentation=segmentation, progress=progress,
                   overwrite=overwrite, truth=truth,
                   title=f"BSV demo: synthetic subject {subject} (seed {seed}, {condition}, {segmentation} segmentation)",
                   **process_params)
     res.timings = {**steps.timings, **res.timings, "total": steps.total()}
-    (out / "demo.json").write_text(json.dumps({"subject": subj.info(), "condition": condition,
+    (out / "demo.json").write_text(json.dumps({"subject": subj.info(), "condition": condition, "room": room,
                                                "segmentation": segmentation, "true_volumes_l": truth,
                                                "comparison": res.comparison, "timings_s": res.timings}, indent=2) + "\n")
     res.files["demo"] = out / "demo.json"
@@ -496,17 +500,30 @@ def _print_process(res: Any) -> None:
     print(f"report: {res.files['report']}")
 
 
+def _non_negative(text: str) -> int:
+    """argparse type: a whole number >= 0 (argparse turns the ValueError into a usage error, exit 2)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{value} is negative; use 0 or more")
+    return value
+
+
 def main_demo(argv: Sequence[str] | None = None) -> int:
     """``bsv demo [-o OUT] [--seed N] [--condition l515]``."""
     ap = argparse.ArgumentParser(prog="bsv demo", description="The whole chain on a synthetic subject, no camera.")
     ap.add_argument("-o", "--out", default="bsv-demo", help="output folder (default ./bsv-demo)")
-    ap.add_argument("--seed", type=int, default=0, help="cohort seed (default 0)")
-    ap.add_argument("--subject", type=int, default=0, help="subject index in the cohort (default 0)")
+    ap.add_argument("--seed", type=_non_negative, default=0, help="cohort seed (default 0)")
+    ap.add_argument("--subject", type=_non_negative, default=0, help="subject index in the cohort (default 0)")
     ap.add_argument("--condition", choices=("noer", "l515", "cali", "l5ca"), default="l515",
                     help="virtual capture condition (default l515: depth noise)")
     ap.add_argument("--segmentation", choices=SEGMENTATIONS, default="camera",
                     help="camera: MediaPipe on the rendered colour images (default); oracle: the rendered labels")
     ap.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="registration parameter (repeatable)")
+    ap.add_argument("--no-room", action="store_true",
+                    help="render the subject alone on grey instead of in a clinic room (floor, walls)")
     ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT")
     ap.add_argument("--quiet", action="store_true", help="only the final table")
     a = ap.parse_args(list(argv) if argv is not None else None)
@@ -514,7 +531,7 @@ def main_demo(argv: Sequence[str] | None = None) -> int:
 
     def run() -> int:
         res = demo(a.out, seed=a.seed, subject=a.subject, condition=a.condition, segmentation=a.segmentation,
-                   progress=not a.quiet, overwrite=a.overwrite, **_register_args(a.param))
+                   progress=not a.quiet, overwrite=a.overwrite, room=not a.no_room, **_register_args(a.param))
         if a.quiet:
             print(comparison_table(res.comparison))
         return 0

@@ -31,3 +31,13 @@ def test_process_without_capture_fails_cleanly(tmp_path, capsys: pytest.CaptureF
     code = main(["process", str(tmp_path / "missing"), "--calibration", str(tmp_path / "c.json"), "-o", str(tmp_path / "o")])
     assert code != 0
     assert "missing" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("args", [["--subject", "-1"], ["--seed", "-5"], ["--subject", "two"]])
+def test_demo_refuses_negative_or_non_numeric_indices(args: list[str], tmp_path, capsys: pytest.CaptureFixture[str]) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(SystemExit) as e:
+        main(["demo", "-o", str(tmp_path / "out"), *args])
+    assert e.value.code == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and args[0] in err
+    assert not (tmp_path / "out").exists()

@@ -4,9 +4,9 @@ and ``--segmentation camera``.
 Each camera folder (colour + depth PNGs + camera.json, written by :func:`bsv.scan` with ``images``) is
 labelled either by the scanner's own label image (``oracle``) or by the MediaPipe front-end
 (``camera``: :func:`bsv.frontend.segment.segment_image` on the colour render), and the cloud is built
-exactly as ``bsv process`` builds it (:func:`bsv.pipeline.build_cloud`: masked deprojection with the
-calibrated extrinsics, per-camera statistical outlier removal k = 600 / std ratio 0.05, merge, head,
-hands and feet dropped).
+exactly as ``bsv process`` builds it by default (:func:`bsv.pipeline.build_cloud`: masked deprojection
+with the calibrated extrinsics, per-camera floor removal and person isolation, merge, head, hands and
+feet dropped; statistical outlier removal only when asked, ``--cloud-param sor=true``).
 
 Like ``bsv process``, it only reads the capture folder: the camera segmentation is used in memory and
 nothing is written into the capture (the benchmark's virtual captures live in a temporary folder).
@@ -42,22 +42,24 @@ def check_available() -> None:
 
 
 def capture_cloud(capture_dir: str | Path, segmentation: str = "oracle",
-                  labels: Mapping[str, np.ndarray] | None = None, sor: bool = True) -> tuple[PointCloud, dict[str, Any]]:
+                  labels: Mapping[str, np.ndarray] | None = None, **cloud_params: Any) -> tuple[PointCloud, dict[str, Any]]:
     """Merged, cleaned, labelled world cloud of a capture folder and the cloud builder's report.
 
     ``segmentation``: ``oracle`` (each camera's ``labels.png``) or ``camera`` (MediaPipe); ``labels``
-    overrides both with per-camera (height, width) uint8 segment-id images."""
-    return build_views_cloud(capture_views(capture_dir, segmentation, labels), capture_dir, sor=sor)
+    overrides both with per-camera (height, width) uint8 segment-id images; ``cloud_params``: keywords
+    of :func:`bsv.pipeline.build_cloud` (default: ``bsv process``'s)."""
+    return build_views_cloud(capture_views(capture_dir, segmentation, labels), capture_dir, **cloud_params)
 
 
 def build_views_cloud(views: list[dict[str, Any]], capture_dir: str | Path = "",
-                      sor: bool = True) -> tuple[PointCloud, dict[str, Any]]:
-    """The cloud of :func:`capture_views`' views, built as ``bsv process`` builds it (``sor``: with the
-    statistical outlier removal); failures become :class:`BenchError` naming ``capture_dir``."""
+                      **cloud_params: Any) -> tuple[PointCloud, dict[str, Any]]:
+    """The cloud of :func:`capture_views`' views, built as ``bsv process`` builds it (``cloud_params``:
+    keywords of :func:`bsv.pipeline.build_cloud` that differ from its defaults); failures become
+    :class:`BenchError` naming ``capture_dir``."""
     from ..pipeline import build_cloud
 
     try:
-        return build_cloud(views, sor=sor)
+        return build_cloud(views, **cloud_params)
     except Exception as exc:  # typed bsv errors carry the reason
         raise BenchError(f"{capture_dir}: building the cloud failed: {exc}") from exc
 

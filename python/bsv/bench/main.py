@@ -61,7 +61,10 @@ def parser() -> argparse.ArgumentParser:
     s.add_argument("--segmentation", choices=["oracle", "camera"], default="oracle",
                    help="oracle: scanner's true labels; camera: MediaPipe on the colour renders (needs bsv.frontend.segment)")
     s.add_argument("--cloud", choices=["raw", "lab"], default="raw",
-                   help="raw: the scanner's cloud; lab: rebuilt from the capture images like bsv process (SOR; slower)")
+                   help="raw: the scanner's cloud; lab: rebuilt from the capture images like bsv process (slower)")
+    s.add_argument("--cloud-param", action="append", type=_param, default=[], metavar="KEY=VALUE",
+                   help="cloud-building parameter of the lab/camera path (repeatable; default bsv process's), "
+                   "e.g. --cloud-param sor=true or --cloud-param isolate_person=false")
     s.add_argument("--room", action=argparse.BooleanOptionalAction, default=None,
                    help="render the rig inside a clinic room (floor, walls, varied subject appearance); "
                    "default: on for --segmentation camera or --cloud lab, off for the raw oracle cloud")
@@ -100,11 +103,12 @@ def main(argv: Sequence[str] | None = None) -> int:
 
             cfg = SynthConfig(n=args.n, seed=args.seed, conditions=args.conditions, segmentation=args.segmentation,
                               template=args.template, methods=methods, params=params, local=not args.no_local,
-                              cloud=args.cloud, room=args.room)
+                              cloud=args.cloud, room=args.room, cloud_params=dict(args.cloud_param))
             cfg.validate()
             infos, runs, wall = run_synth(cfg, jobs=max(1, args.jobs), progress=not args.quiet)
             config = {"n": cfg.n, "seed": cfg.seed, "conditions": ",".join(cfg.conditions),
-                      "segmentation": cfg.segmentation, "cloud": cfg.cloud, "room": cfg.uses_room(), "template": cfg.template, "methods": ",".join(methods),
+                      "segmentation": cfg.segmentation, "cloud": cfg.cloud, "room": cfg.uses_room(),
+                      "cloud_params": cfg.cloud_params, "template": cfg.template, "methods": ",".join(methods),
                       "params": params, "local_modifiers": cfg.local, "jobs": args.jobs}
             summary = write_outputs(args.out, "BSV synthetic benchmark", config, infos, runs, wall,
                                     overwrite=args.overwrite)

@@ -102,8 +102,8 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
         md += ["## Cloud points off the body (% of the registered cloud)", "",
                ("Points farther than 2 cm / 10 cm from the true body surface (exact point-to-triangle distance): "
                 "floor, wall or mask spill, flying pixels and calibration shifts that survived the cloud building; "
-                "`before SOR`: the lab path's cloud before the statistical outlier removal (what the person mask "
-                "let through)."),
+                "`uncleaned`: the lab path's cloud of the person mask alone, before floor removal, person isolation "
+                "and outlier removal (what the mask let through)."),
                "", far, ""]
     if checks:
         md += ["## Targets (bsv)", "", targets_md(checks), ""]

@@ -51,6 +51,8 @@ class SynthConfig:
     params: dict[str, Any] = field(default_factory=dict)
     local: bool = True
     cloud: str = "raw"
+    #: Cloud-building keywords for the lab path (``bsv process``'s defaults when empty), e.g. {"sor": True}.
+    cloud_params: dict[str, Any] = field(default_factory=dict)
     #: Render the rig inside a room; None: yes on the camera path (camera segmentation or lab cloud), no on the raw path.
     room: bool | None = None
 
@@ -88,7 +90,8 @@ def scan_seed(seed: int, index: int) -> int:
 def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition: str, seed: int,
                       template: Mesh, methods: Iterable[str], segmentation: str = "oracle",
                       params: dict[str, Any] | None = None, truth_mesh: Mesh | None = None,
-                      cloud_mode: str = "raw", room: bool = False) -> list[Run]:
+                      cloud_mode: str = "raw", room: bool = False,
+                      cloud_params: dict[str, Any] | None = None) -> list[Run]:
     """Scan ``mesh`` in one condition, compute the floor if calibrated, register with every method.
 
     ``cloud_mode``: ``raw`` registers the scanner's cloud; ``lab`` (forced by camera segmentation) rebuilds
@@ -114,8 +117,10 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
             from .camera import build_views_cloud, capture_views
 
             views = capture_views(tmp, segmentation)
-            raw = build_views_cloud(views, tmp)[0]
-            unfiltered = cloud_far_pct(keep_trunk_limbs(build_views_cloud(views, tmp, sor=False)[0]), truth_surface)
+            raw = build_views_cloud(views, tmp, **(cloud_params or {}))[0]
+            # The mask's own cloud, before any cleaning: what floor, wall and edge removal had to remove.
+            uncleaned = build_views_cloud(views, tmp, sor=False, remove_floor=False, isolate_person=False)[0]
+            unfiltered = cloud_far_pct(keep_trunk_limbs(uncleaned), truth_surface)
     cloud: PointCloud = keep_trunk_limbs(raw)
     far2, far10 = cloud_far_pct(cloud, truth_surface)
     for method in methods:
@@ -162,7 +167,7 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] |
         try:
             runs += measure_condition(name, mesh, truth, cond, scan_seed(cfg.seed, index), template,
                                       cfg.methods, cfg.segmentation, cfg.params, cloud_mode=cfg.cloud,
-                                      room=cfg.uses_room())
+                                      room=cfg.uses_room(), cloud_params=cfg.cloud_params)
         except Exception as exc:  # a failed scan/floor is reported, the run goes on
             runs += [Run(name, cond, m, False, truth_l=truth, error=f"{type(exc).__name__}: {exc}")
                      for m in cfg.methods]

@@ -231,8 +231,8 @@ def cloud_table(runs: Sequence[Run]) -> str:
     measured = [r for r in runs if r.cloud_far_2cm_pct is not None and r.cloud_far_10cm_pct is not None]
     if not measured:
         return ""
-    head = ("| condition | method | runs | > 2 cm mean (max) | > 10 cm mean (max) | before SOR > 2 cm | "
-            "before SOR > 10 cm |")
+    head = ("| condition | method | runs | > 2 cm mean (max) | > 10 cm mean (max) | uncleaned > 2 cm | "
+            "uncleaned > 10 cm |")
     lines = [head, "|---|---|---|---|---|---|---|"]
     for c in [c for c in CONDITIONS if any(r.condition == c for r in measured)]:
         for m in sorted({r.method for r in measured if r.condition == c}):

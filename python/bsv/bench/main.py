@@ -68,6 +68,9 @@ def parser() -> argparse.ArgumentParser:
     s.add_argument("--room", action=argparse.BooleanOptionalAction, default=None,
                    help="render the rig inside a clinic room (floor, walls, varied subject appearance); "
                    "default: on for --segmentation camera or --cloud lab, off for the raw oracle cloud")
+    s.add_argument("--studio", action="store_true",
+                   help="with a room: the subject dressed and lit as in the room but no floor, walls or ceiling "
+                   "(compare with the room to see what the floor and walls do)")
     s.add_argument("--template", default="default", help="default, fine or a labelled mesh path")
     s.add_argument("--no-local", action="store_true", help="cohort without MakeHuman local modifiers")
     common(s, "bench_synth")
@@ -103,11 +106,12 @@ def main(argv: Sequence[str] | None = None) -> int:
 
             cfg = SynthConfig(n=args.n, seed=args.seed, conditions=args.conditions, segmentation=args.segmentation,
                               template=args.template, methods=methods, params=params, local=not args.no_local,
-                              cloud=args.cloud, room=args.room, cloud_params=dict(args.cloud_param))
+                              cloud=args.cloud, room=args.room, studio=args.studio,
+                              cloud_params=dict(args.cloud_param))
             cfg.validate()
             infos, runs, wall = run_synth(cfg, jobs=max(1, args.jobs), progress=not args.quiet)
             config = {"n": cfg.n, "seed": cfg.seed, "conditions": ",".join(cfg.conditions),
-                      "segmentation": cfg.segmentation, "cloud": cfg.cloud, "room": cfg.uses_room(),
+                      "segmentation": cfg.segmentation, "cloud": cfg.cloud, "room": ("studio" if cfg.studio else "clinic") if cfg.uses_room() else False,
                       "cloud_params": cfg.cloud_params, "template": cfg.template, "methods": ",".join(methods),
                       "params": params, "local_modifiers": cfg.local, "jobs": args.jobs}
             summary = write_outputs(args.out, "BSV synthetic benchmark", config, infos, runs, wall,

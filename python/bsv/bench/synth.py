@@ -37,6 +37,11 @@ from .reference import CALIBRATED, CONDITIONS
 
 SEGMENTATIONS: tuple[str, ...] = ("oracle", "camera")
 
+#: The room of ``--studio``: the subject dressed and lit as in the clinic room (skin tone, underwear, hair,
+#: two lights) but nothing else returns depth. Against the clinic room it isolates what the floor and the
+#: walls do to the camera path from what the subject's appearance does.
+STUDIO: dict[str, Any] = {"floor": False, "walls": False, "ceiling": False}
+
 
 @dataclass
 class SynthConfig:
@@ -55,6 +60,14 @@ class SynthConfig:
     cloud_params: dict[str, Any] = field(default_factory=dict)
     #: Render the rig inside a room; None: yes on the camera path (camera segmentation or lab cloud), no on the raw path.
     room: bool | None = None
+    #: With a room: a studio (:data:`STUDIO`), the room's appearance without its floor, walls or ceiling.
+    studio: bool = False
+
+    def room_arg(self) -> bool | dict[str, Any]:
+        """The ``room`` argument of :func:`bsv.scan` for this configuration."""
+        if not self.uses_room():
+            return False
+        return dict(STUDIO) if self.studio else True
 
     def uses_room(self) -> bool:
         """Whether the scans render a room (:attr:`room`, or its default for the path)."""
@@ -90,13 +103,13 @@ def scan_seed(seed: int, index: int) -> int:
 def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition: str, seed: int,
                       template: Mesh, methods: Iterable[str], segmentation: str = "oracle",
                       params: dict[str, Any] | None = None, truth_mesh: Mesh | None = None,
-                      cloud_mode: str = "raw", room: bool = False,
+                      cloud_mode: str = "raw", room: bool | dict[str, Any] = False,
                       cloud_params: dict[str, Any] | None = None) -> list[Run]:
     """Scan ``mesh`` in one condition, compute the floor if calibrated, register with every method.
 
     ``cloud_mode``: ``raw`` registers the scanner's cloud; ``lab`` (forced by camera segmentation) rebuilds
-    it from the capture images like ``bsv process`` (statistical outlier removal included).
-    ``room``: scan inside a clinic room (:func:`bsv.scan`). The floor moves ``truth_mesh`` (default ``mesh``:
+    it from the capture images like ``bsv process`` (its defaults, or ``cloud_params``).
+    ``room``: scan inside a clinic room, or the room given as a dict (:func:`bsv.scan`). The floor moves ``truth_mesh`` (default ``mesh``:
     it must be closed and labelled like the truth); the cloud's far-point percentages are measured against it.
     Never raises for a failed registration: the Run carries ``ok=False`` and the error text."""
     from .. import scan
@@ -167,7 +180,7 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] |
         try:
             runs += measure_condition(name, mesh, truth, cond, scan_seed(cfg.seed, index), template,
                                       cfg.methods, cfg.segmentation, cfg.params, cloud_mode=cfg.cloud,
-                                      room=cfg.uses_room(), cloud_params=cfg.cloud_params)
+                                      room=cfg.room_arg(), cloud_params=cfg.cloud_params)
         except Exception as exc:  # a failed scan/floor is reported, the run goes on
             runs += [Run(name, cond, m, False, truth_l=truth, error=f"{type(exc).__name__}: {exc}")
                      for m in cfg.methods]

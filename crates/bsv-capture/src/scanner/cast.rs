@@ -119,7 +119,8 @@ pub(super) fn cast_camera_room(
                     let (d, ray) = pixel_ray(intr, ext, u, v);
                     let body = bvh.cast_local_ray_and_get_normal(&ray, MAX_TOI, false);
                     let limit = body.as_ref().map_or(MAX_TOI, |b| b.time_of_impact);
-                    match (room.bvh.cast_local_ray_and_get_normal(&ray, limit, false), body) {
+                    let wall = room.bvh.as_ref().and_then(|r| r.cast_local_ray_and_get_normal(&ray, limit, false));
+                    match (wall, body) {
                         (Some(r), b) if b.as_ref().is_none_or(|b| r.time_of_impact < b.time_of_impact) => {
                             let kind = room.kinds.get(r.subshape as usize).copied().unwrap_or(SurfaceKind::Wall);
                             pixel_hit(&r, &ray, d, 0, kind)

@@ -81,6 +81,10 @@ pub enum RoomObject {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Room {
+    /// A floor at y = 0 (false: nothing below the subject returns depth).
+    pub floor: bool,
+    /// The front, back and side walls (false: none; the ceiling is [`Room::ceiling`]).
+    pub walls: bool,
     /// Floor extent along x, metres, centred on x = 0.
     pub floor_width: f64,
     /// Floor extent along z, metres, centred on z = 0.
@@ -111,6 +115,8 @@ impl Room {
     /// ceiling, no objects.
     pub fn clinic() -> Room {
         Room {
+            floor: true,
+            walls: true,
             floor_width: 6.0,
             floor_length: 8.0,
             back_wall_z: -2.6,
@@ -132,6 +138,14 @@ impl Room {
             ],
             ..Room::clinic()
         }
+    }
+
+    /// A studio: no floor, walls, ceiling or object returns depth (the background is empty, as in the
+    /// rig without a room), but the colour render still dresses and lights the subject like a room's
+    /// ([`crate::scanner::Appearance`]). Compared with [`Room::clinic`] it isolates what the floor and
+    /// walls do from what the subject's appearance does.
+    pub fn studio() -> Room {
+        Room { floor: false, walls: false, ceiling: false, ..Room::clinic() }
     }
 
     /// This room with its distances varied deterministically for `seed`: each wall moved by up to
@@ -177,8 +191,11 @@ impl Room {
     }
 
     /// Checks that a camera centre lies inside the room (between the walls, above the floor, below
-    /// the ceiling); `camera` names it in the error.
+    /// the ceiling; anywhere in a room without walls); `camera` names it in the error.
     pub fn check_inside(&self, camera: &str, centre: [f64; 3]) -> Result<(), ScanError> {
+        if !self.walls {
+            return Ok(());
+        }
         let [x, y, z] = centre;
         let side = self.side_wall_x.unwrap_or(f64::INFINITY);
         let (param, remedy) = if z <= self.back_wall_z {
@@ -244,8 +261,8 @@ impl RoomObject {
 
 /// The room as one ray-casting structure (parry BVH) with the kind of every triangle.
 pub(crate) struct RoomScene {
-    /// The BVH of every room triangle.
-    pub bvh: parry3d_f64::shape::TriMesh,
+    /// The BVH of every room triangle (`None` for a room with nothing in it, [`Room::studio`]).
+    pub bvh: Option<parry3d_f64::shape::TriMesh>,
     /// [`SurfaceKind`] of each triangle.
     pub kinds: Vec<SurfaceKind>,
 }
@@ -268,11 +285,16 @@ impl RoomScene {
         let (hw, hl, h) = (room.floor_width / 2.0, room.floor_length / 2.0, room.wall_height);
         let xw = room.side_wall_x.unwrap_or(hw).max(hw);
         let (zb, zf) = (room.back_wall_z, room.front_wall_z);
-        push_quad(&mut m, &mut kinds, [-hw, 0.0, -hl], [2.0 * hw, 0.0, 0.0], [0.0, 0.0, 2.0 * hl], SurfaceKind::Floor);
-        for z in [zb, zf] {
-            push_quad(&mut m, &mut kinds, [-xw, 0.0, z], [2.0 * xw, 0.0, 0.0], [0.0, h, 0.0], SurfaceKind::Wall);
+        if room.floor {
+            let (o, a, b) = ([-hw, 0.0, -hl], [2.0 * hw, 0.0, 0.0], [0.0, 0.0, 2.0 * hl]);
+            push_quad(&mut m, &mut kinds, o, a, b, SurfaceKind::Floor);
         }
-        if let Some(x) = room.side_wall_x {
+        if room.walls {
+            for z in [zb, zf] {
+                push_quad(&mut m, &mut kinds, [-xw, 0.0, z], [2.0 * xw, 0.0, 0.0], [0.0, h, 0.0], SurfaceKind::Wall);
+            }
+        }
+        if let Some(x) = room.side_wall_x.filter(|_| room.walls) {
             for sx in [-x, x] {
                 push_quad(&mut m, &mut kinds, [sx, 0.0, zb], [0.0, 0.0, zf - zb], [0.0, h, 0.0], SurfaceKind::Wall);
             }
@@ -294,9 +316,12 @@ impl RoomScene {
             m.vertices.extend(part.vertices);
             m.triangles.extend(part.triangles.iter().map(|t| t.map(|i| i + off)));
         }
+        if m.triangles.is_empty() {
+            return Ok(RoomScene { bvh: None, kinds });
+        }
         let verts: Vec<Vector> = m.vertices.iter().map(|p| Vector::new(p[0], p[1], p[2])).collect();
         let bvh =
             parry3d_f64::shape::TriMesh::new(verts, m.triangles).map_err(|e| ScanError::Parry(format!("room: {e}")))?;
-        Ok(RoomScene { bvh, kinds })
+        Ok(RoomScene { bvh: Some(bvh), kinds })
     }
 }

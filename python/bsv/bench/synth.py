@@ -24,6 +24,7 @@ from typing import Any
 
 from ..types import Mesh, PointCloud
 from .common import BenchError, Run, keep_trunk_limbs, load_template, register_method
+from .outliers import inject, split_request
 from .reference import CALIBRATED, CONDITIONS
 
 SEGMENTATIONS: tuple[str, ...] = ("oracle", "camera")
@@ -93,7 +94,8 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
             from .camera import capture_cloud
 
             raw = capture_cloud(tmp, segmentation)[0]
-    cloud: PointCloud = keep_trunk_limbs(raw)
+    kinds, params = split_request(params)  # --param bench_outliers=floor,wall,mixed (bench/outliers.py)
+    cloud: PointCloud = inject(keep_trunk_limbs(raw), kinds, seed)
     for method in methods:
         run = Run(name, condition, method, False, truth_l=dict(truth), floor_l=dict(floor), n_points=len(cloud))
         try:

@@ -1,10 +1,11 @@
 //! Stage 1 of a registration: the prepared input. Checks the template and the cloud, drops the
-//! cloud's extremities and sparse outliers, pre-aligns the template ([`crate::prealign`]) and
+//! cloud's extremities, the detached pieces of its segments and sparse outliers, pre-aligns the template ([`crate::prealign`]) and
 //! runs the articulated initialisation of the limbs ([`crate::articulate`]). The result is the
 //! rest shape that [`crate::Registrar`] fits.
 
 use crate::articulate;
 use crate::cotan::CotanWeights;
+use crate::detached;
 use crate::error::{InputError, NumericError, RegisterError};
 use crate::outliers;
 use crate::params::{ArticulationParams, LabelSource, OutlierParams, RegisterParams};
@@ -25,6 +26,7 @@ pub struct Prepared<'a> {
     pub(crate) similarity: Similarity,
     pub(crate) articulation: Vec<LimbAlignment>,
     pub(crate) extremities_dropped: usize,
+    pub(crate) detached_removed: usize,
     pub(crate) outliers_removed: usize,
     /// When the registration started (for `Registration::setup_seconds` and `total_seconds`).
     pub(crate) started: Instant,
@@ -55,6 +57,10 @@ impl<'a> Prepared<'a> {
     pub fn extremities_dropped(&self) -> usize {
         self.extremities_dropped
     }
+    /// Cloud points dropped as detached pieces of their segment.
+    pub fn detached_removed(&self) -> usize {
+        self.detached_removed
+    }
     /// Cloud points dropped as sparse outliers.
     pub fn outliers_removed(&self) -> usize {
         self.outliers_removed
@@ -79,7 +85,14 @@ pub fn prepare<'a>(
     if let Some((c, n)) = drop_extremities(&cloud, &params.outliers)? {
         (cloud, extremities_dropped) = (Cow::Owned(c), n);
     }
-    let cloud_box = prealign::check_cloud(&cloud, &params.checks, params.prealignment.bbox_quantile)?;
+    let mut cloud_box = prealign::check_cloud(&cloud, &params.checks, params.prealignment.bbox_quantile)?;
+    // Detached pieces of a segment (floor and wall spill labelled like a limb): before anything
+    // aggregates the cloud (the box, the limb axes, the correspondences); the box is redone.
+    let mut detached_removed = 0;
+    if let Some((c, n)) = drop_detached(&cloud, &params.outliers, params.checks.min_points) {
+        (cloud, detached_removed) = (Cow::Owned(c), n);
+        cloud_box = prealign::check_cloud(&cloud, &params.checks, params.prealignment.bbox_quantile)?;
+    }
     // Sparse-point removal (flying pixels trail behind the silhouettes, right where the
     // gaps are, and would attract the gap-side vertices).
     let mut outliers_removed = 0;
@@ -94,7 +107,17 @@ pub fn prepare<'a>(
             .map_err(NumericError::index)?;
     let rest: Vec<[f64; 3]> = template.vertices.iter().map(|&p| similarity.apply(p)).collect();
     let (rest, articulation) = articulate_limbs(rest, template, &cloud, &params.articulation);
-    Ok(Prepared { template, cloud, rest, similarity, articulation, extremities_dropped, outliers_removed, started })
+    Ok(Prepared {
+        template,
+        cloud,
+        rest,
+        similarity,
+        articulation,
+        extremities_dropped,
+        detached_removed,
+        outliers_removed,
+        started,
+    })
 }
 
 /// The cloud without its head/hand/foot points and how many were dropped, or `None` when nothing
@@ -114,6 +137,25 @@ fn drop_extremities(cloud: &PointCloud, params: &OutlierParams) -> Result<Option
             Ok(Some((c, dropped)))
         }
         _ => Ok(None),
+    }
+}
+
+/// The cloud without the detached pieces of its segments (see [`crate::detached`]) and how many
+/// points were dropped, or `None` when none is dropped or fewer than `min_points` would remain.
+fn drop_detached(cloud: &PointCloud, params: &OutlierParams, min_points: usize) -> Option<(PointCloud, usize)> {
+    let keep = detached::attached_points(
+        &cloud.points,
+        cloud.labels.as_deref(),
+        params.detached_voxel_m,
+        params.detached_min_fraction,
+    );
+    let removed = keep.iter().filter(|&&k| !k).count();
+    if removed > 0 && cloud.points.len() - removed >= min_points.max(1) {
+        let mut c = cloud.clone();
+        c.retain_indices(|i| keep[i]);
+        Some((c, removed))
+    } else {
+        None
     }
 }
 

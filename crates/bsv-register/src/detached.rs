@@ -16,7 +16,12 @@
 //! segment's. So, per segment label (all points as one group in an unlabelled cloud): the points
 //! are binned in voxels of side `voxel`, voxels sharing a face, edge or corner are joined (union
 //! find), and a piece whose point count is below `min_fraction` x the segment's largest piece is
-//! dropped. Cost: one hash pass and 13 look-ups per occupied voxel.
+//! dropped. Cost: one hash pass and 13 look-ups per occupied voxel. It runs after the sparse-point
+//! filter, so that trails of flying or mixed pixels cannot bridge a spill to the body.
+//!
+//! Limit: the test is relative to the segment's largest piece, so a spill of more than a quarter
+//! of a small segment's largest piece (a shin seen by one camera holds ~4 % of the cloud) that
+//! forms ONE piece is kept.
 
 use std::collections::HashMap;
 

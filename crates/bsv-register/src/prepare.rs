@@ -1,9 +1,10 @@
 //! Stage 1 of a registration: the prepared input. Checks the template and the cloud, drops the
-//! cloud's extremities, the detached pieces of its segments and sparse outliers, pre-aligns the template ([`crate::prealign`]) and
-//! runs the articulated initialisation of the limbs ([`crate::articulate`]). The result is the
+//! cloud's extremities, sparse outliers and the detached pieces of its segments, pre-aligns the
+//! template ([`crate::prealign`]) and runs the articulated initialisation of the limbs ([`crate::articulate`]). The result is the
 //! rest shape that [`crate::Registrar`] fits.
 
 use crate::articulate;
+use crate::correspond::{build_tree, nearest_batch};
 use crate::cotan::CotanWeights;
 use crate::detached;
 use crate::error::{InputError, NumericError, RegisterError};
@@ -86,18 +87,20 @@ pub fn prepare<'a>(
         (cloud, extremities_dropped) = (Cow::Owned(c), n);
     }
     let mut cloud_box = prealign::check_cloud(&cloud, &params.checks, params.prealignment.bbox_quantile)?;
-    // Detached pieces of a segment (floor and wall spill labelled like a limb): before anything
-    // aggregates the cloud (the box, the limb axes, the correspondences); the box is redone.
-    let mut detached_removed = 0;
-    if let Some((c, n)) = drop_detached(&cloud, &params.outliers, params.checks.min_points) {
-        (cloud, detached_removed) = (Cow::Owned(c), n);
-        cloud_box = prealign::check_cloud(&cloud, &params.checks, params.prealignment.bbox_quantile)?;
-    }
-    // Sparse-point removal (flying pixels trail behind the silhouettes, right where the
-    // gaps are, and would attract the gap-side vertices).
-    let mut outliers_removed = 0;
-    if let Some((c, n)) = drop_outliers(&cloud, &params.outliers, params.checks.min_points) {
-        (cloud, outliers_removed) = (Cow::Owned(c), n);
+    // Sparse points (flying pixels trail behind the silhouettes, right where the gaps are, and
+    // would attract the gap-side vertices), then the detached pieces of a segment (floor and wall
+    // spill labelled like a limb) among the points left. The box keeps its definition (the cloud
+    // before the sparse-point removal) without the detached pieces and without the sparse points
+    // far from the body (mixed pixels toward a wall): redone only when there are such points, so
+    // a clean cloud is prepared exactly as without these removals.
+    let (mut outliers_removed, mut detached_removed) = (0, 0);
+    let far = params.prealignment.bbox_max_outlier_distance_m;
+    if let Some(cleaned) = clean_cloud(&cloud, &params.outliers, params.checks.min_points, far)? {
+        if let Some(box_cloud) = &cleaned.for_box {
+            cloud_box = prealign::check_cloud(box_cloud, &params.checks, params.prealignment.bbox_quantile)?;
+        }
+        (outliers_removed, detached_removed) = (cleaned.sparse, cleaned.detached);
+        cloud = Cow::Owned(cleaned.cloud);
     }
     if params.labels == LabelSource::Template && template.vertex_labels.is_none() {
         return Err(InputError::TemplateWithoutLabels.into());
@@ -140,37 +143,90 @@ fn drop_extremities(cloud: &PointCloud, params: &OutlierParams) -> Result<Option
     }
 }
 
-/// The cloud without the detached pieces of its segments (see [`crate::detached`]) and how many
-/// points were dropped, or `None` when none is dropped or fewer than `min_points` would remain.
-fn drop_detached(cloud: &PointCloud, params: &OutlierParams, min_points: usize) -> Option<(PointCloud, usize)> {
-    let keep = detached::attached_points(
-        &cloud.points,
-        cloud.labels.as_deref(),
-        params.detached_voxel_m,
-        params.detached_min_fraction,
-    );
-    let removed = keep.iter().filter(|&&k| !k).count();
-    if removed > 0 && cloud.points.len() - removed >= min_points.max(1) {
-        let mut c = cloud.clone();
-        c.retain_indices(|i| keep[i]);
-        Some((c, removed))
-    } else {
-        None
-    }
+/// What [`clean_cloud`] dropped.
+struct Cleaned {
+    /// The cloud without its sparse points and detached pieces.
+    cloud: PointCloud,
+    /// The box's cloud (without the detached pieces and the far sparse points), when it differs
+    /// from the input cloud.
+    for_box: Option<PointCloud>,
+    /// Sparse points dropped.
+    sparse: usize,
+    /// Points of detached pieces dropped.
+    detached: usize,
 }
 
-/// The cloud without its sparse points (see [`crate::outliers`]) and how many were dropped, or
-/// `None` when none is dropped or fewer than `min_points` would remain.
-fn drop_outliers(cloud: &PointCloud, params: &OutlierParams, min_points: usize) -> Option<(PointCloud, usize)> {
-    let keep = outliers::sparse_points(&cloud.points, params.outlier_voxel_m, params.outlier_min_fraction);
-    let removed = keep.iter().filter(|&&k| !k).count();
-    if removed > 0 && cloud.points.len() - removed >= min_points.max(1) {
-        let mut c = cloud.clone();
-        c.retain_indices(|i| keep[i]);
-        Some((c, removed))
-    } else {
-        None
+/// Drops the sparse points ([`crate::outliers`]) and then, among the points left, the detached
+/// pieces of the segments ([`crate::detached`]); `None` when nothing is dropped. Either removal
+/// is skipped when fewer than `min_points` would remain. The box's cloud also leaves out the
+/// sparse points farther than `far` from the cloud kept.
+fn clean_cloud(
+    cloud: &PointCloud,
+    params: &OutlierParams,
+    min_points: usize,
+    far: f64,
+) -> Result<Option<Cleaned>, NumericError> {
+    let n = cloud.points.len();
+    let min_points = min_points.max(1);
+    let mut keep = outliers::sparse_points(&cloud.points, params.outlier_voxel_m, params.outlier_min_fraction);
+    let mut sparse = keep.iter().filter(|&&k| !k).count();
+    if n - sparse < min_points {
+        keep.iter_mut().for_each(|k| *k = true);
+        sparse = 0;
     }
+    let kept: Vec<usize> = (0..n).filter(|&i| keep[i]).collect();
+    let points: Vec<[f64; 3]> = kept.iter().map(|&i| cloud.points[i]).collect();
+    let labels: Option<Vec<u8>> = cloud.labels.as_ref().map(|l| kept.iter().map(|&i| l[i]).collect());
+    let attached =
+        detached::attached_points(&points, labels.as_deref(), params.detached_voxel_m, params.detached_min_fraction);
+    let mut out_of_box = vec![false; n];
+    for (&i, &a) in kept.iter().zip(&attached) {
+        out_of_box[i] = !a;
+    }
+    let mut detached = attached.iter().filter(|&&a| !a).count();
+    if kept.len() - detached < min_points {
+        out_of_box.iter_mut().for_each(|d| *d = false);
+        detached = 0;
+    }
+    if sparse + detached == 0 {
+        return Ok(None);
+    }
+    let final_keep: Vec<bool> = (0..n).map(|i| keep[i] && !out_of_box[i]).collect();
+    let far_sparse = mark_far(&cloud.points, &keep, &final_keep, far, &mut out_of_box)?;
+    let for_box = (detached + far_sparse > 0).then(|| {
+        let mut c = cloud.clone();
+        c.retain_indices(|i| !out_of_box[i]);
+        c
+    });
+    let mut c = cloud.clone();
+    c.retain_indices(|i| final_keep[i]);
+    Ok(Some(Cleaned { cloud: c, for_box, sparse, detached }))
+}
+
+/// Marks in `out` the points not in `sparse_kept` (the sparse points) lying farther than `far`
+/// from every point of `kept`; returns how many. Nothing when `far` is infinite.
+fn mark_far(
+    points: &[[f64; 3]],
+    sparse_kept: &[bool],
+    kept: &[bool],
+    far: f64,
+    out: &mut [bool],
+) -> Result<usize, NumericError> {
+    let queries: Vec<usize> = (0..points.len()).filter(|&i| !sparse_kept[i]).collect();
+    if !far.is_finite() || queries.is_empty() {
+        return Ok(0);
+    }
+    let body: Vec<[f64; 3]> = points.iter().zip(kept).filter(|(_, &k)| k).map(|(p, _)| *p).collect();
+    let tree = build_tree(&body).map_err(NumericError::index)?;
+    let q: Vec<[f64; 3]> = queries.iter().map(|&i| points[i]).collect();
+    let mut count = 0;
+    for (&i, (_, d2)) in queries.iter().zip(nearest_batch(&tree, &q)) {
+        if d2 > far * far {
+            out[i] = true;
+            count += 1;
+        }
+    }
+    Ok(count)
 }
 
 /// The articulated initialisation (labelled template and cloud, `articulate` on): the rest shape

@@ -204,7 +204,8 @@ fn clean_cloud(
 }
 
 /// Marks in `out` the points not in `sparse_kept` (the sparse points) lying farther than `far`
-/// from every point of `kept`; returns how many. Nothing when `far` is infinite.
+/// from every point of `kept` (those farther by less than `far / 20 * sqrt(3)` may be missed);
+/// returns how many. Nothing when `far` is infinite.
 fn mark_far(
     points: &[[f64; 3]],
     sparse_kept: &[bool],
@@ -216,12 +217,27 @@ fn mark_far(
     if !far.is_finite() || queries.is_empty() {
         return Ok(0);
     }
-    let body: Vec<[f64; 3]> = points.iter().zip(kept).filter(|(_, &k)| k).map(|(p, _)| *p).collect();
+    // One kept point per voxel of side far / 20 stands for the cloud (a tree of a few thousand
+    // points instead of the whole cloud): the nearest representative is at most a voxel diagonal
+    // farther than the nearest kept point, so a point is marked only when that distance less the
+    // diagonal exceeds `far` (never a point within `far` of the cloud).
+    let inv = 20.0 / far;
+    let limit = far * (1.0 + 3f64.sqrt() / 20.0);
+    let mut seen = std::collections::HashSet::new();
+    let body: Vec<[f64; 3]> = points
+        .iter()
+        .zip(kept)
+        .filter(|&(p, &k)| k && seen.insert(p.map(|x| (x * inv).floor() as i64)))
+        .map(|(p, _)| *p)
+        .collect();
+    if body.is_empty() {
+        return Ok(0);
+    }
     let tree = build_tree(&body).map_err(NumericError::index)?;
     let q: Vec<[f64; 3]> = queries.iter().map(|&i| points[i]).collect();
     let mut count = 0;
     for (&i, (_, d2)) in queries.iter().zip(nearest_batch(&tree, &q)) {
-        if d2 > far * far {
+        if d2 > limit * limit {
             out[i] = true;
             count += 1;
         }

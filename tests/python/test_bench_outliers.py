@@ -57,18 +57,21 @@ def test_injection_is_reproducible_and_where_it_should_be() -> None:
 
 
 def test_registration_ignores_the_injected_spill() -> None:
-    """A scanned body with 3.5 % room outliers registers close to the clean fit (it was +30 % to
-    +300 % before the detached-piece removal): within 2 % for the trunk and the shins, 8 % for the
-    upper arms (mixed pixels less than 0.3 m from the body still count in the pre-alignment box)."""
+    """A scanned body with 3 % floor and wall spill registers like its clean cloud (it was +30 % to
+    +300 % before the detached-piece removal); with the 0.5 % mixed pixels added, within 5 % for
+    trunk_limbs and 10 % per segment (mixed pixels less than ~0.3 m from the body still count in the
+    pre-alignment box, see ``bbox_max_outlier_distance_m``)."""
     from bsv.bench.common import keep_trunk_limbs, load_template
     from bsv.bodies import subject
 
     s = subject(0, 0, local=True)
     clean = keep_trunk_limbs(bsv.scan(s.body.mesh(), "noer", 0))
-    dirty = inject(clean, ("floor", "wall", "mixed"), seed=0)
     template = load_template("default")
     a = bsv.register(clean.points, clean.labels, template).volumes["volumes_l"]
-    b = bsv.register(dirty.points, dirty.labels, template).volumes["volumes_l"]
-    for seg, tol in (("trunk_limbs", 0.02), ("torso", 0.02), ("shin_l", 0.02), ("shin_r", 0.02),
-                     ("upper_arm_l", 0.08), ("upper_arm_r", 0.08)):
-        assert abs(b[seg] - a[seg]) / a[seg] < tol, (seg, a[seg], b[seg])
+    segs = ("torso", "upper_arm_l", "upper_arm_r", "forearm_l", "forearm_r", "thigh_l", "thigh_r", "shin_l", "shin_r")
+    for kinds, tol_trunk, tol in ((("floor", "wall"), 0.005, 0.01), (("floor", "wall", "mixed"), 0.05, 0.10)):
+        dirty = inject(clean, kinds, seed=0)
+        b = bsv.register(dirty.points, dirty.labels, template).volumes["volumes_l"]
+        assert abs(b["trunk_limbs"] - a["trunk_limbs"]) / a["trunk_limbs"] < tol_trunk, (kinds, a, b)
+        for seg in segs:
+            assert abs(b[seg] - a[seg]) / a[seg] < tol, (kinds, seg, a[seg], b[seg])

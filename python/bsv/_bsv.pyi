@@ -29,6 +29,10 @@ EXTREMITIES: tuple[int, ...]
 class RegisterParams:
     # Registration parameters (``bsv_register::RegisterParams``); unknown names, wrong types and
     # out-of-range values raise ``RegistrationParameterError`` naming the parameter.
+    # Room outliers (floor/wall spill labelled like a limb, mixed pixels): ``detached_voxel_m``
+    # (float, default 0.015; 0 = off) and ``detached_min_fraction`` (float in [0, 1], default 0.25)
+    # drop the detached pieces of a segment; ``bbox_max_outlier_distance_m`` (float > 0, default
+    # 0.3; inf = off) leaves far sparse points out of the pre-alignment box.
 
     def __init__(self, **kwargs: Any) -> None: ...
     def to_dict(self) -> dict[str, Any]: ...

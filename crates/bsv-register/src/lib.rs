@@ -5,6 +5,7 @@
 //!
 //! 1. [`prepare`] -> [`Prepared`]: input checks, head/hand/foot removal
 //!    ([`OutlierParams::drop_extremities`]), sparse-point (flying pixel) removal (`outliers.rs`),
+//!    detached-piece removal (floor and wall spill labelled like a limb, `detached.rs`),
 //!    the similarity pre-alignment (`prealign.rs`) and the articulated initialisation of the limbs
 //!    when the template and the cloud are labelled (`articulate.rs`; the articulated template is
 //!    the rest shape).
@@ -25,6 +26,7 @@
 mod articulate;
 mod correspond;
 mod cotan;
+mod detached;
 mod error;
 mod local;
 mod log;

@@ -168,6 +168,13 @@ pub struct PrealignParams {
     /// Default 0.001 (0.1 % / 99.9 %), so stray points and flying pixels do not stretch the box.
     /// Also the box of the cloud's extent check ([`CheckParams`]).
     pub bbox_quantile: f64,
+    /// The box is taken from the cloud before the sparse-point removal ([`OutlierParams`]), so the
+    /// flying pixels a depth camera leaves behind the silhouettes count in it (the cohort was tuned
+    /// so); but sparse points farther than this from the cloud kept are left out of it (metres;
+    /// inf = none, the behaviour before): mixed pixels between the body and a wall 0.3-1 m behind
+    /// it stretched the box and the template with it (torso +160 % with 0.5 % of such points).
+    /// Default 0.3: the virtual L515's flying pixels reach 0.27-0.28 m.
+    pub bbox_max_outlier_distance_m: f64,
 }
 
 impl Default for PrealignParams {
@@ -177,6 +184,7 @@ impl Default for PrealignParams {
             prealign_yaw: YawMode::Auto,
             auto_aspect_threshold: 0.5,
             bbox_quantile: 0.001,
+            bbox_max_outlier_distance_m: 0.3,
         }
     }
 }
@@ -213,11 +221,27 @@ pub struct OutlierParams {
     pub outlier_voxel_m: f64,
     /// See [`Self::outlier_voxel_m`]. Default 0.1.
     pub outlier_min_fraction: f64,
+    /// Detached-piece removal before the fit: voxel side in metres (0 = off). Per segment label
+    /// (the whole cloud when unlabelled), points in touching voxels form pieces, and a piece with
+    /// fewer points than [`Self::detached_min_fraction`] x the segment's largest piece is dropped:
+    /// floor patches and wall slivers that a person mask spilled onto and labelled like the
+    /// nearest limb (see `detached.rs`). Default 0.015: pieces more than ~2-5 cm apart are
+    /// separate; a segment's own surface, sampled every few millimetres, is one piece per camera.
+    pub detached_voxel_m: f64,
+    /// See [`Self::detached_voxel_m`]. Default 0.25: a segment's front and back pieces (split by the
+    /// lateral gaps) are each far larger; a spill of a few percent of the points is far smaller.
+    pub detached_min_fraction: f64,
 }
 
 impl Default for OutlierParams {
     fn default() -> Self {
-        OutlierParams { drop_extremities: true, outlier_voxel_m: 0.008, outlier_min_fraction: 0.1 }
+        OutlierParams {
+            drop_extremities: true,
+            outlier_voxel_m: 0.008,
+            outlier_min_fraction: 0.1,
+            detached_voxel_m: 0.015,
+            detached_min_fraction: 0.25,
+        }
     }
 }
 
@@ -304,7 +328,7 @@ impl Default for RegisterParams {
 
 /// Every key of the serde form of [`RegisterParams`] (the flat parameter names), in the order of
 /// the serialised form. A unit test keeps it equal to the serialised keys.
-pub const PARAMETER_NAMES: [&str; 27] = [
+pub const PARAMETER_NAMES: [&str; 30] = [
     "alpha",
     "cell_weight",
     "data_weight",
@@ -320,6 +344,7 @@ pub const PARAMETER_NAMES: [&str; 27] = [
     "prealign_yaw",
     "auto_aspect_threshold",
     "bbox_quantile",
+    "bbox_max_outlier_distance_m",
     "min_points",
     "max_extent_m",
     "min_extent_m",
@@ -328,6 +353,8 @@ pub const PARAMETER_NAMES: [&str; 27] = [
     "drop_extremities",
     "outlier_voxel_m",
     "outlier_min_fraction",
+    "detached_voxel_m",
+    "detached_min_fraction",
     "surface_correction",
     "articulate",
     "articulate_axial_scale",
@@ -455,6 +482,24 @@ impl RegisterParams {
             o.outlier_min_fraction,
             (0.0..=1.0).contains(&o.outlier_min_fraction),
             "must be in [0, 1]",
+        )?;
+        check(
+            "detached_voxel_m",
+            o.detached_voxel_m,
+            o.detached_voxel_m.is_finite() && o.detached_voxel_m >= 0.0,
+            "must be finite and >= 0 metres (0 = no detached-piece removal)",
+        )?;
+        check(
+            "detached_min_fraction",
+            o.detached_min_fraction,
+            (0.0..=1.0).contains(&o.detached_min_fraction),
+            "must be in [0, 1] (0 = keep every piece)",
+        )?;
+        check(
+            "bbox_max_outlier_distance_m",
+            a.bbox_max_outlier_distance_m,
+            a.bbox_max_outlier_distance_m > 0.0,
+            "must be > 0 metres (inf = keep every sparse point in the box)",
         )?;
         check("bbox_quantile", a.bbox_quantile, (0.0..0.25).contains(&a.bbox_quantile), "must be in [0, 0.25)")?;
         let c = &self.checks;

@@ -1,10 +1,12 @@
 //! Stage 1 of a registration: the prepared input. Checks the template and the cloud, drops the
-//! cloud's extremities and sparse outliers, pre-aligns the template ([`crate::prealign`]) and
-//! runs the articulated initialisation of the limbs ([`crate::articulate`]). The result is the
+//! cloud's extremities, sparse outliers and the detached pieces of its segments, pre-aligns the
+//! template ([`crate::prealign`]) and runs the articulated initialisation of the limbs ([`crate::articulate`]). The result is the
 //! rest shape that [`crate::Registrar`] fits.
 
 use crate::articulate;
+use crate::correspond::{build_tree, nearest_batch};
 use crate::cotan::CotanWeights;
+use crate::detached;
 use crate::error::{InputError, NumericError, RegisterError};
 use crate::outliers;
 use crate::params::{ArticulationParams, LabelSource, OutlierParams, RegisterParams};
@@ -25,6 +27,7 @@ pub struct Prepared<'a> {
     pub(crate) similarity: Similarity,
     pub(crate) articulation: Vec<LimbAlignment>,
     pub(crate) extremities_dropped: usize,
+    pub(crate) detached_removed: usize,
     pub(crate) outliers_removed: usize,
     /// When the registration started (for `Registration::setup_seconds` and `total_seconds`).
     pub(crate) started: Instant,
@@ -55,6 +58,10 @@ impl<'a> Prepared<'a> {
     pub fn extremities_dropped(&self) -> usize {
         self.extremities_dropped
     }
+    /// Cloud points dropped as detached pieces of their segment.
+    pub fn detached_removed(&self) -> usize {
+        self.detached_removed
+    }
     /// Cloud points dropped as sparse outliers.
     pub fn outliers_removed(&self) -> usize {
         self.outliers_removed
@@ -79,12 +86,21 @@ pub fn prepare<'a>(
     if let Some((c, n)) = drop_extremities(&cloud, &params.outliers)? {
         (cloud, extremities_dropped) = (Cow::Owned(c), n);
     }
-    let cloud_box = prealign::check_cloud(&cloud, &params.checks, params.prealignment.bbox_quantile)?;
-    // Sparse-point removal (flying pixels trail behind the silhouettes, right where the
-    // gaps are, and would attract the gap-side vertices).
-    let mut outliers_removed = 0;
-    if let Some((c, n)) = drop_outliers(&cloud, &params.outliers, params.checks.min_points) {
-        (cloud, outliers_removed) = (Cow::Owned(c), n);
+    let mut cloud_box = prealign::check_cloud(&cloud, &params.checks, params.prealignment.bbox_quantile)?;
+    // Sparse points (flying pixels trail behind the silhouettes, right where the gaps are, and
+    // would attract the gap-side vertices), then the detached pieces of a segment (floor and wall
+    // spill labelled like a limb) among the points left. The box keeps its definition (the cloud
+    // before the sparse-point removal) without the detached pieces and without the sparse points
+    // far from the body (mixed pixels toward a wall): redone only when there are such points, so
+    // a clean cloud is prepared exactly as without these removals.
+    let (mut outliers_removed, mut detached_removed) = (0, 0);
+    let far = params.prealignment.bbox_max_outlier_distance_m;
+    if let Some(cleaned) = clean_cloud(&cloud, &params.outliers, params.checks.min_points, far)? {
+        if let Some(box_cloud) = &cleaned.for_box {
+            cloud_box = prealign::check_cloud(box_cloud, &params.checks, params.prealignment.bbox_quantile)?;
+        }
+        (outliers_removed, detached_removed) = (cleaned.sparse, cleaned.detached);
+        cloud = Cow::Owned(cleaned.cloud);
     }
     if params.labels == LabelSource::Template && template.vertex_labels.is_none() {
         return Err(InputError::TemplateWithoutLabels.into());
@@ -94,7 +110,17 @@ pub fn prepare<'a>(
             .map_err(NumericError::index)?;
     let rest: Vec<[f64; 3]> = template.vertices.iter().map(|&p| similarity.apply(p)).collect();
     let (rest, articulation) = articulate_limbs(rest, template, &cloud, &params.articulation);
-    Ok(Prepared { template, cloud, rest, similarity, articulation, extremities_dropped, outliers_removed, started })
+    Ok(Prepared {
+        template,
+        cloud,
+        rest,
+        similarity,
+        articulation,
+        extremities_dropped,
+        detached_removed,
+        outliers_removed,
+        started,
+    })
 }
 
 /// The cloud without its head/hand/foot points and how many were dropped, or `None` when nothing
@@ -117,18 +143,106 @@ fn drop_extremities(cloud: &PointCloud, params: &OutlierParams) -> Result<Option
     }
 }
 
-/// The cloud without its sparse points (see [`crate::outliers`]) and how many were dropped, or
-/// `None` when none is dropped or fewer than `min_points` would remain.
-fn drop_outliers(cloud: &PointCloud, params: &OutlierParams, min_points: usize) -> Option<(PointCloud, usize)> {
-    let keep = outliers::sparse_points(&cloud.points, params.outlier_voxel_m, params.outlier_min_fraction);
-    let removed = keep.iter().filter(|&&k| !k).count();
-    if removed > 0 && cloud.points.len() - removed >= min_points.max(1) {
-        let mut c = cloud.clone();
-        c.retain_indices(|i| keep[i]);
-        Some((c, removed))
-    } else {
-        None
+/// What [`clean_cloud`] dropped.
+struct Cleaned {
+    /// The cloud without its sparse points and detached pieces.
+    cloud: PointCloud,
+    /// The box's cloud (without the detached pieces and the far sparse points), when it differs
+    /// from the input cloud.
+    for_box: Option<PointCloud>,
+    /// Sparse points dropped.
+    sparse: usize,
+    /// Points of detached pieces dropped.
+    detached: usize,
+}
+
+/// Drops the sparse points ([`crate::outliers`]) and then, among the points left, the detached
+/// pieces of the segments ([`crate::detached`]); `None` when nothing is dropped. Either removal
+/// is skipped when fewer than `min_points` would remain. The box's cloud also leaves out the
+/// sparse points farther than `far` from the cloud kept.
+fn clean_cloud(
+    cloud: &PointCloud,
+    params: &OutlierParams,
+    min_points: usize,
+    far: f64,
+) -> Result<Option<Cleaned>, NumericError> {
+    let n = cloud.points.len();
+    let min_points = min_points.max(1);
+    let mut keep = outliers::sparse_points(&cloud.points, params.outlier_voxel_m, params.outlier_min_fraction);
+    let mut sparse = keep.iter().filter(|&&k| !k).count();
+    if n - sparse < min_points {
+        keep.iter_mut().for_each(|k| *k = true);
+        sparse = 0;
     }
+    let kept: Vec<usize> = (0..n).filter(|&i| keep[i]).collect();
+    let points: Vec<[f64; 3]> = kept.iter().map(|&i| cloud.points[i]).collect();
+    let labels: Option<Vec<u8>> = cloud.labels.as_ref().map(|l| kept.iter().map(|&i| l[i]).collect());
+    let attached =
+        detached::attached_points(&points, labels.as_deref(), params.detached_voxel_m, params.detached_min_fraction);
+    let mut out_of_box = vec![false; n];
+    for (&i, &a) in kept.iter().zip(&attached) {
+        out_of_box[i] = !a;
+    }
+    let mut detached = attached.iter().filter(|&&a| !a).count();
+    if kept.len() - detached < min_points {
+        out_of_box.iter_mut().for_each(|d| *d = false);
+        detached = 0;
+    }
+    if sparse + detached == 0 {
+        return Ok(None);
+    }
+    let final_keep: Vec<bool> = (0..n).map(|i| keep[i] && !out_of_box[i]).collect();
+    let far_sparse = mark_far(&cloud.points, &keep, &final_keep, far, &mut out_of_box)?;
+    let for_box = (detached + far_sparse > 0).then(|| {
+        let mut c = cloud.clone();
+        c.retain_indices(|i| !out_of_box[i]);
+        c
+    });
+    let mut c = cloud.clone();
+    c.retain_indices(|i| final_keep[i]);
+    Ok(Some(Cleaned { cloud: c, for_box, sparse, detached }))
+}
+
+/// Marks in `out` the points not in `sparse_kept` (the sparse points) lying farther than `far`
+/// from every point of `kept` (those farther by less than `far / 20 * sqrt(3)` may be missed);
+/// returns how many. Nothing when `far` is infinite.
+fn mark_far(
+    points: &[[f64; 3]],
+    sparse_kept: &[bool],
+    kept: &[bool],
+    far: f64,
+    out: &mut [bool],
+) -> Result<usize, NumericError> {
+    let queries: Vec<usize> = (0..points.len()).filter(|&i| !sparse_kept[i]).collect();
+    if !far.is_finite() || queries.is_empty() {
+        return Ok(0);
+    }
+    // One kept point per voxel of side far / 20 stands for the cloud (a tree of a few thousand
+    // points instead of the whole cloud): the nearest representative is at most a voxel diagonal
+    // farther than the nearest kept point, so a point is marked only when that distance less the
+    // diagonal exceeds `far` (never a point within `far` of the cloud).
+    let inv = 20.0 / far;
+    let limit = far * (1.0 + 3f64.sqrt() / 20.0);
+    let mut seen = std::collections::HashSet::new();
+    let body: Vec<[f64; 3]> = points
+        .iter()
+        .zip(kept)
+        .filter(|&(p, &k)| k && seen.insert(p.map(|x| (x * inv).floor() as i64)))
+        .map(|(p, _)| *p)
+        .collect();
+    if body.is_empty() {
+        return Ok(0);
+    }
+    let tree = build_tree(&body).map_err(NumericError::index)?;
+    let q: Vec<[f64; 3]> = queries.iter().map(|&i| points[i]).collect();
+    let mut count = 0;
+    for (&i, (_, d2)) in queries.iter().zip(nearest_batch(&tree, &q)) {
+        if d2 > limit * limit {
+            out[i] = true;
+            count += 1;
+        }
+    }
+    Ok(count)
 }
 
 /// The articulated initialisation (labelled template and cloud, `articulate` on): the rest shape

@@ -30,6 +30,9 @@ pub struct Registration {
     /// Head/hand/foot cloud points dropped before the fit
     /// ([`crate::OutlierParams::drop_extremities`]).
     pub extremities_dropped: usize,
+    /// Cloud points dropped as detached pieces of their segment
+    /// ([`crate::OutlierParams::detached_voxel_m`]).
+    pub detached_removed: usize,
     /// Cloud points dropped as sparse outliers ([`crate::OutlierParams::outlier_voxel_m`]).
     pub outliers_removed: usize,
     /// The limbs moved by the articulated initialisation (empty when it did not run).

@@ -33,6 +33,7 @@ from typing import Any
 
 from ..types import Mesh, PointCloud
 from .common import BenchError, Run, keep_trunk_limbs, load_template, register_method
+from .outliers import inject, split_request
 from .reference import CALIBRATED, CONDITIONS
 
 SEGMENTATIONS: tuple[str, ...] = ("oracle", "camera")
@@ -134,7 +135,8 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
             # The mask's own cloud, before any cleaning: what floor, wall and edge removal had to remove.
             uncleaned = build_views_cloud(views, tmp, sor=False, remove_floor=False, isolate_person=False)[0]
             unfiltered = cloud_far_pct(keep_trunk_limbs(uncleaned), truth_surface)
-    cloud: PointCloud = keep_trunk_limbs(raw)
+    kinds, params = split_request(params)  # --param bench_outliers=floor,wall,mixed (bench/outliers.py)
+    cloud: PointCloud = inject(keep_trunk_limbs(raw), kinds, seed)
     far2, far10 = cloud_far_pct(cloud, truth_surface)
     for method in methods:
         run = Run(name, condition, method, False, truth_l=dict(truth), floor_l=dict(floor), n_points=len(cloud),

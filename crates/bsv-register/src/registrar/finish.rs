@@ -37,6 +37,7 @@ impl Registrar<'_> {
             rms_points_to_mesh_mm: rms_p2m * 1e3,
             labels_from,
             extremities_dropped: input.extremities_dropped,
+            detached_removed: input.detached_removed,
             outliers_removed: input.outliers_removed,
             articulation: input.articulation,
         })

@@ -4,6 +4,7 @@ that fails leaves the old file and no temporary file), never a half-written file
 from __future__ import annotations
 
 import os
+import re
 import resource
 import subprocess
 import sys
@@ -42,3 +43,17 @@ def test_a_file_size_limit_keeps_the_old_file_whole(tmp_path: Path) -> None:
     assert "WriteError" in r.stderr and "c.ply" in r.stderr, r.stderr
     assert out.read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.ply"]
+
+
+@pytest.mark.parametrize(("colors", "message"), [
+    (np.full((3, 3), 300), "colors[0, 0] = 300 is outside 0..=255"),
+    (np.full((3, 3), -1), "colors[0, 0] = -1 is outside 0..=255"),
+    (np.full((3, 3), 0.5), "uint8 array, got float64"),
+])
+def test_colours_out_of_range_are_refused_not_wrapped(tmp_path: Path, colors: np.ndarray, message: str) -> None:
+    with pytest.raises(bsv.InputError, match=re.escape(message)):
+        bsv.write_point_cloud(tmp_path / "c.ply", np.zeros((3, 3)), colors=colors)
+    assert not (tmp_path / "c.ply").exists()
+    bsv.write_point_cloud(tmp_path / "ok.ply", np.zeros((3, 3)), colors=np.full((3, 3), 255, dtype=np.int64))
+    c = bsv.read_point_cloud(tmp_path / "ok.ply")
+    assert c.colors is not None and c.colors.tolist() == [[255, 255, 255]] * 3

@@ -181,6 +181,25 @@ pub fn mesh_from(
     Ok(TriMesh { vertices: v, triangles: t, vertex_labels: vl, face_labels: fl })
 }
 
+/// The rows of an integer (N, 3) colour array, every value checked to be in 0..=255 (a cast would wrap
+/// 300 to 44 and -1 to 255).
+fn color_rows(arr: &Bound<'_, PyUntypedArray>) -> PyResult<Vec<[u8; 3]>> {
+    let wide = asarray(arr.as_any(), Some("int64"), "colors")?;
+    let wide = wide.cast::<PyArray2<i64>>()?.readonly();
+    let wide = wide.as_array();
+    let mut rows = Vec::with_capacity(wide.nrows());
+    for (i, r) in wide.rows().into_iter().enumerate() {
+        let mut c = [0u8; 3];
+        for (k, &v) in r.iter().enumerate() {
+            c[k] = u8::try_from(v).map_err(|_| {
+                input_error("colors", Some(i), format!("colors[{i}, {k}] = {v} is outside 0..=255 (8-bit sRGB)"))
+            })?;
+        }
+        rows.push(c);
+    }
+    Ok(rows)
+}
+
 /// Builds a cloud from array-likes.
 pub fn cloud_from(
     points: &Bound<'_, PyAny>,
@@ -219,9 +238,7 @@ pub fn cloud_from(
                     ),
                 ));
             }
-            let u = asarray(arr.as_any(), Some("uint8"), "colors")?;
-            let u = u.cast::<PyArray2<u8>>()?.readonly();
-            Some(u.as_array().rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect())
+            Some(color_rows(&arr)?)
         }
         None => None,
     };

@@ -155,28 +155,28 @@ def _read_label_png(path: Path) -> np.ndarray:
     return np.ascontiguousarray(img.astype(np.uint8))
 
 
-def _segment(cam: str, data: dict[str, Any], folder: Path, mode: str, params: dict[str, Any], seg_out: Path,
-             overwrite: bool) -> tuple[np.ndarray, dict]:
-    """Per-pixel segment labels of one camera and a summary of the segmentation; the camera segmentation
-    is saved into ``seg_out`` (in the output folder, never into the capture ``folder``)."""
+def _segment(cam: str, data: dict[str, Any], folder: Path, mode: str, params: dict[str, Any],
+             seg_out: Path) -> tuple[np.ndarray, dict, Any]:
+    """Per-pixel segment labels of one camera, a summary of the segmentation and the camera segmentation
+    to save into ``seg_out`` (in the output folder, never into the capture ``folder``) once the whole run
+    has succeeded (None for the oracle)."""
+    seg = None
     if mode == "oracle":
         labels = _read_label_png(folder / data["meta"].get("labels", "labels.png"))
         summary = {"source": "oracle", "labelled_pixels": int((labels > 0).sum())}
     else:
-        from .frontend.segment import segment_image, write_segmentation
+        from .frontend.segment import segment_image
 
         seg = segment_image(data["colour"], view=cam, depth=data["depth_m"], **params)
         labels = seg.labels
         summary = {"source": "camera (MediaPipe Holistic)", "labelled_pixels": int((labels > 0).sum()),
-                   "hands_found": list(seg.hands_found), "counts": seg.counts()}
-        write_segmentation(seg, seg_out, overwrite=overwrite)
-        summary["files"] = str(seg_out)
+                   "hands_found": list(seg.hands_found), "counts": seg.counts(), "files": str(seg_out)}
     if labels.shape != data["depth_m"].shape:
         raise SegmentationError(
             f"{cam}: label image {labels.shape} and depth image {data['depth_m'].shape} differ in size; the depth must "
             "be aligned to the colour image"
         )
-    return labels, summary
+    return labels, summary, seg
 
 
 def build_cloud(
@@ -308,16 +308,16 @@ def process(
                            lambda: _calibration(calibration, cap, cameras, {c: d["intrinsics"] for c, d in data.items()}))
 
     seg_summary: dict[str, dict[str, Any]] = {}
+    seg_files: dict[str, Any] = {}
     views = []
     for cam in cameras:
         d = data[cam]
 
-        def segment_camera(cam: str = cam, d: dict[str, Any] = d) -> tuple[np.ndarray, dict]:
-            return _segment(cam, d, dirs[cam], segmentation, segment_params or {}, out / SEGMENTATION_DIR / cam,
-                            overwrite)
+        def segment_camera(cam: str = cam, d: dict[str, Any] = d) -> tuple[np.ndarray, dict, Any]:
+            return _segment(cam, d, dirs[cam], segmentation, segment_params or {}, out / SEGMENTATION_DIR / cam)
 
-        labels, summary = steps.run(f"segment_{cam}", f"segmenting the {cam} camera ({segmentation})",
-                                    segment_camera)
+        labels, summary, seg_files[cam] = steps.run(f"segment_{cam}", f"segmenting the {cam} camera ({segmentation})",
+                                                    segment_camera)
         seg_summary[cam] = summary
         views.append({"name": cam, "intrinsics": d["intrinsics"].to_json(), "camera_to_world": extrinsics[cam],
                       "depth": np.ascontiguousarray(d["depth_m"], dtype=np.float32), "labels": labels,
@@ -341,11 +341,17 @@ def process(
              "report": out / "report.html"}
 
     def write_all() -> None:
+        # Written only now: a run that fails earlier leaves nothing in OUT, and can be rerun as it was.
+        for cam, seg in seg_files.items():
+            if seg is not None:
+                from .frontend.segment import write_segmentation
+
+                write_segmentation(seg, out / SEGMENTATION_DIR / cam, overwrite=overwrite)
         write_point_cloud(files["cloud"], cloud, overwrite=overwrite)
         write_mesh(files["fitted"], reg.mesh, overwrite=overwrite)
         files["volumes"].write_text(json.dumps(vols, indent=2) + "\n")
 
-    steps.run("write", "writing cloud.ply, fitted.ply, volumes.json", write_all)
+    steps.run("write", "writing the segmentation, cloud.ply, fitted.ply, volumes.json", write_all)
     result = ProcessResult(out, cloud, reg, vols, cloud_report, seg_summary, steps.timings, files, truth=truth)
     if truth is not None:
         result.comparison = compare(vols, truth)

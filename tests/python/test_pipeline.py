@@ -279,6 +279,22 @@ def test_every_output_blocks_a_rerun(capture, tmp_path):
     assert (seg / "segmentation" / "front" / "landmarks.json").read_text() == "{}"
 
 
+@pytest.mark.skipif(not _has_mediapipe(), reason="camera segmentation needs mediapipe")
+def test_a_failed_camera_run_leaves_nothing_and_can_be_rerun(capture, tmp_path):
+    """The camera segmentation is saved with the other outputs, after the registration: a run that fails
+    in between (here a registration parameter error) leaves OUT empty, and the same call then works."""
+    from bsv.errors import RegistrationParameterError
+
+    cap, _ = capture
+    out = tmp_path / "out"
+    with pytest.raises(RegistrationParameterError):
+        pipeline.process(cap, cap / "calibration.json", out, segmentation="camera", progress=False,
+                         schedule="m2p:0")
+    assert not out.exists() or not any(out.rglob("*")), sorted(out.rglob("*"))
+    pipeline.process(cap, cap / "calibration.json", out, segmentation="camera", progress=False)
+    assert (out / "segmentation" / "front" / "mask.png").exists() and (out / "volumes.json").exists()
+
+
 # ----------------------------------------------------------------------------------------------------
 # The report on a known labelled mesh (the subject's own body as the "fitted" mesh)
 

@@ -114,6 +114,15 @@ class PersonIsolationError(BsvError):
     camera: str | None = None
 
 
+class ImplausibleCaptureError(BsvError):
+    """A camera's view cannot be a standing person seen from its own side (``camera``): its person has no
+    depth relief (a flat wall behind the mask), or its left and right limbs lie on the wrong sides
+    (swapped front/back calibrations or camera folders, mirrored extrinsics). Fix the capture or the
+    calibration; ``check_plausible=False`` (``--cloud-param check_plausible=false``) skips the check."""
+
+    camera: str | None = None
+
+
 class OutputExistsError(BsvError, FileExistsError):
     """An output file or folder exists and overwriting was not asked for (``overwrite=True``, ``--overwrite``)."""
 
@@ -213,7 +222,7 @@ class FloorError(BsvError, ValueError):
 
 __all__ = [
     "AssetError", "BenchError", "BlurredImageError", "BsvError", "CalibrationError", "CalibrationFileError",
-    "CaptureError", "FloorError", "FormatError", "FrontendError", "InputError", "LabelError",
+    "CaptureError", "FloorError", "FormatError", "FrontendError", "ImplausibleCaptureError", "InputError", "LabelError",
     "LandmarkMissingError", "MarkerNotFoundError", "MeshError", "NoCameraError", "OutputExistsError",
     "PersonIsolationError", "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",
     "RegistrationInputError", "RegistrationNumericError", "RegistrationParameterError",

@@ -20,6 +20,7 @@ pub mod floor;
 pub mod isolate;
 mod params;
 mod person;
+pub mod plausible;
 mod report;
 
 pub use params::FuseParams;
@@ -137,6 +138,24 @@ pub enum FuseError {
         distance_m: f64,
         /// The `second_part_ratio` parameter.
         ratio: f64,
+    },
+    /// A view's person has no depth relief: a flat surface behind a person mask, not a person.
+    #[error("camera `{camera}`: the person's points span only {relief_m:.3} m in depth (a standing person spans 0.15-0.35 m): the depth image shows a flat surface (a wall, a screen) where the mask sees a person; check that the depth and colour images of this camera belong to the same capture")]
+    FlatView {
+        /// Camera name.
+        camera: String,
+        /// 5-95 % depth range of the person's points, metres.
+        relief_m: f64,
+    },
+    /// The subject's left limbs lie on the right in the world: the view is placed as its mirror.
+    #[error("camera `{camera}`: the subject's left limbs lie at x = {left_x:.2} m and the right ones at x = {right_x:.2} m, but +X is the subject's left: the calibration or the camera folders are swapped (front <-> back) or this camera's extrinsics are mirrored; give each camera folder its own calibration")]
+    MirroredView {
+        /// Camera name.
+        camera: String,
+        /// Median x of the points labelled as left limbs, metres.
+        left_x: f64,
+        /// Median x of the points labelled as right limbs, metres.
+        right_x: f64,
     },
     /// The cleaning removed every labelled point of a view.
     #[error("camera `{camera}`: all {deprojected} labelled points were removed as floor ({floor}), depth edges ({edges}) or far behind the person ({far}): the mask does not cover a person standing on the floor; check the segmentation and the calibration, or set remove_floor = false or isolate_person = false to diagnose")]
@@ -367,6 +386,9 @@ fn fuse_view(view: &DepthView, params: &FuseParams) -> Result<(ViewPoints, ViewR
         sor_removed = vp.retain(&res.keep);
     }
     let seconds_sor = t.elapsed().as_secs_f64();
+    if params.check_plausible {
+        plausible::check_view(view, &vp)?;
+    }
     let warnings = floor.warnings(&view.name, params);
     let report = ViewReport {
         name: view.name.clone(),

@@ -228,6 +228,9 @@ impl ToPyErr for bsv_capture::fuse::FuseError {
             F::PersonNotIsolated { camera, .. } | F::NothingLeft { camera, .. } => {
                 exception("PersonIsolationError", message(self), vec![("camera", Field::Str(camera.clone()))])
             }
+            F::FlatView { camera, .. } | F::MirroredView { camera, .. } => {
+                exception("ImplausibleCaptureError", message(self), vec![("camera", Field::Str(camera.clone()))])
+            }
             _ => exception("InputError", message(self), vec![("argument", Field::Str("views".into()))]),
         }
     }

@@ -47,6 +47,10 @@ pub struct FuseParams {
     /// Warn when two cameras' floors differ in height at the subject by more than this (mm): the
     /// calibrations do not agree.
     pub floor_warn_between_mm: f64,
+    /// Refuse a view that cannot be a standing person seen from its own side: no depth relief (a flat
+    /// wall) or left and right limbs on the wrong sides (swapped calibration or camera folders); see
+    /// [`crate::fuse::plausible`].
+    pub check_plausible: bool,
     /// Keep only the person: drop mask pixels on depth edges, far behind the person and in 3-D parts
     /// separate from the person (fails when two comparable parts are found).
     pub isolate_person: bool,
@@ -83,6 +87,7 @@ impl Default for FuseParams {
             floor_warn_tilt_deg: 0.5,
             floor_warn_height_mm: 20.0,
             floor_warn_between_mm: 10.0,
+            check_plausible: true,
             isolate_person: true,
             edge_step_m: 0.05,
             far_m: 0.6,

@@ -57,6 +57,17 @@ def _views(cap: Path, labels_from: str = "labels.png") -> list[dict]:
     return views
 
 
+def test_swapped_calibrations_are_an_implausible_capture(capture):
+    from bsv.errors import ImplausibleCaptureError
+
+    cap, _ = capture
+    views = _views(cap)
+    views[0]["camera_to_world"], views[1]["camera_to_world"] = views[1]["camera_to_world"], views[0]["camera_to_world"]
+    with pytest.raises(ImplausibleCaptureError, match="swapped") as e:
+        pipeline.build_cloud(views)
+    assert e.value.camera in ("front", "back")
+
+
 def test_binding_rebuilds_the_scanner_cloud(capture):
     cap, scanned = capture
     params = {"sor": False, "drop_labels": [], "normals": False, "isolate_person": False}

@@ -398,61 +398,62 @@ impl CloudIndex {
 
     /// Per vertex, the count, sum, scatter (and with given normals, the sum of the normal parts)
     /// of the offsets to the cloud points `nn` sends to it, without those longer than `sqrt(lim2)`.
+    ///
+    /// Every vertex sums its points in point order (a counting sort groups them first), so the sums
+    /// are bit-identical for any thread count.
+    #[allow(clippy::neg_cmp_op_on_partial_ord, reason = "a NaN distance is kept, as before")]
     fn accumulate(&self, nn: &[(u32, f64)], vertices: &[[f64; 3]], lim2: f64) -> Vec<Acc> {
         let n = vertices.len();
         let zero = Acc { n: 0, s: [0.0; 3], ss: [0.0; 6], np: [0.0; 3] };
         let given = self.given_normals.as_deref();
-        let chunk = 16384;
-        nn.par_chunks(chunk)
-            .enumerate()
-            .fold(
-                || vec![zero; n],
-                |mut acc, (c, part)| {
-                    for (k, &(v, dd)) in part.iter().enumerate() {
-                        if dd > lim2 {
-                            continue;
-                        }
-                        let idx = c * chunk + k;
-                        let d = sub(self.points[idx], vertices[v as usize]);
-                        let a = &mut acc[v as usize];
-                        a.n += 1;
-                        if let Some(g) = given {
-                            let pr = project(g[idx], d);
-                            for (np, p) in a.np.iter_mut().zip(pr) {
-                                *np += p;
-                            }
-                        }
-                        for (s, x) in a.s.iter_mut().zip(d) {
-                            *s += x;
-                        }
-                        a.ss[0] += d[0] * d[0];
-                        a.ss[1] += d[0] * d[1];
-                        a.ss[2] += d[0] * d[2];
-                        a.ss[3] += d[1] * d[1];
-                        a.ss[4] += d[1] * d[2];
-                        a.ss[5] += d[2] * d[2];
-                    }
-                    acc
-                },
-            )
-            .reduce(
-                || vec![zero; n],
-                |mut a, b| {
-                    for (x, y) in a.iter_mut().zip(b) {
-                        x.n += y.n;
-                        for k in 0..3 {
-                            x.s[k] += y.s[k];
-                        }
-                        for k in 0..6 {
-                            x.ss[k] += y.ss[k];
-                        }
-                        for k in 0..3 {
-                            x.np[k] += y.np[k];
+        let kept = |dd: f64| !(dd > lim2);
+        // start[v]..start[v + 1]: the kept points of vertex v in `order`, in point order.
+        let mut start = vec![0u32; n + 1];
+        for &(v, dd) in nn {
+            if kept(dd) {
+                start[v as usize + 1] += 1;
+            }
+        }
+        for v in 0..n {
+            start[v + 1] += start[v];
+        }
+        let mut next = start.clone();
+        let mut order = vec![0u32; start[n] as usize];
+        for (i, &(v, dd)) in nn.iter().enumerate() {
+            if kept(dd) {
+                let at = &mut next[v as usize];
+                order[*at as usize] = i as u32;
+                *at += 1;
+            }
+        }
+        (0..n)
+            .into_par_iter()
+            .with_min_len(256)
+            .map(|v| {
+                let mut a = zero;
+                for &i in &order[start[v] as usize..start[v + 1] as usize] {
+                    let idx = i as usize;
+                    let d = sub(self.points[idx], vertices[v]);
+                    a.n += 1;
+                    if let Some(g) = given {
+                        let pr = project(g[idx], d);
+                        for (np, p) in a.np.iter_mut().zip(pr) {
+                            *np += p;
                         }
                     }
-                    a
-                },
-            )
+                    for (s, x) in a.s.iter_mut().zip(d) {
+                        *s += x;
+                    }
+                    a.ss[0] += d[0] * d[0];
+                    a.ss[1] += d[0] * d[1];
+                    a.ss[2] += d[0] * d[2];
+                    a.ss[3] += d[1] * d[1];
+                    a.ss[4] += d[1] * d[2];
+                    a.ss[5] += d[2] * d[2];
+                }
+                a
+            })
+            .collect()
     }
 
     /// The target of every vertex from its accumulated points (`None` without points or when the

@@ -127,6 +127,15 @@ pub fn nearest_rotation(m: &Matrix3<f64>) -> Matrix3<f64> {
     }
 }
 
+/// Cells per parallel task of the energy sums: each chunk sums its cells in order and the chunk
+/// sums are added in chunk order, so the energies do not depend on the thread count.
+const CELL_CHUNK: usize = 256;
+
+/// The sum of (arap, reg) pairs in order.
+fn sum_pairs(parts: &[(f64, f64)]) -> (f64, f64) {
+    parts.iter().fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
+}
+
 impl LocalModel {
     /// Precomputes `P_i` and `M_i^{-1}` for the rest shape.
     pub fn new(rest: Vec<[f64; 3]>, weights: CotanWeights, cell_weight: f64, lambda: f64) -> LocalModel {
@@ -182,31 +191,48 @@ impl LocalModel {
 
     /// The exact local update for every cell; returns (arap, reg) energies after it.
     pub fn local_step(&self, cur: &[[f64; 3]], maps: &mut CellMaps) -> (f64, f64) {
-        maps.t
-            .par_iter_mut()
-            .zip(maps.r.par_iter_mut())
+        let parts: Vec<(f64, f64)> = maps
+            .t
+            .par_chunks_mut(CELL_CHUNK)
+            .zip(maps.r.par_chunks_mut(CELL_CHUNK))
             .enumerate()
-            .map(|(i, (t, r))| {
-                let (s, ee) = self.covariance(cur, i);
-                let minv = &self.minv[i];
-                let rot = nearest_rotation(&(s * minv));
-                let tt = (s * self.cell_weight + rot * self.lambda) * minv;
-                *t = tt;
-                *r = rot;
-                self.cell_energy(i, &s, ee, t, r)
+            .map(|(c, (ts, rs))| {
+                let mut e = (0.0, 0.0);
+                for (k, (t, r)) in ts.iter_mut().zip(rs).enumerate() {
+                    let i = c * CELL_CHUNK + k;
+                    let (s, ee) = self.covariance(cur, i);
+                    let minv = &self.minv[i];
+                    let rot = nearest_rotation(&(s * minv));
+                    let tt = (s * self.cell_weight + rot * self.lambda) * minv;
+                    *t = tt;
+                    *r = rot;
+                    let (a, g) = self.cell_energy(i, &s, ee, t, r);
+                    e.0 += a;
+                    e.1 += g;
+                }
+                e
             })
-            .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
+            .collect();
+        sum_pairs(&parts)
     }
 
     /// (arap, reg) energies of the current positions with the given maps.
     pub fn energy(&self, cur: &[[f64; 3]], maps: &CellMaps) -> (f64, f64) {
-        (0..self.n())
+        let n = self.n();
+        let parts: Vec<(f64, f64)> = (0..n.div_ceil(CELL_CHUNK))
             .into_par_iter()
-            .map(|i| {
-                let (s, ee) = self.covariance(cur, i);
-                self.cell_energy(i, &s, ee, &maps.t[i], &maps.r[i])
+            .map(|c| {
+                let mut e = (0.0, 0.0);
+                for i in c * CELL_CHUNK..((c + 1) * CELL_CHUNK).min(n) {
+                    let (s, ee) = self.covariance(cur, i);
+                    let (a, g) = self.cell_energy(i, &s, ee, &maps.t[i], &maps.r[i]);
+                    e.0 += a;
+                    e.1 += g;
+                }
+                e
             })
-            .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
+            .collect();
+        sum_pairs(&parts)
     }
 
     /// The ARAP part of the global right-hand side, `2 b_k = w_c sum_j w_kj (T_k + T_j) e_kj`.

@@ -4,8 +4,8 @@
 //! (the default), SOR off as in `bsv process`. `cargo bench -p bsv-capture --bench fuse`.
 #![allow(missing_docs, clippy::unwrap_used)]
 
-use bsv_capture::fuse::{build_cloud, DepthImage, DepthView, FuseParams};
-use bsv_capture::scanner::{scan, Condition, Rig};
+use bsv_capture::fuse::{build_cloud, DepthView, FuseParams};
+use bsv_capture::scanner::{scan, spill_labels, Condition, Rig};
 use bsv_core::shapes::append_labelled;
 use bsv_core::template::{template, TemplateKind};
 use bsv_core::TriMesh;
@@ -16,30 +16,6 @@ fn quad(a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]) -> TriMesh {
     TriMesh::new(vec![a, b, c, d], vec![[0, 1, 2], [0, 2, 3]])
 }
 
-/// Grows the label image by `k` 8-neighbour steps (unlabelled pixels take a labelled neighbour's label).
-fn dilate(labels: &[u8], w: usize, h: usize, k: usize) -> Vec<u8> {
-    let mut cur = labels.to_vec();
-    for _ in 0..k {
-        let prev = cur.clone();
-        for v in 0..h {
-            for u in 0..w {
-                if prev[v * w + u] != 0 {
-                    continue;
-                }
-                let found = (-1i64..=1)
-                    .flat_map(|dv| (-1i64..=1).map(move |du| (u as i64 + du, v as i64 + dv)))
-                    .filter(|&(x, y)| x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h)
-                    .map(|(x, y)| prev[y as usize * w + x as usize])
-                    .find(|&l| l != 0);
-                if let Some(l) = found {
-                    cur[v * w + u] = l;
-                }
-            }
-        }
-    }
-    cur
-}
-
 fn only_the_person(c: &mut Criterion) {
     let mut mesh = template(TemplateKind::Full).unwrap();
     append_labelled(&mut mesh, quad([-3.0, 0.0, -2.6], [3.0, 0.0, -2.6], [3.0, 0.0, 4.0], [-3.0, 0.0, 4.0]), 0);
@@ -48,13 +24,9 @@ fn only_the_person(c: &mut Criterion) {
     let views: Vec<DepthView> = s
         .views
         .iter()
-        .map(|v| DepthView {
-            name: v.name.clone(),
-            intrinsics: v.intrinsics,
-            camera_to_world: v.estimated_extrinsics,
-            depth: DepthImage::Metres(v.depth.clone()),
-            labels: dilate(&v.labels, v.intrinsics.width as usize, v.intrinsics.height as usize, 4),
-            colors: None,
+        .map(|v| {
+            let (w, h) = (v.intrinsics.width as usize, v.intrinsics.height as usize);
+            DepthView { labels: spill_labels(&v.labels, w, h, 4), ..v.depth_view() }
         })
         .collect();
     let base = FuseParams { sor: false, ..FuseParams::default() };

@@ -7,7 +7,7 @@
 
 use bsv_capture::camera::{Extrinsics, Intrinsics};
 use bsv_capture::fuse::{build_cloud, ColorMode, DepthImage, DepthView, FuseError, FuseParams};
-use bsv_capture::scanner::{scan, write_capture, CameraView, Condition, Rig, DEPTH_SCALE};
+use bsv_capture::scanner::{scan, write_capture, Condition, Rig, DEPTH_SCALE};
 use bsv_core::shapes;
 
 /// Parameters that keep every point (no SOR, no floor removal or isolation, no dropping, no
@@ -23,18 +23,6 @@ fn keep_all() -> FuseParams {
     }
 }
 
-/// The scan's view as cloud-building input with exact (f32) depth and the estimated extrinsics.
-fn exact_view(v: &CameraView) -> DepthView {
-    DepthView {
-        name: v.name.clone(),
-        intrinsics: v.intrinsics,
-        camera_to_world: v.estimated_extrinsics,
-        depth: DepthImage::Metres(v.depth.clone()),
-        labels: v.labels.clone(),
-        colors: None,
-    }
-}
-
 fn max_dist(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
     a.iter()
         .zip(b)
@@ -46,7 +34,7 @@ fn max_dist(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 fn rebuilding_from_exact_depth_reproduces_the_scanner_cloud() {
     for condition in [Condition::NoEr, Condition::L5Ca] {
         let s = scan(&shapes::capsule_body(false, true), &Rig::paper_default(), condition, 3).unwrap();
-        let views: Vec<DepthView> = s.views.iter().map(exact_view).collect();
+        let views: Vec<DepthView> = s.views.iter().map(|v| v.depth_view()).collect();
         let (cloud, report) = build_cloud(&views, &keep_all()).unwrap();
         assert_eq!(cloud.len(), s.cloud.len(), "{condition:?}");
         assert_eq!(cloud.labels, s.cloud.labels, "labels differ ({condition:?})");
@@ -113,7 +101,7 @@ fn rebuilding_from_written_16_bit_pngs_reproduces_the_scanner_cloud_to_quantisat
 #[test]
 fn extremities_are_dropped_by_default_and_counted() {
     let s = scan(&shapes::capsule_body(false, true), &Rig::paper_default(), Condition::NoEr, 0).unwrap();
-    let views: Vec<DepthView> = s.views.iter().map(exact_view).collect();
+    let views: Vec<DepthView> = s.views.iter().map(|v| v.depth_view()).collect();
     // The capsule body's head and hands float free of it: keep them (no isolation) to count them.
     let params = FuseParams { sor: false, isolate_person: false, ..FuseParams::default() };
     let (cloud, report) = build_cloud(&views, &params).unwrap();
@@ -133,7 +121,7 @@ fn extremities_are_dropped_by_default_and_counted() {
 #[test]
 fn outlier_removal_removes_injected_flying_points() {
     let s = scan(&shapes::capsule_body(false, true), &Rig::paper_default(), Condition::NoEr, 0).unwrap();
-    let mut views: Vec<DepthView> = s.views.iter().map(exact_view).collect();
+    let mut views: Vec<DepthView> = s.views.iter().map(|v| v.depth_view()).collect();
     // Mark 300 scattered person pixels of the front camera in red and pull them 0.3 m toward it.
     let v = &mut views[0];
     let DepthImage::Metres(depth) = &mut v.depth else { unreachable!() };
@@ -214,7 +202,7 @@ fn normals_of_a_sphere_point_outward_toward_the_camera() {
 #[test]
 fn bad_inputs_give_typed_errors() {
     let s = scan(&shapes::capsule_body(false, true), &Rig::paper_default(), Condition::NoEr, 0).unwrap();
-    let good = exact_view(&s.views[0]);
+    let good = s.views[0].depth_view();
     let p = FuseParams::default();
 
     assert!(matches!(build_cloud(&[], &p), Err(FuseError::NoViews)));

@@ -10,8 +10,8 @@
 #![allow(clippy::unwrap_used)]
 
 use bsv_capture::camera::rotation_from_vector;
-use bsv_capture::fuse::{build_cloud, DepthImage, DepthView, FloorStatus, FuseError, FuseParams, FuseReport};
-use bsv_capture::scanner::{parry_mesh, scan, Condition, Rig, Scan};
+use bsv_capture::fuse::{build_cloud, DepthView, FloorStatus, FuseError, FuseParams, FuseReport};
+use bsv_capture::scanner::{parry_mesh, scan, spill_labels, Condition, Rig, Scan};
 use bsv_core::geometry::{add, cross, dot, norm, scale, sub};
 use bsv_core::shapes::{self, append_labelled};
 use bsv_core::template::{template, TemplateKind};
@@ -79,35 +79,6 @@ fn append_keeping_labels(mesh: &mut TriMesh, part: TriMesh) {
     mesh.face_labels = Some(labels);
 }
 
-/// Grows the label image by `pixels` 8-neighbour steps: an unlabelled pixel next to labelled ones
-/// takes the label of its first labelled neighbour (MediaPipe's mask spill; the nearest limb's label).
-fn dilate(labels: &[u8], w: usize, h: usize, pixels: usize) -> Vec<u8> {
-    let mut cur = labels.to_vec();
-    for _ in 0..pixels {
-        let prev = cur.clone();
-        for v in 0..h {
-            for u in 0..w {
-                if prev[v * w + u] != 0 {
-                    continue;
-                }
-                'n: for dv in -1i64..=1 {
-                    for du in -1i64..=1 {
-                        let (uu, vv) = (u as i64 + du, v as i64 + dv);
-                        if uu >= 0 && vv >= 0 && (uu as usize) < w && (vv as usize) < h {
-                            let l = prev[vv as usize * w + uu as usize];
-                            if l != 0 {
-                                cur[v * w + u] = l;
-                                break 'n;
-                            }
-                        }
-                    }
-                }
-            }
-        }
-    }
-    cur
-}
-
 /// The scan's views as cloud-building input (estimated extrinsics, f32 depth), labels dilated by
 /// `spill` pixels.
 fn views(s: &Scan, spill: usize) -> Vec<DepthView> {
@@ -115,14 +86,7 @@ fn views(s: &Scan, spill: usize) -> Vec<DepthView> {
         .iter()
         .map(|v| {
             let (w, h) = (v.intrinsics.width as usize, v.intrinsics.height as usize);
-            DepthView {
-                name: v.name.clone(),
-                intrinsics: v.intrinsics,
-                camera_to_world: v.estimated_extrinsics,
-                depth: DepthImage::Metres(v.depth.clone()),
-                labels: dilate(&v.labels, w, h, spill),
-                colors: None,
-            }
+            DepthView { labels: spill_labels(&v.labels, w, h, spill), ..v.depth_view() }
         })
         .collect()
 }

@@ -14,17 +14,7 @@ fn scanned() -> Scan {
 }
 
 fn views(s: &Scan) -> Vec<DepthView> {
-    s.views
-        .iter()
-        .map(|v| DepthView {
-            name: v.name.clone(),
-            intrinsics: v.intrinsics,
-            camera_to_world: v.estimated_extrinsics,
-            depth: DepthImage::Metres(v.depth.clone()),
-            labels: v.labels.clone(),
-            colors: None,
-        })
-        .collect()
+    s.views.iter().map(|v| v.depth_view()).collect()
 }
 
 #[test]

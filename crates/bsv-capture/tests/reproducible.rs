@@ -3,38 +3,13 @@
 
 #![allow(clippy::unwrap_used)]
 
-use bsv_capture::fuse::{build_cloud, DepthImage, DepthView, FuseParams};
-use bsv_capture::scanner::{scan, Condition, Rig, Room};
+use bsv_capture::fuse::{build_cloud, DepthView, FuseParams};
+use bsv_capture::scanner::{scan, spill_labels, Condition, Rig, Room};
 use bsv_core::template::{template, TemplateKind};
 use bsv_core::PointCloud;
 
 fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
     rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(f)
-}
-
-/// Label spill of `pixels` pixels around the person (so floor and wall points reach the cloud and
-/// floor removal, isolation and SOR have work to do).
-fn dilate(labels: &[u8], w: usize, h: usize, pixels: usize) -> Vec<u8> {
-    let mut cur = labels.to_vec();
-    for _ in 0..pixels {
-        let prev = cur.clone();
-        for v in 0..h {
-            for u in 0..w {
-                if prev[v * w + u] != 0 {
-                    continue;
-                }
-                let mut nb = 0;
-                for (du, dv) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
-                    let (uu, vv) = (u as i64 + du, v as i64 + dv);
-                    if uu >= 0 && vv >= 0 && (uu as usize) < w && (vv as usize) < h {
-                        nb = nb.max(prev[vv as usize * w + uu as usize]);
-                    }
-                }
-                cur[v * w + u] = nb;
-            }
-        }
-    }
-    cur
 }
 
 type Bits = (Vec<[u64; 3]>, Option<Vec<[u64; 3]>>, Option<Vec<u8>>, Option<Vec<[u8; 3]>>);
@@ -56,13 +31,9 @@ fn scan_and_build_cloud_are_bit_identical_for_any_thread_count() {
             let views: Vec<DepthView> = s
                 .views
                 .iter()
-                .map(|v| DepthView {
-                    name: v.name.clone(),
-                    intrinsics: v.intrinsics,
-                    camera_to_world: v.estimated_extrinsics,
-                    depth: DepthImage::Metres(v.depth.clone()),
-                    labels: dilate(&v.labels, v.intrinsics.width as usize, v.intrinsics.height as usize, 3),
-                    colors: None,
+                .map(|v| {
+                    let (w, h) = (v.intrinsics.width as usize, v.intrinsics.height as usize);
+                    DepthView { labels: spill_labels(&v.labels, w, h, 3), ..v.depth_view() }
                 })
                 .collect();
             let (cloud, report) = build_cloud(&views, &params).unwrap();

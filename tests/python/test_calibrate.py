@@ -243,3 +243,15 @@ def test_intrinsics_json_round_trip_and_errors(tmp_path):
         load_intrinsics(bad)
     with pytest.raises(errors.CalibrationFileError, match="not valid JSON"):
         cal.read_calibration(bad)
+
+
+def test_a_frame_of_the_other_camera_is_refused_not_averaged(frames):
+    """Issue 14: a back-camera frame mixed into the front set moved the front camera by 17 cm with only a
+    printed spread; now it is named and refused."""
+    mixed = [*frames["front"], frames["back"][0]]
+    with pytest.raises(errors.CalibrationError, match=r"frame\(s\) 8 disagree") as e:
+        cal.calibrate_camera(mixed, INTR, "front", BOARD)
+    assert "remove those frames" in str(e.value)
+    for average in ("image", "pose"):  # genuine frames stay well inside the limits
+        c = cal.calibrate_camera(frames["front"], INTR, "front", BOARD, average=average)
+        assert c.spread_mm < cal.MAX_FRAME_MM / 3 and c.spread_deg < cal.MAX_FRAME_DEG / 3

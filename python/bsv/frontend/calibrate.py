@@ -363,6 +363,29 @@ def read_calibration(path: PathLike) -> Calibration:
 # Calibration from frames
 
 
+#: Largest distance (mm) and angle (deg) of one frame's camera pose from the calibrated pose: a still
+#: board seen by a still camera repeats to well under a millimetre and 0.05 deg per frame.
+MAX_FRAME_MM = 15.0
+MAX_FRAME_DEG = 1.0
+
+
+def _check_frames_agree(side: str, centres: Sequence[np.ndarray], rotations: Sequence[np.ndarray], max_mm: float,
+                        max_deg: float) -> None:
+    """Raises CalibrationError naming the frames whose camera pose departs from the frames' robust centre
+    (the component-wise median camera centre; the medoid rotation), which a few bad frames cannot move."""
+    c = np.asarray(centres)
+    dev_mm = np.linalg.norm(c - np.median(c, axis=0), axis=1) * 1000.0
+    angles = np.array([[rotation_angle_deg(a, b) for b in rotations] for a in rotations])
+    dev_deg = angles[int(np.argmin(angles.sum(axis=1)))]
+    bad = [i for i in range(len(dev_mm)) if dev_mm[i] > max_mm or dev_deg[i] > max_deg]
+    if bad:
+        worst = max(bad, key=lambda i: dev_mm[i] / max_mm + dev_deg[i] / max_deg)
+        raise CalibrationError(
+            f"{side}: frame(s) {', '.join(map(str, bad))} disagree with the others (frame {worst}: the camera "
+            f"{dev_mm[worst]:.1f} mm / {dev_deg[worst]:.2f} deg away; limits {max_mm:g} mm / {max_deg:g} deg): "
+            "a frame of the other camera or a board or camera that moved; remove those frames and calibrate again")
+
+
 def calibrate_camera(
     images: Iterable[ImageLike],
     intrinsics: Intrinsics,
@@ -372,13 +395,17 @@ def calibrate_camera(
     serial: str | None = None,
     average: str = "image",
     max_edge_width_px: float = MAX_EDGE_WIDTH_PX,
+    max_frame_mm: float = MAX_FRAME_MM,
+    max_frame_deg: float = MAX_FRAME_DEG,
 ) -> CameraCalibration:
     """Calibrates one camera (``side`` "front" or "back") from frames of the still board; every frame must
     show the marker (a frame without it raises, naming the frame).
 
     ``average="image"`` (default) estimates the pose from the mean of the frames (sensor noise averaged
     before the non-linear pose estimate); ``"pose"`` averages the per-frame poses (chordal mean rotation,
-    mean translation). Either way the per-frame poses give the reported spread."""
+    mean translation). Either way the per-frame poses give the reported spread, and a frame whose camera
+    pose lies more than ``max_frame_mm`` / ``max_frame_deg`` from the result (a frame of the other camera,
+    a board that moved) is an error naming it, never averaged in."""
     if side not in SIDES:
         raise CalibrationError(f"unknown camera side {side!r}; expected one of {SIDES}")
     if average not in ("image", "pose"):
@@ -410,6 +437,7 @@ def calibrate_camera(
     r_wm, t_wm = board.marker_to_world(side)
     r_wc, t_wc = camera_to_world(r_cm, t_cm, r_wm, t_wm)
     centres = [camera_to_world(r, t, r_wm, t_wm)[1] for r, t in zip(rs, ts, strict=True)]
+    _check_frames_agree(side, centres, rs, max_frame_mm, max_frame_deg)
     spread_mm = float(np.sqrt(np.mean(np.sum((np.asarray(centres) - t_wc) ** 2, axis=1)))) * 1000.0
     spread_deg = float(np.sqrt(np.mean([rotation_angle_deg(r, r_cm) ** 2 for r in rs])))
     return CameraCalibration(side, intrinsics, r_wc, t_wc, serial=serial, frames=len(rs),

@@ -8,6 +8,7 @@
 //!   camera's surface at the mirror of where it belongs, and the limbs change sides.
 
 use super::deproject::ViewPoints;
+use super::floor::quantile;
 use super::{DepthView, FuseError};
 use bsv_core::Segment;
 
@@ -29,26 +30,16 @@ const LIMB_PAIRS: [(Segment, Segment); 6] = [
     (Segment::FootL, Segment::FootR),
 ];
 
-/// The `q`-quantile (0..=1) of `v` (reordered in place); `None` for an empty slice.
-fn quantile(v: &mut [f64], q: f64) -> Option<f64> {
-    if v.is_empty() {
-        return None;
-    }
-    let k = ((v.len() - 1) as f64 * q).round() as usize;
-    Some(*v.select_nth_unstable_by(k, f64::total_cmp).1)
-}
-
 /// Checks one cleaned view: depth relief, then the sides of its labelled limbs.
 pub(super) fn check_view(view: &DepthView, vp: &ViewPoints) -> Result<(), FuseError> {
     let ext = &view.camera_to_world;
     let c = ext.translation;
     let axis = ext.transform_vector([0.0, 0.0, 1.0]);
-    let mut depth: Vec<f64> =
+    let depth: Vec<f64> =
         vp.points.iter().map(|p| (p[0] - c[0]) * axis[0] + (p[1] - c[1]) * axis[1] + (p[2] - c[2]) * axis[2]).collect();
-    if let (Some(lo), Some(hi)) = (quantile(&mut depth, 0.05), quantile(&mut depth, 0.95)) {
-        if hi - lo < MIN_RELIEF_M {
-            return Err(FuseError::FlatView { camera: view.name.clone(), relief_m: hi - lo });
-        }
+    let relief = quantile(depth.clone(), 0.95) - quantile(depth, 0.05);
+    if relief < MIN_RELIEF_M {
+        return Err(FuseError::FlatView { camera: view.name.clone(), relief_m: relief });
     }
     let (mut left, mut right) = (Vec::new(), Vec::new());
     for (p, &l) in vp.points.iter().zip(&vp.labels) {
@@ -63,23 +54,9 @@ pub(super) fn check_view(view: &DepthView, vp: &ViewPoints) -> Result<(), FuseEr
     if left.len() < MIN_SIDE_POINTS || right.len() < MIN_SIDE_POINTS {
         return Ok(());
     }
-    let (Some(lx), Some(rx)) = (quantile(&mut left, 0.5), quantile(&mut right, 0.5)) else { return Ok(()) };
+    let (lx, rx) = (quantile(left, 0.5), quantile(right, 0.5));
     if lx < rx {
         return Err(FuseError::MirroredView { camera: view.name.clone(), left_x: lx, right_x: rx });
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn quantiles() {
-        let mut v = vec![5.0, 1.0, 3.0, 2.0, 4.0];
-        assert_eq!(quantile(&mut v, 0.5), Some(3.0));
-        assert_eq!(quantile(&mut v, 0.0), Some(1.0));
-        assert_eq!(quantile(&mut v, 1.0), Some(5.0));
-        assert_eq!(quantile(&mut [], 0.5), None);
-    }
 }

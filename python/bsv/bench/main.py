@@ -9,6 +9,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from .reference import CONDITIONS
+from .synth import COHORTS
 
 
 def _conditions(text: str) -> tuple[str, ...]:
@@ -73,6 +74,10 @@ def parser() -> argparse.ArgumentParser:
                    "(compare with the room to see what the floor and walls do)")
     s.add_argument("--template", default="default", help="default, fine or a labelled mesh path")
     s.add_argument("--no-local", action="store_true", help="cohort without MakeHuman local modifiers")
+    s.add_argument("--cohort", choices=COHORTS, default="standard",
+                   help="standard: bsv.bodies.cohort; hard: the same subjects reshaped into the registration's "
+                   "hard classes (deep upper arms, bumps, a swollen segment, extreme segment modifiers; "
+                   "bsv.bodies.variants.hard_subject)")
     common(s, "bench_synth")
 
     b = sub.add_parser("boxes", help="the paper's two boxes at 45 deg, noer and l5ca")
@@ -107,13 +112,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             cfg = SynthConfig(n=args.n, seed=args.seed, conditions=args.conditions, segmentation=args.segmentation,
                               template=args.template, methods=methods, params=params, local=not args.no_local,
                               cloud=args.cloud, room=args.room, studio=args.studio,
-                              cloud_params=dict(args.cloud_param))
+                              cloud_params=dict(args.cloud_param), cohort=args.cohort)
             cfg.validate()
             infos, runs, wall = run_synth(cfg, jobs=max(1, args.jobs), progress=not args.quiet)
             config = {"n": cfg.n, "seed": cfg.seed, "conditions": ",".join(cfg.conditions),
                       "segmentation": cfg.segmentation, "cloud": cfg.cloud, "room": ("studio" if cfg.studio else "clinic") if cfg.uses_room() else False,
                       "cloud_params": cfg.cloud_params, "template": cfg.template, "methods": ",".join(methods),
-                      "params": params, "local_modifiers": cfg.local, "jobs": args.jobs}
+                      "params": params, "local_modifiers": cfg.local, "jobs": args.jobs,
+                      "cohort": cfg.cohort}
             summary = write_outputs(args.out, "BSV synthetic benchmark", config, infos, runs, wall,
                                     overwrite=args.overwrite)
         elif args.command == "boxes":

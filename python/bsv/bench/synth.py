@@ -37,6 +37,9 @@ from .outliers import inject, split_request
 from .reference import CALIBRATED, CONDITIONS
 
 SEGMENTATIONS: tuple[str, ...] = ("oracle", "camera")
+#: The cohorts of ``--cohort``: the plain synthetic adults, or the same reshaped into the registration's
+#: hard classes (:func:`bsv.bodies.variants.hard_subject`).
+COHORTS: tuple[str, ...] = ("standard", "hard")
 
 #: The room of ``--studio``: the subject dressed and lit as in the clinic room (skin tone, underwear, hair,
 #: two lights) but nothing else returns depth. Against the clinic room it isolates what the floor and the
@@ -63,6 +66,8 @@ class SynthConfig:
     room: bool | None = None
     #: With a room: a studio (:data:`STUDIO`), the room's appearance without its floor, walls or ceiling.
     studio: bool = False
+    #: ``standard`` or ``hard`` (:data:`COHORTS`).
+    cohort: str = "standard"
 
     def room_arg(self) -> bool | dict[str, Any]:
         """The ``room`` argument of :func:`bsv.scan` for this configuration."""
@@ -83,6 +88,8 @@ class SynthConfig:
         bad = [c for c in self.conditions if c not in CONDITIONS]
         if bad or not self.conditions:
             raise BenchError(f"--conditions {','.join(self.conditions)}: use a comma list of {','.join(CONDITIONS)}")
+        if self.cohort not in COHORTS:
+            raise BenchError(f"--cohort {self.cohort}: use one of {', '.join(COHORTS)}")
         if self.segmentation not in SEGMENTATIONS:
             raise BenchError(f"--segmentation {self.segmentation}: use oracle or camera")
         if self.cloud not in ("raw", "lab"):
@@ -160,11 +167,13 @@ def subject_name(index: int) -> str:
 def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] | None = None) -> tuple[dict, list[Run]]:
     """Every condition and method for cohort subject ``index``; failures are recorded, never raised."""
     from ..bodies import subject
+    from ..bodies.variants import hard_subject
 
     name = subject_name(index)
     t0 = time.perf_counter()
     try:
-        s = subject(index, cfg.seed, local=cfg.local)
+        make = hard_subject if cfg.cohort == "hard" else subject
+        s = make(index, cfg.seed, local=cfg.local)
     except Exception as exc:
         err = f"subject generation failed: {type(exc).__name__}: {exc}"
         runs: list[Run] = [Run(name, c, m, False, error=err) for c in cfg.conditions for m in cfg.methods]

@@ -229,7 +229,7 @@ class BsipError(BsvError, ValueError):
 
 
 __all__ = [
-    "AssetError", "BenchError", "BsipError", "BlurredImageError", "BsvError", "CalibrationError", "CalibrationFileError",
+    "AssetError", "BenchError", "BlurredImageError", "BsipError", "BsvError", "CalibrationError", "CalibrationFileError",
     "CaptureError", "FloorError", "FormatError", "FrontendError", "ImplausibleCaptureError", "InputError", "LabelError",
     "LandmarkMissingError", "MarkerNotFoundError", "MeshError", "NoCameraError", "OutputExistsError",
     "PersonIsolationError", "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",

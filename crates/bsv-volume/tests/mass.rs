@@ -1,7 +1,7 @@
 //! Mass properties against exact values: boxes, n-gon prisms (the exact prism formula), Tonon's
 //! tetrahedron, a box cut into two labelled halves (each an exact box, their interface centre known),
 //! all rotated and translated, to 1e-9 relative; and parry3d's mass properties as a second opinion.
-#![allow(clippy::unwrap_used)]
+#![allow(clippy::unwrap_used, clippy::needless_range_loop)]
 
 use bsv_core::shapes::{cuboid, icosphere, subdivided_cuboid};
 use bsv_core::{Segment, TriMesh};

@@ -89,7 +89,7 @@ def csv_text(b: BSIP) -> str:
 
 def _opensim() -> Any:
     try:
-        import opensim
+        import opensim  # type: ignore[import-untyped]
     except ImportError as e:  # pragma: no cover - depends on the environment
         raise BsipError("model.osim needs the OpenSim Python package: pip install opensim==4.6 "
                         "(or the project's requirements-dev.txt)") from e

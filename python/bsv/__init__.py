@@ -278,8 +278,11 @@ def bsip(
     about it, the joint centres (centroids of the boundaries segments share) and the segment lengths,
     beside de Leva's (1996) regression values for ``sex``. Returns a :class:`bsv.biomech.BSIP` (``.table()``
     prints a readable table); with ``out_dir`` also writes bsip.json, bsip.csv and model.osim (OpenSim)."""
-    from .biomech import compute, write_all
+    from .biomech import FILES, check_output, compute, write_all
 
+    if out_dir is not None:  # the outputs are checked before the work
+        for name in FILES:
+            check_output(Path(out_dir) / name, overwrite)
     result = compute(mesh, density, sex=sex)
     if out_dir is not None:
         write_all(result, Path(out_dir), overwrite=overwrite)

@@ -30,7 +30,7 @@ import numpy as np
 from . import _bsv
 from .errors import BsipError, OutputExistsError, PersonIsolationError
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
-from .types import TRUNK_LIMBS, Mesh, PointCloud, Registration
+from .types import SEGMENT_IDS, TRUNK_LIMBS, Mesh, PointCloud, Registration
 
 PathLike = str | Path
 
@@ -312,7 +312,7 @@ def process(
 
         if bsip_sex not in SEXES:
             raise BsipError(f"bsip_sex must be one of {SEXES}, got {bsip_sex!r}")
-        densities(bsip_density, ["torso"])  # a bad density fails before the work
+        densities(bsip_density, [n for n in SEGMENT_IDS if n != "unlabelled"])  # a bad density fails before the work
     dirs = _camera_dirs(cap, cameras)
     steps = _Steps(progress)
 

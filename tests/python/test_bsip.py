@@ -144,7 +144,8 @@ def test_opensim_model_loads_and_carries_the_masses(subject: tuple[object, bsv.b
     np.testing.assert_allclose([c.get(0), c.get(1), c.get(2)], [r.com[2], r.com[1], -r.com[0]], atol=1e-6)
     with pytest.raises(OutputExistsError):
         bsv.biomech.write_all(r, tmp_path)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["bsip.csv", "bsip.json", "model.osim"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bsip.csv", "bsip.json", "bsip.png", "model.osim"]
+    assert (tmp_path / "bsip.png").read_bytes()[:4] == b"\x89PNG"
 
 
 def test_csv_layout(subject: tuple[object, bsv.biomech.BSIP]) -> None:

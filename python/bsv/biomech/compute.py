@@ -98,6 +98,8 @@ class BSIP:
     density_source: str
     mass_basis: str
     notes: list[str] = field(default_factory=list)
+    #: The labelled mesh measured (for the figure).
+    mesh: Mesh | None = None
 
     def table(self) -> str:
         """A readable table: one row per segment, ours beside de Leva's (in brackets)."""
@@ -314,4 +316,4 @@ def compute(obj: Any, density: Density = None, *, sex: str = "male", islands: bo
     extents = [f"{s.name} {e.name}" for s in segs.values() for e in (s.origin, s.other) if e.how == "extent"]
     if extents:
         notes.append("endpoints taken as the segment's extent (no neighbouring segment): " + ", ".join(extents))
-    return BSIP(segs, joints, float(total), np.asarray(com_all), sex, source, basis, notes)
+    return BSIP(segs, joints, float(total), np.asarray(com_all), sex, source, basis, notes, mesh)

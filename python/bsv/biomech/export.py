@@ -21,7 +21,7 @@ from .compute import BSIP
 from .tables import DE_LEVA_SOURCE
 
 #: Files written by :func:`write_all` (and by ``bsv process --bsip``).
-FILES = ("bsip.json", "bsip.csv", "model.osim")
+FILES = ("bsip.json", "bsip.csv", "model.osim", "bsip.png")
 
 #: The kinematic tree of the OpenSim model: segment -> (parent segment, the joint between them).
 TREE: dict[str, tuple[str, str]] = {
@@ -156,8 +156,19 @@ def write_osim(b: BSIP, path: Path, overwrite: bool = False) -> None:
     _write_atomic(Path(path), write, overwrite)
 
 
+def write_figure(b: BSIP, path: Path, overwrite: bool = False) -> None:
+    """Writes ``bsip.png`` (:func:`bsv.biomech.figure.draw`) of a result that holds its mesh."""
+    from .figure import draw
+
+    if b.mesh is None:
+        raise BsipError("this result holds no mesh to draw; compute it with bsv.bsip(mesh)")
+    mesh = b.mesh
+    _write_atomic(Path(path), lambda p: draw(b, mesh, p), overwrite)
+
+
 def write_all(b: BSIP, out_dir: Path, overwrite: bool = False) -> dict[str, Path]:
-    """Writes bsip.json, bsip.csv and model.osim into ``out_dir`` (all checked first)."""
+    """Writes bsip.json, bsip.csv, model.osim and (when the result holds its mesh) bsip.png into
+    ``out_dir`` (all checked first)."""
     out = Path(out_dir)
     paths = {n: out / n for n in FILES}
     for p in paths.values():
@@ -165,4 +176,8 @@ def write_all(b: BSIP, out_dir: Path, overwrite: bool = False) -> dict[str, Path
     write_json(b, paths["bsip.json"], overwrite)
     write_csv(b, paths["bsip.csv"], overwrite)
     write_osim(b, paths["model.osim"], overwrite)
+    if b.mesh is not None:
+        write_figure(b, paths["bsip.png"], overwrite)
+    else:
+        del paths["bsip.png"]
     return paths

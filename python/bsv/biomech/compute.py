@@ -200,16 +200,10 @@ def _extent(points: np.ndarray, start: np.ndarray, toward: np.ndarray) -> np.nda
 def _endpoints(name: str, com: np.ndarray, pts: np.ndarray, inertia: np.ndarray,
                joints: dict[str, np.ndarray]) -> tuple[Endpoint, Endpoint]:
     k = kind(name)
-    side = name[-1] if name.endswith(("_l", "_r")) else ""
-    j = {n[:-2] if n.endswith(("_l", "_r")) and n[-1] == side else n: p for n, p in joints.items()
-         if not n.endswith(("_l", "_r")) or n[-1] == side}
     ref = DE_LEVA["male"][k]
-    chains = {"upper_arm": ("shoulder", "elbow"), "forearm": ("elbow", "wrist"), "hand": ("wrist", None),
-              "thigh": ("hip", "knee"), "shin": ("knee", "ankle")}
-    if k in chains:
-        prox, dist = chains[k]
-        p = j.get(prox)
-        d = j.get(dist) if dist else None
+    if k in ("upper_arm", "forearm", "hand", "thigh", "shin"):  # proximal joint -> distal joint (or extent)
+        p = next((joints.get(jn) for jn, (_, child) in JOINTS.items() if child == name), None)
+        d = next((joints.get(jn) for jn, (parent, _) in JOINTS.items() if parent == name), None)
         if p is None and d is None:
             raise BsipError(f"{name}: no boundary with a neighbouring segment; its length cannot be measured")
         if p is None:
@@ -219,7 +213,7 @@ def _endpoints(name: str, com: np.ndarray, pts: np.ndarray, inertia: np.ndarray,
             return Endpoint(ref.origin, p, "joint"), Endpoint(ref.other, _extent(pts, p, com), "extent")
         return Endpoint(ref.origin, p, "joint"), Endpoint(ref.other, d, "joint")
     if k == "head":
-        neck = j.get("neck")
+        neck = joints.get("neck")
         if neck is None:
             raise BsipError("head: no boundary with the torso; its length cannot be measured")
         return Endpoint(ref.origin, _extent(pts, neck, com), "extent"), Endpoint(ref.other, neck, "joint")

@@ -18,19 +18,14 @@ import numpy as np
 
 from ..errors import BsipError, OutputExistsError
 from .compute import BSIP
-from .tables import DE_LEVA_SOURCE
+from .tables import DE_LEVA_SOURCE, JOINTS
 
 #: Files written by :func:`write_all` (and by ``bsv process --bsip``).
 FILES = ("bsip.json", "bsip.csv", "model.osim", "bsip.png")
 
-#: The kinematic tree of the OpenSim model: segment -> (parent segment, the joint between them).
-TREE: dict[str, tuple[str, str]] = {
-    "head": ("torso", "neck"),
-    **{f"{seg}_{s}": (parent + ("" if parent == "torso" else f"_{s}"), f"{joint}_{s}") for s in ("l", "r")
-       for seg, parent, joint in (("upper_arm", "torso", "shoulder"), ("forearm", "upper_arm", "elbow"),
-                                  ("hand", "forearm", "wrist"), ("thigh", "torso", "hip"),
-                                  ("shin", "thigh", "knee"), ("foot", "shin", "ankle"))},
-}
+#: The kinematic tree of the OpenSim model: segment -> (parent segment, the joint between them), from
+#: :data:`bsv.biomech.tables.JOINTS` (each joint's first segment is the parent).
+TREE: dict[str, tuple[str, str]] = {child: (parent, joint) for joint, (parent, child) in JOINTS.items()}
 
 #: World (Y up, X the subject's left, Z forward) -> OpenSim (X forward, Y up, Z the subject's right).
 WORLD_TO_OSIM = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])

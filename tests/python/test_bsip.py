@@ -158,6 +158,7 @@ def test_csv_layout(subject: tuple[object, bsv.biomech.BSIP]) -> None:
     assert float(thigh["de_leva_com_pct"]) == DE_LEVA["male"]["thigh"].com_pct
     assert sum(float(row["mass_pct"]) for row in rows) == pytest.approx(100.0, abs=0.05)
     assert sum(float(row["de_leva_mass_pct"]) for row in rows) == pytest.approx(100.0, abs=0.05)
+    assert r._repr_html_().count("<tr>") == len(r.segments) + 1 and len(repr(r)) < 120
 
 
 def test_demo_bsip_end_to_end(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

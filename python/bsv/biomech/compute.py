@@ -121,6 +121,26 @@ class BSIP:
                      f"densities: {self.density_source}; (de Leva 1996, {self.sex})")
         return "\n".join(lines)
 
+    def _repr_html_(self) -> str:
+        """A notebook table: ours beside de Leva's (in brackets)."""
+        import html
+
+        head = ("segment", "mass kg", "mass %", "length mm", "COM %", "rg sag %", "rg trans %", "rg long %")
+        rows = []
+        for s in self.segments.values():
+            r = s.reference
+            rg = s.radii_of_gyration_pct()
+            ref = (r.mass_pct, r.com_pct, r.rg_sagittal_pct, r.rg_transverse_pct, r.rg_longitudinal_pct) if r else (
+                float("nan"),) * 5
+            ours = (s.mass_pct, s.com_pct, *rg)
+            cells = [html.escape(s.name), f"{s.mass_kg:.2f}", f"{ours[0]:.1f} ({ref[0]:.1f})", f"{s.length_m * 1e3:.0f}",
+                     *(f"{x:.1f} ({y:.1f})" for x, y in zip(ours[1:], ref[1:], strict=True))]
+            rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
+        caption = html.escape(f"body-mass estimate {self.body_mass_kg:.2f} kg ({self.mass_basis}); "
+                              f"in brackets de Leva (1996), {self.sex}; densities: {self.density_source}")
+        return ("<table><caption>" + caption + "</caption><tr>" + "".join(f"<th>{h}</th>" for h in head) + "</tr>"
+                + "".join(rows) + "</table>")
+
     def __repr__(self) -> str:
         return (f"BSIP({len(self.segments)} segments, {len(self.joints)} joints, "
                 f"body mass {self.body_mass_kg:.2f} kg, sex={self.sex!r})")

@@ -142,6 +142,15 @@ def test_opensim_model_loads_and_carries_the_masses(subject: tuple[object, bsv.b
     # the whole-body centre of mass in the default pose = ours, in OpenSim axes (X forward, Y up, Z right)
     c = model.calcMassCenterPosition(state)
     np.testing.assert_allclose([c.get(0), c.get(1), c.get(2)], [r.com[2], r.com[1], -r.com[0]], atol=1e-6)
+    # each body's inertia about its centre of mass = ours, rotated into OpenSim axes
+    w2o = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
+    for i in range(bodies.getSize()):
+        body = bodies.get(i)
+        ours = w2o @ r.segments[body.getName()].inertia_kg_m2 @ w2o.T
+        mom, prod = body.getInertia().getMoments(), body.getInertia().getProducts()
+        got = [mom.get(0), mom.get(1), mom.get(2), prod.get(0), prod.get(1), prod.get(2)]
+        want = [ours[0, 0], ours[1, 1], ours[2, 2], ours[0, 1], ours[0, 2], ours[1, 2]]
+        np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-12 * max(want))
     with pytest.raises(OutputExistsError):
         bsv.biomech.write_all(r, tmp_path)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bsip.csv", "bsip.json", "bsip.png", "model.osim"]

@@ -127,10 +127,11 @@ def test_synthetic_subject_masses_coms_and_joints(subject: tuple[object, bsv.bio
         assert abs(r.segments[seg].length_m - rig_len) < 0.04, (seg, r.segments[seg].length_m, rig_len)
 
 
-def test_opensim_model_loads_and_carries_the_masses(subject: tuple[object, bsv.biomech.BSIP],
-                                                    tmp_path: Path) -> None:
+def test_opensim_model_loads_and_carries_the_masses(subject: tuple[object, bsv.biomech.BSIP], tmp_path: Path,
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
     opensim = pytest.importorskip("opensim", reason="opensim (requirements-dev.txt) is not installed")
     _, r = subject
+    monkeypatch.chdir(tmp_path)  # OpenSim must leave no opensim.log in the working folder
     files = bsv.biomech.write_all(r, tmp_path)
     model = opensim.Model(str(files["model.osim"]))
     state = model.initSystem()

@@ -88,6 +88,9 @@ def _opensim() -> Any:
     except ImportError as e:  # pragma: no cover - depends on the environment
         raise BsipError("model.osim needs the OpenSim Python package: pip install opensim==4.6 "
                         "(or the project's requirements-dev.txt)") from e
+    # OpenSim logs into ./opensim.log and prints [info] lines by default: neither belongs in a user's folder
+    opensim.Logger.removeFileSink()
+    opensim.Logger.setLevelString("Warn")
     return opensim
 
 

@@ -220,8 +220,16 @@ class FloorError(BsvError, ValueError):
     """A capture folder lacks the per-camera extrinsics the floor needs."""
 
 
+# --- biomechanics outputs (bsv.bsip) ---------------------------------------------------------------
+
+
+class BsipError(BsvError, ValueError):
+    """Body-segment inertial parameters cannot be computed or exported as asked (a bad density, a segment
+    without volume, a missing package); the message names the parameter or segment and what to do."""
+
+
 __all__ = [
-    "AssetError", "BenchError", "BlurredImageError", "BsvError", "CalibrationError", "CalibrationFileError",
+    "AssetError", "BenchError", "BlurredImageError", "BsipError", "BsvError", "CalibrationError", "CalibrationFileError",
     "CaptureError", "FloorError", "FormatError", "FrontendError", "ImplausibleCaptureError", "InputError", "LabelError",
     "LandmarkMissingError", "MarkerNotFoundError", "MeshError", "NoCameraError", "OutputExistsError",
     "PersonIsolationError", "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",

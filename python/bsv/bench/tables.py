@@ -225,8 +225,8 @@ def worst_table(table: Sequence[Mapping[str, Any]], method: str = "bsv") -> str:
     for seg in PAPER_ROWS:
         cells = []
         for c in conds:
-            r = worst.get((seg, c))
-            cells.append(EMPTY_CELL if r is None else f"{r['signed_pct']:+.2f} ({r['subject'].removeprefix('subject_')})")
+            w = worst.get((seg, c))
+            cells.append(EMPTY_CELL if w is None else f"{w['signed_pct']:+.2f} ({w['subject'].removeprefix('subject_')})")
         lines.append(f"| {seg} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 

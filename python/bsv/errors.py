@@ -220,8 +220,16 @@ class FloorError(BsvError, ValueError):
     """A capture folder lacks the per-camera extrinsics the floor needs."""
 
 
+# --- batch processing (bsv.batch) ----------------------------------------------------------------
+
+
+class BatchInputError(InputError):
+    """An input, manifest or option of ``bsv batch`` is not usable (names the file, column or option and
+    what to do); the batch does not start."""
+
+
 __all__ = [
-    "AssetError", "BenchError", "BlurredImageError", "BsvError", "CalibrationError", "CalibrationFileError",
+    "AssetError", "BatchInputError", "BenchError", "BlurredImageError", "BsvError", "CalibrationError", "CalibrationFileError",
     "CaptureError", "FloorError", "FormatError", "FrontendError", "ImplausibleCaptureError", "InputError", "LabelError",
     "LandmarkMissingError", "MarkerNotFoundError", "MeshError", "NoCameraError", "OutputExistsError",
     "PersonIsolationError", "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",

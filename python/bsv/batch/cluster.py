@@ -39,6 +39,17 @@ def dashboard_text(client: Any) -> str:
     return f"Dask dashboard: off (it needs bokeh: {DASHBOARD_HINT})"
 
 
+def check_scheduler(scheduler: str, workers: int) -> None:
+    """Refuses a ``--scheduler`` that is neither ``local`` nor an address, and ``--workers`` below 1
+    (:class:`bsv.errors.BatchInputError`), before anything is written."""
+    if scheduler == LOCAL:
+        if workers < 1:
+            raise BatchInputError(f"--workers {workers}: need at least one worker")
+    elif "://" not in scheduler:
+        raise BatchInputError(f"--scheduler {scheduler!r}: use 'local' or a scheduler address such as "
+                              "tcp://host:8786")
+
+
 @contextlib.contextmanager
 def open_client(scheduler: str = LOCAL, workers: int = 2, *, allowed_failures: int = 3,
                 dashboard: bool = True) -> Iterator[Any]:
@@ -51,9 +62,8 @@ def open_client(scheduler: str = LOCAL, workers: int = 2, *, allowed_failures: i
     except ImportError as exc:
         raise BatchInputError(f"bsv batch needs Dask distributed ({exc}): pip install 'bsv[batch]' "
                               "(dask[distributed], pyarrow, bokeh)") from exc
+    check_scheduler(scheduler, workers)
     if scheduler == LOCAL:
-        if workers < 1:
-            raise BatchInputError(f"--workers {workers}: need at least one worker")
         with dask.config.set({"distributed.scheduler.allowed-failures": int(allowed_failures)}):
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                    dashboard_address=":8787" if dashboard and has_dashboard() else None)
@@ -63,9 +73,6 @@ def open_client(scheduler: str = LOCAL, workers: int = 2, *, allowed_failures: i
         finally:
             cluster.close()
         return
-    if "://" not in scheduler:
-        raise BatchInputError(f"--scheduler {scheduler!r}: use 'local' or a scheduler address such as "
-                              "tcp://host:8786")
     try:
         client = Client(scheduler, timeout="30s")
     except OSError as exc:
@@ -77,4 +84,4 @@ def open_client(scheduler: str = LOCAL, workers: int = 2, *, allowed_failures: i
         client.close()
 
 
-__all__ = ["DASHBOARD_HINT", "LOCAL", "dashboard_text", "has_dashboard", "open_client"]
+__all__ = ["DASHBOARD_HINT", "LOCAL", "check_scheduler", "dashboard_text", "has_dashboard", "open_client"]

@@ -29,7 +29,7 @@ from typing import Any
 
 from ..errors import OutputExistsError
 from ..exitcodes import EXIT_FAILED, EXIT_OK
-from .cluster import LOCAL, dashboard_text, open_client
+from .cluster import LOCAL, check_scheduler, dashboard_text, open_client
 from .items import Item, input_hash
 from .state import JOURNAL, Journal, Spec, is_current, load_journal
 from .table import CSV_NAME, PARQUET_NAME, ResultsTable
@@ -166,6 +166,8 @@ def run_batch(
     exception; ``on_start``: called with each task-start event (``item``, ``worker``, ``pid``)."""
     spec = spec or Spec()
     out = Path(out_dir)
+    if client is None:
+        check_scheduler(scheduler, workers)
     check_out_dir(out)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()

@@ -206,3 +206,19 @@ def test_manifest_names_and_refused_calls(inputs: dict[str, Any], tmp_path: Path
     assert batch_main([str(src), "--out", str(tmp_path / "o4"), "--scheduler", "nowhere", "--quiet"]) == 2
     assert batch_main([str(src), "--out", str(tmp_path / "o5"), "--workers", "0", "--quiet"]) == 2
     assert not [i for i in range(1, 6) if (tmp_path / f"o{i}").exists()]  # a refused call writes nothing
+
+
+def test_bench_synth_on_a_running_scheduler_gives_the_sequential_numbers(client: Any) -> None:
+    """``bsv bench synth --scheduler tcp://...``: the subjects run as tasks on a running scheduler (this
+    module's cluster) and give bit-for-bit the numbers of the in-process run (the registration is
+    deterministic)."""
+    from bsv.bench.synth import SynthConfig, run_synth
+
+    cfg = SynthConfig(n=1, conditions=("noer",), params={"schedule": SCHEDULE}, local=False)
+    infos_seq, runs_seq, _ = run_synth(cfg, progress=False)
+    infos_dask, runs_dask, _ = run_synth(cfg, progress=False, scheduler=client.scheduler.address)
+    assert client.scheduler.address.startswith("tcp://")
+    assert [r.subject for r in runs_dask] == [r.subject for r in runs_seq] == ["subject_000"]
+    assert all(r.ok for r in runs_dask)
+    assert [r.estimated_l for r in runs_dask] == [r.estimated_l for r in runs_seq]
+    assert [i["subject"] for i in infos_dask] == [i["subject"] for i in infos_seq]

@@ -159,6 +159,13 @@ def test_rerun_failed_and_changed_input(inputs: dict[str, Any], client: Any, tmp
     assert (out / "b").is_dir()
     t = read_table(out).to_pylist()
     assert {r["status"] for r in t} == {"ok"} and {r["item"] for r in t} == {"a", "b"}
+    # New parameters that fail: every item runs again, is recorded failed with the typed error naming the
+    # parameter, and the folders of the older results go (DIR/<item>/ exists only for a current success).
+    bad = Spec(params={"schedule": SCHEDULE, "alpha": -1.0})
+    assert run_batch(items, out, bad, client=client, progress=False).exit_code == 1
+    t = read_table(out).to_pylist()
+    assert {r["error_type"] for r in t} == {"RegistrationParameterError"} and all("alpha" in r["error"] for r in t)
+    assert not (out / "a").exists() and not (out / "b").exists()
 
 
 def test_a_task_past_the_timeout_is_cancelled_and_recorded(inputs: dict[str, Any], client: Any,
@@ -222,3 +229,34 @@ def test_bench_synth_on_a_running_scheduler_gives_the_sequential_numbers(client:
     assert all(r.ok for r in runs_dask)
     assert [r.estimated_l for r in runs_dask] == [r.estimated_l for r in runs_seq]
     assert [i["subject"] for i in infos_dask] == [i["subject"] for i in infos_seq]
+
+
+def test_an_interrupted_batch_continues_where_it_stopped(inputs: dict[str, Any], client: Any, tmp_path: Path) -> None:
+    """Ctrl-C (SIGINT) once the first item is in the journal: exit 130, a readable table of the finished
+    items, no temporary folder; the same batch then runs only the rest."""
+    import subprocess
+    import sys
+    import time
+
+    ins = inputs["inputs"][:4]
+    out = tmp_path / "batch"
+    proc = subprocess.Popen([sys.executable, "-m", "bsv.cli", "batch", *ins, "--out", str(out), "--workers", "1",
+                             "--quiet", "--no-dashboard", *FAST], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    deadline = time.monotonic() + 240
+    while time.monotonic() < deadline and proc.poll() is None:
+        if (out / JOURNAL).is_file() and (out / JOURNAL).read_text().count("\n") >= 1:
+            break
+        time.sleep(0.1)
+    assert proc.poll() is None, "the batch ended before it could be interrupted"
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err.decode()[-2000:]
+    done = load_journal(out)
+    assert 1 <= len(done) < 4
+    assert {r["item"] for r in read_table(out).to_pylist()} == set(done)
+    assert not list(out.glob(".tmp-*")) and sorted(p.name for p in out.iterdir() if p.is_dir()) == sorted(done)
+    res = run_batch(collect_items(ins), out, Spec(segmentation="oracle", params={"schedule": SCHEDULE}),
+                    client=client, progress=False)
+    assert (res.ran, res.skipped, res.exit_code) == (4 - len(done), len(done), 0)
+    assert {r["item"] for r in read_table(out).to_pylist() if r["segment"] == "trunk_limbs"} == set(res.done)
+    assert sorted(res.done) == sorted(Path(p).stem for p in ins)

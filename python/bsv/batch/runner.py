@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import contextlib
+import json
 import shutil
 import sys
 import threading
@@ -33,7 +34,7 @@ from .cluster import LOCAL, check_scheduler, dashboard_text, open_client
 from .items import Item, input_hash
 from .state import JOURNAL, Journal, Spec, is_current, load_journal
 from .table import CSV_NAME, PARQUET_NAME, ResultsTable
-from .task import START_TOPIC, run_item
+from .task import ITEM_JSON, START_TOPIC, run_item
 
 
 @dataclass
@@ -130,6 +131,25 @@ def _watchdog(client: Any, futures: dict[str, Any], starts: _Starts, timeout: fl
                 client.restart_workers([worker], raise_for_error=False)
 
 
+def _placed(out: Path, name: str, input_hash: str, key: str) -> dict[str, Any] | None:
+    """The record of an item whose task completed its folder but died before returning (a worker killed
+    or restarted in that instant): its ``item.json`` for these inputs and parameters, else None."""
+    try:
+        rec = json.loads((out / name / ITEM_JSON).read_text())
+    except (OSError, ValueError):
+        return None
+    ok = isinstance(rec, dict) and rec.get("status") == "ok"
+    return rec if ok and rec.get("input_hash") == input_hash and rec.get("params_key") == key else None
+
+
+def _remove_stale(out: Path, name: str) -> None:
+    """A failed item has no folder: the folder of an earlier result (other inputs or parameters, no longer
+    the item's record) goes (DIR/<item>/ exists exactly when the item's current record is a success)."""
+    folder = out / name
+    if folder.is_dir():
+        shutil.rmtree(folder, ignore_errors=True)
+
+
 def _failure(name: str, item: Item, fut: Any, timed_out: dict[str, str], timeout: float | None) -> dict[str, Any]:
     if name in timed_out:
         return {"status": "failed", "error_type": "TimeoutError",
@@ -201,7 +221,7 @@ def run_batch(
                     _run(c, todo, out, spec, table, journal, result, timeout, retries, progress, on_start)
     finally:
         journal.close()
-    _remove_leftovers(out)
+        _remove_leftovers(out)  # also after Ctrl-C: the local cluster has stopped its workers by now
     result.wall_s = time.perf_counter() - t0
     return result
 
@@ -217,6 +237,8 @@ def _run(client: Any, todo: list[tuple[Item, str]], out: Path, spec: Spec, table
     client.subscribe_topic(topic, starts)
     run_id = uuid.uuid4().hex[:8]
     by_item = {it.name: it for it, _ in todo}
+    hashes = {it.name: h for it, h in todo}
+    key = spec.key()
     futures = {it.name: client.submit(run_item, it, str(out), spec, h, key=f"bsv-batch-{run_id}-{it.name}",
                                       retries=retries, pure=False) for it, h in todo}
     names = {f.key: n for n, f in futures.items()}
@@ -233,13 +255,14 @@ def _run(client: Any, todo: list[tuple[Item, str]], out: Path, spec: Spec, table
             for fut in as_completed(list(futures.values())):
                 name = names[fut.key]
                 item = by_item[name]
-                if fut.status == "finished" and name not in timed_out:
+                if fut.status == "finished":
                     rec = fut.result()
                 else:
-                    rec = {"item": name, "kind": item.kind, "input": item.path,
-                           **_failure(name, item, fut, timed_out, timeout)}
-                    rec["input_hash"] = next(h for it, h in todo if it.name == name)
-                    rec["params_key"] = spec.key()
+                    rec = _placed(out, name, hashes[name], key) or {
+                        "item": name, "kind": item.kind, "input": item.path, "input_hash": hashes[name],
+                        "params_key": key, **_failure(name, item, fut, timed_out, timeout)}
+                if rec.get("status") != "ok":
+                    _remove_stale(out, name)
                 with starts.lock:
                     attempts = starts.attempts.get(name, 0)
                     worker = starts.started.get(name, (0.0, ""))[1]

@@ -17,11 +17,12 @@ from __future__ import annotations
 import contextlib
 import json
 import shutil
+import signal
 import sys
 import threading
 import time
 import uuid
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
@@ -131,6 +132,21 @@ def _watchdog(client: Any, futures: dict[str, Any], starts: _Starts, timeout: fl
                 client.restart_workers([worker], raise_for_error=False)
 
 
+@contextlib.contextmanager
+def _deferred_interrupt() -> Iterator[None]:
+    """Blocks SIGINT (and SIGTERM) in the main thread for the block: a Ctrl-C arriving meanwhile is raised
+    right after it (POSIX; elsewhere, and off the main thread, the block is unprotected)."""
+    sigs = {signal.SIGINT, signal.SIGTERM}
+    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, sigs)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 def _placed(out: Path, name: str, input_hash: str, key: str) -> dict[str, Any] | None:
     """The record of an item whose task completed its folder but died before returning (a worker killed
     or restarted in that instant): its ``item.json`` for these inputs and parameters, else None."""
@@ -196,10 +212,14 @@ def run_batch(
     journal_records = load_journal(out)
     records: dict[str, dict[str, Any]] = {}
     todo: list[tuple[Item, str]] = []
+    adopted: list[dict[str, Any]] = []
     for it, h in zip(items, hashes, strict=True):
         rec = journal_records.get(it.name)
         if rec is not None and is_current(rec, h, key, out, rerun_failed):
             records[it.name] = rec
+        elif (placed := _placed(out, it.name, h, key)) is not None:
+            records[it.name] = placed  # finished, but the client stopped before recording it
+            adopted.append(placed)
         else:
             todo.append((it, h))
     skipped = len(records)
@@ -209,6 +229,8 @@ def run_batch(
         print(f"bsv batch: {len(items)} items, {skipped} already done or failed with these inputs and "
               f"parameters, {len(todo)} to run -> {out}", flush=True)
     journal = Journal(out)
+    for rec in adopted:
+        journal.append(rec)
     try:
         with ResultsTable(out, [records[it.name] for it in items if it.name in records]) as table:
             if todo:
@@ -267,8 +289,9 @@ def _run(client: Any, todo: list[tuple[Item, str]], out: Path, spec: Spec, table
                     attempts = starts.attempts.get(name, 0)
                     worker = starts.started.get(name, (0.0, ""))[1]
                 rec.update(attempts=attempts, worker=worker or None, finished_utc=_now())
-                journal.append(rec)
-                table.add(rec)
+                with _deferred_interrupt():  # Ctrl-C lands after both: the table holds every journaled item
+                    journal.append(rec)
+                    table.add(rec)
                 result.records[name] = rec
                 if rec.get("status") != "ok":
                     failed += 1

@@ -266,3 +266,16 @@ def test_an_interrupted_batch_continues_where_it_stopped(inputs: dict[str, Any],
     assert len(load_journal(out)) == 4
     assert {r["item"] for r in read_table(out).to_pylist() if r["segment"] == "trunk_limbs"} == set(res.done)
     assert sorted(res.done) == sorted(Path(p).stem for p in ins)
+
+
+def test_the_dashboard_line_gives_the_address_or_how_to_turn_it_on(client: Any,
+                                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    from bsv.batch import cluster
+
+    class WithLink:
+        dashboard_link = "http://127.0.0.1:8787/status"
+
+    monkeypatch.setattr(cluster, "has_dashboard", lambda: True)
+    assert cluster.dashboard_text(WithLink()) == "Dask dashboard: http://127.0.0.1:8787/status"
+    monkeypatch.setattr(cluster, "has_dashboard", lambda: False)
+    assert "off" in cluster.dashboard_text(WithLink()) and "pip install bokeh" in cluster.dashboard_text(client)

@@ -279,3 +279,14 @@ def test_the_dashboard_line_gives_the_address_or_how_to_turn_it_on(client: Any,
     assert cluster.dashboard_text(WithLink()) == "Dask dashboard: http://127.0.0.1:8787/status"
     monkeypatch.setattr(cluster, "has_dashboard", lambda: False)
     assert "off" in cluster.dashboard_text(WithLink()) and "pip install bokeh" in cluster.dashboard_text(client)
+
+
+def test_without_the_batch_extra_the_command_says_what_to_install(monkeypatch: pytest.MonkeyPatch,
+                                                                   capsys: pytest.CaptureFixture[str],
+                                                                   tmp_path: Path) -> None:
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "pyarrow" else real(name, *a))
+    assert batch_main(["x.ply", "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    assert "pip install 'bsv[batch]'" in capsys.readouterr().err and not (tmp_path / "o").exists()

@@ -19,6 +19,18 @@ def _positive(text: str) -> float:
     return value
 
 
+def _check_installed() -> None:
+    """A clear usage error when the batch extra is not installed (instead of an ImportError traceback)."""
+    import importlib.util
+
+    from ..errors import BatchInputError
+
+    missing = [m for m in ("distributed", "pyarrow") if importlib.util.find_spec(m) is None]
+    if missing:
+        raise BatchInputError(f"bsv batch needs {' and '.join(missing)}: pip install 'bsv[batch]' "
+                              "(or pip install -r requirements-batch.txt)")
+
+
 def parser() -> argparse.ArgumentParser:
     """The argument parser of ``bsv batch``."""
     ap = argparse.ArgumentParser(prog="bsv batch", description=(
@@ -60,6 +72,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from ..pipeline import _register_args
 
     def run() -> int:
+        _check_installed()
         from .items import collect_items
         from .runner import run_batch, summary_text
         from .state import Spec

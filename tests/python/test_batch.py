@@ -181,8 +181,10 @@ def test_a_task_past_the_timeout_is_cancelled_and_recorded(inputs: dict[str, Any
     assert not (tmp_path / "slow" / items[0].name).exists()
     assert len(set(client.run(os.getpid).values()) - pids) == 1  # the computation was stopped with its process
     # The cluster goes on with the next batch.
-    ok = run_batch(items[1:], tmp_path / "next", Spec(params={"schedule": SCHEDULE}), client=client, progress=False)
+    ok = run_batch(items[1:], tmp_path / "next", Spec(what="report", params={"schedule": SCHEDULE}), client=client,
+                   progress=False)
     assert ok.exit_code == 0 and ok.done == [items[1].name]
+    assert (tmp_path / "next" / items[1].name / "report.html").is_file()  # --what report on a cloud item
 
 
 def test_manifest_names_and_refused_calls(inputs: dict[str, Any], tmp_path: Path,

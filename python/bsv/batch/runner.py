@@ -134,17 +134,19 @@ def _watchdog(client: Any, futures: dict[str, Any], starts: _Starts, timeout: fl
 
 @contextlib.contextmanager
 def _deferred_interrupt() -> Iterator[None]:
-    """Blocks SIGINT (and SIGTERM) in the main thread for the block: a Ctrl-C arriving meanwhile is raised
-    right after it (POSIX; elsewhere, and off the main thread, the block is unprotected)."""
-    sigs = {signal.SIGINT, signal.SIGTERM}
-    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
+    """A Ctrl-C (SIGINT) arriving during the block is raised right after it, not inside it (main thread
+    only; a signal mask would not do: the kernel hands a process-directed signal to any thread)."""
+    if threading.current_thread() is not threading.main_thread():
         yield
         return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, sigs)
+    received: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: received.append(signum))
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        signal.signal(signal.SIGINT, previous)
+    if received:
+        raise KeyboardInterrupt
 
 
 def _placed(out: Path, name: str, input_hash: str, key: str) -> dict[str, Any] | None:

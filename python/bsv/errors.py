@@ -228,8 +228,16 @@ class BsipError(BsvError, ValueError):
     without volume, a missing package); the message names the parameter or segment and what to do."""
 
 
+# --- batch processing (bsv.batch) ----------------------------------------------------------------
+
+
+class BatchInputError(InputError):
+    """An input, manifest or option of ``bsv batch`` is not usable (names the file, column or option and
+    what to do); the batch does not start."""
+
+
 __all__ = [
-    "AssetError", "BenchError", "BlurredImageError", "BsipError", "BsvError", "CalibrationError", "CalibrationFileError",
+    "AssetError", "BatchInputError", "BenchError", "BlurredImageError", "BsipError", "BsvError", "CalibrationError", "CalibrationFileError",
     "CaptureError", "FloorError", "FormatError", "FrontendError", "ImplausibleCaptureError", "InputError", "LabelError",
     "LandmarkMissingError", "MarkerNotFoundError", "MeshError", "NoCameraError", "OutputExistsError",
     "PersonIsolationError", "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",

@@ -207,8 +207,11 @@ def _worker(args: tuple[SynthConfig, int]) -> tuple[dict, list[dict]]:
     return info, [r.to_json() for r in runs]
 
 
-def run_synth(cfg: SynthConfig, jobs: int = 1, progress: bool = True) -> tuple[list[dict], list[Run], float]:
-    """The whole cohort: (subject infos, runs, wall seconds). ``jobs`` > 1 uses worker processes."""
+def run_synth(cfg: SynthConfig, jobs: int = 1, progress: bool = True,
+              scheduler: str | None = None) -> tuple[list[dict], list[Run], float]:
+    """The whole cohort: (subject infos, runs, wall seconds). ``jobs`` > 1 or a ``scheduler`` ("local" or
+    a Dask scheduler address) runs one subject per task on the ``bsv batch`` cluster
+    (:func:`bsv.batch.mapping.map_unordered`; a LocalCluster of ``jobs`` workers for "local")."""
     from tqdm import tqdm
 
     cfg.validate()
@@ -217,23 +220,27 @@ def run_synth(cfg: SynthConfig, jobs: int = 1, progress: bool = True) -> tuple[l
     runs: list[Run] = []
     total = cfg.n * len(cfg.conditions)
     with tqdm(total=total, desc="bench synth", unit="scan", disable=not progress) as bar:
-        if jobs <= 1:
+        if jobs <= 1 and scheduler is None:
             for i in range(cfg.n):
                 info, rs = run_subject(cfg, i, on_condition=lambda: bar.update(1))
                 infos.append(info)
                 runs += rs
                 _report_failures(rs, bar)
         else:
-            import multiprocessing as mp
+            from ..batch.mapping import map_unordered
 
-            # spawn: the parent already runs rayon threads; forking them is unsafe
-            with mp.get_context("spawn").Pool(jobs) as pool:
-                for info, rs_json in pool.imap_unordered(_worker, [(cfg, i) for i in range(cfg.n)]):
-                    rs = [Run.from_json(r) for r in rs_json]
-                    infos.append(info)
-                    runs += rs
-                    bar.update(len(cfg.conditions))
-                    _report_failures(rs, bar)
+            for i, out in map_unordered(_worker, [(cfg, i) for i in range(cfg.n)], scheduler=scheduler,
+                                        workers=max(1, jobs), announce=progress):
+                if isinstance(out, BaseException):  # the task itself failed (its workers died): recorded
+                    err = f"task failed: {type(out).__name__}: {out}"
+                    info, rs = {"subject": subject_name(i), "index": i, "error": err}, [
+                        Run(subject_name(i), c, m, False, error=err) for c in cfg.conditions for m in cfg.methods]
+                else:
+                    info, rs = out[0], [Run.from_json(r) for r in out[1]]
+                infos.append(info)
+                runs += rs
+                bar.update(len(cfg.conditions))
+                _report_failures(rs, bar)
     infos.sort(key=lambda d: d["subject"])
     runs.sort(key=lambda r: (r.subject, CONDITIONS.index(r.condition), r.method))
     return infos, runs, time.perf_counter() - t0

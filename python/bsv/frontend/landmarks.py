@@ -366,6 +366,9 @@ def apply_offsets(joints: Mapping[str, np.ndarray],
         return dict(joints)
     out = {}
     for j, p in joints.items():
+        if j not in JOINTS:
+            out[j] = np.asarray(p, dtype=np.float64)  # e.g. the neck: no offset
+            continue
         kind, side = _kind(j)
         off = np.asarray(table.get(kind, (0.0, 0.0, 0.0)), dtype=np.float64)
         off = off * np.array([1.0 if side == "left" else -1.0, 1.0, 1.0])

@@ -137,8 +137,12 @@ def test_joint_centres_near_the_rig(capture, monkeypatch):
     truth = rig_joints(s.phenotype, s.pose)
     assert set(joints) == set(lm.JOINTS)
     err = {j: float(np.linalg.norm(joints[j].xyz - truth[j])) * 1000 for j in joints}
-    assert np.median(list(err.values())) < 35.0, err
-    assert max(err.values()) < 80.0, err
+    # measured 13 mm median, 20 mm worst (the knees); the target is a median of 15 mm over a cohort
+    assert np.median(list(err.values())) < 16.0, err
+    assert max(err.values()) < 35.0, err
+    raw = lm.joint_centres(segs, {v: data[v]["depth_m"] for v in seg.VIEWS}, cams, correct=False)
+    raw_err = [float(np.linalg.norm(raw[j].xyz - truth[j])) * 1000 for j in raw]
+    assert np.median(raw_err) > np.median(list(err.values())), "the learned offsets should help a held-out subject"
     for j in joints.values():
         assert 0.0 <= j.confidence <= 1.0 and j.source == "front+back"
         assert json.loads(json.dumps(j.to_json()))["source"] == "front+back"

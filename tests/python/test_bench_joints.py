@@ -7,7 +7,7 @@ import numpy as np
 from bsv.bench.common import Run
 from bsv.bench.joints import INFO_KEY, joint_errors, joints_markdown, summarise
 from bsv.bodies.joints import rig_joints
-from bsv.frontend.landmarks import JOINT_OFFSETS_M, apply_offsets, body_frame
+from bsv.frontend.landmarks import JOINT_OFFSETS_M, TRUNK_REF_M, apply_offsets, body_frame, trunk_length
 
 
 def test_errors_are_signed_in_the_body_frame_and_mirrored() -> None:
@@ -26,10 +26,15 @@ def test_errors_are_signed_in_the_body_frame_and_mirrored() -> None:
 
 def test_offsets_move_each_side_outward_alike() -> None:
     truth = rig_joints()
-    moved = apply_offsets(truth, {"knee": (0.01, -0.02, 0.005)})
+    moved = apply_offsets(truth, {"knee": ((0.01, -0.02, 0.005), (0.0, 0.0, 0.0))})
     e = joint_errors(moved, truth)
     assert np.allclose(e["knee_l"], [10, -20, 5], atol=0.05) and np.allclose(e["knee_r"], [10, -20, 5], atol=0.05)
     assert np.allclose(e["ankle_l"], 0.0)
+    # the trunk-length term: b (T - T_ref)
+    t = trunk_length(truth)
+    assert 0.3 < t < 0.7
+    moved = apply_offsets(truth, {"hip": ((0.0, 0.0, 0.0), (0.0, 0.1, 0.0))})
+    assert np.allclose(joint_errors(moved, truth)["hip_r"], [0, 100 * (t - TRUNK_REF_M), 0], atol=0.05)
     assert set(JOINT_OFFSETS_M) == {"shoulder", "elbow", "wrist", "hip", "knee", "ankle"}
 
 

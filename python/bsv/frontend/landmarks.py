@@ -21,8 +21,9 @@ per view, the surface point under the landmark (the median depth of that side's 
 segments meeting at the joint, within :data:`DEPTH_RADIUS_PX`); seen from both views, the centre is the
 midpoint of the front and back surface points (the joint lies midway between the two opposite surfaces
 of the limb's cross-section); seen usably by one view only, the surface point pushed along the ray by the
-limb's half-thickness. A fixed offset per joint in the body's own frame (:data:`JOINT_OFFSETS_M`, learned
-on synthetic subjects, see there) then moves MediaPipe's landmark to the anatomical joint centre.
+limb's half-thickness. An offset per joint kind in the body's own frame, linear in the trunk length
+(:data:`JOINT_OFFSETS_M`, learned on synthetic subjects, see there), then moves MediaPipe's landmark to the
+anatomical joint centre.
 """
 
 from __future__ import annotations
@@ -68,22 +69,27 @@ _KINDS: dict[str, tuple[tuple[str, str], tuple[str, str], float]] = {
 }
 #: Pixels around a landmark whose depth gives the surface under it.
 DEPTH_RADIUS_PX = 7
-#: Fixed offset (metres) from the landmark-based estimate to the anatomical joint centre, per joint kind, in
-#: the body frame (x: lateral, toward the joint's own side; y: up, hips to shoulders; z: forward, the
-#: subject's facing direction). Minus the median error on cohort seed 11 (6 subjects, clinic room, noer:
-#: ``benchmarks/learn_joint_offsets.py``); evaluated on seed 12 the median 3-D error over the six joints goes
-#: from 17.9 to 9.7 mm. What it corrects: MediaPipe's ankle is the malleoli's outline, 38 mm above the rig's
-#: ankle joint (the head of the foot bone); its hip, knee, elbow and shoulder lie about 10 mm medial of the
-#: joint centres (the hip also 10 mm high: the hip landmark marks the hip's outline, not the femoral head);
-#: the shoulder sits 11 mm behind the humeral head's centre (the midpoint of the front and back surfaces
-#: there includes the scapula).
-JOINT_OFFSETS_M: dict[str, tuple[float, float, float]] = {
-    "shoulder": (0.0104, -0.0054, 0.0108),
-    "elbow": (0.0109, 0.0012, -0.0043),
-    "wrist": (0.0, -0.0031, -0.0012),
-    "hip": (0.0143, -0.0097, -0.0029),
-    "knee": (0.0097, -0.0094, 0.0004),
-    "ankle": (0.006, -0.0384, 0.0005),
+#: Trunk length (metres, mid-hip to mid-shoulder of the uncorrected estimates) at which the offsets of
+#: :data:`JOINT_OFFSETS_M` are the constant term.
+TRUNK_REF_M = 0.48
+#: Offset (metres) from the landmark-based estimate to the anatomical joint centre, per joint kind, in the
+#: body frame (x: lateral, toward the joint's own side; y: up, hips to shoulders; z: forward, the
+#: subject's facing direction), linear in the trunk length T (an anthropometric scaling, like the
+#: regression hip-joint-centre models of gait labs): offset = a + b (T - :data:`TRUNK_REF_M`), as
+#: ``(a, b)``. Least squares on cohort seeds 11 and 13 (12 subjects, clinic room, noer; left and right
+#: pooled) by ``benchmarks/learn_joint_offsets.py``; on the held-out seeds 12 and 14 the median 3-D error
+#: over the six joints goes from 18.6 mm (no offset) and 10.4 mm (a constant offset) to 9.3 mm, the hip's
+#: from 26.0 and 19.6 to 13.9 mm (95th percentile over all joints 46.8, 28.8, 26.3 mm). What it corrects: MediaPipe's ankle is the malleoli's outline, about
+#: 40 mm above the rig's ankle joint (the head of the foot bone); its hip, knee, elbow and shoulder lie
+#: 10-15 mm medial of the joint centres; its hip marks the hip's outline, not the femoral head, and the
+#: vertical gap grows with the trunk's length.
+JOINT_OFFSETS_M: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
+    "shoulder": ((0.0139, -0.0021, 0.0060), (0.1991, 0.0965, -0.1487)),
+    "elbow": ((0.0128, -0.0028, -0.0068), (0.0493, -0.0653, -0.1181)),
+    "wrist": ((0.0015, -0.0038, -0.0005), (0.0233, -0.0488, 0.0683)),
+    "hip": ((0.0155, -0.0051, -0.0074), (0.1852, 0.2488, -0.1738)),
+    "knee": ((0.0103, -0.0150, 0.0022), (0.0726, -0.1360, 0.0801)),
+    "ankle": ((0.0054, -0.0476, 0.0017), (0.0331, -0.3308, 0.0174)),
 }
 
 
@@ -360,22 +366,35 @@ def joint_centres(segs: Mapping[str, Segmentation], depths: Mapping[str, np.ndar
     return {j: JointCentre(out_xyz[j], conf[j], src[j]) for j in raw}
 
 
+def trunk_length(joints: Mapping[str, np.ndarray]) -> float:
+    """Distance (metres) from the mid-hip to the mid-shoulder of joint centres by name (NaN without them)."""
+    need = ("hip_l", "hip_r", "shoulder_l", "shoulder_r")
+    if any(k not in joints for k in need):
+        return float("nan")
+    p = {k: np.asarray(joints[k], dtype=np.float64) for k in need}
+    return float(np.linalg.norm((p["shoulder_l"] + p["shoulder_r"] - p["hip_l"] - p["hip_r"]) / 2))
+
+
 def apply_offsets(joints: Mapping[str, np.ndarray],
-                  offsets: Mapping[str, Sequence[float]] | None = None) -> dict[str, np.ndarray]:
-    """Joint centres moved by the fixed per-kind offsets (default :data:`JOINT_OFFSETS_M`) in the body frame
-    (x mirrored for the right side); unchanged without hips and shoulders to build the frame."""
+                  offsets: Mapping[str, tuple[Sequence[float], Sequence[float]]] | None = None,
+                  ) -> dict[str, np.ndarray]:
+    """Joint centres moved by the per-kind offsets ``(a, b)`` (default :data:`JOINT_OFFSETS_M`):
+    a + b (T - :data:`TRUNK_REF_M`) in the body frame of the given joints (x mirrored for the right side),
+    T their trunk length; unchanged without hips and shoulders to build the frame. Joints that are not
+    of :data:`JOINTS` (e.g. the neck) are not moved."""
     table = JOINT_OFFSETS_M if offsets is None else offsets
     frame = _body_frame(joints)
-    if frame is None:
-        return dict(joints)
+    trunk = trunk_length(joints)
+    if frame is None or not np.isfinite(trunk):
+        return {j: np.asarray(p, dtype=np.float64) for j, p in joints.items()}
     out = {}
     for j, p in joints.items():
-        if j not in JOINTS:
-            out[j] = np.asarray(p, dtype=np.float64)  # e.g. the neck: no offset
+        if j not in JOINTS or _kind(j)[0] not in table:
+            out[j] = np.asarray(p, dtype=np.float64)
             continue
         kind, side = _kind(j)
-        off = np.asarray(table.get(kind, (0.0, 0.0, 0.0)), dtype=np.float64)
-        off = off * np.array([1.0 if side == "left" else -1.0, 1.0, 1.0])
+        a, b = (np.asarray(v, dtype=np.float64) for v in table[kind])
+        off = (a + b * (trunk - TRUNK_REF_M)) * np.array([1.0 if side == "left" else -1.0, 1.0, 1.0])
         out[j] = np.asarray(p, dtype=np.float64) + off @ frame
     return out
 
@@ -412,6 +431,7 @@ __all__ = [
     "JOINTS",
     "JOINT_OFFSETS_M",
     "LIMBS",
+    "TRUNK_REF_M",
     "Camera",
     "JointCentre",
     "apply_offsets",
@@ -419,4 +439,5 @@ __all__ = [
     "capture_joints",
     "joint_centres",
     "segment_views",
+    "trunk_length",
 ]

@@ -721,7 +721,8 @@ def write_segmentation(seg: Segmentation, folder: PathLike, overwrite: bool = Fa
     lm = {n: (None if not np.isfinite(r[0]) else [float(r[0]), float(r[1]), float(r[2])])
           for n, r in zip(seg.names, seg.landmarks, strict=False)}
     meta = {"view": seg.view, "segments": dict(SEGMENT_IDS), "hands_found": list(seg.hands_found),
-            "swapped_pairs": list(seg.swapped), "counts": seg.counts(), "landmarks_px": lm}
+            "swapped_pairs": list(seg.swapped), "counts": seg.counts(), "landmarks_px": lm,
+            "landmark_sources": dict(seg.sources), "warnings": list(seg.warnings)}
     (d / "landmarks.json").write_text(json.dumps(meta, indent=1))
 
 

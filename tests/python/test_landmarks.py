@@ -161,3 +161,15 @@ def test_process_keeps_the_capture_and_records_the_warning(capture, monkeypatch,
     assert vols["joints_m"]["wrist_r"]["source"] == "front"  # the back view's wrist came from the front
     assert "right_wrist" in (tmp_path / "out" / "report.html").read_text()
     assert vols["volumes_l"]["trunk_limbs"] > 0
+
+
+def test_bsv_process_names_the_missing_limb_and_writes_nothing(capture, monkeypatch, tmp_path, capsys):
+    from bsv.pipeline import main_process
+
+    folder, data, _, _ = capture
+    _lower(monkeypatch, data, {("front", "right_elbow"): 0.1, ("back", "right_elbow"): 0.2})
+    out = tmp_path / "out"
+    assert main_process([str(folder), "-c", str(folder / "calibration.json"), "-o", str(out), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "right arm" in err and "right_elbow" in err and "step back" in err and "Traceback" not in err
+    assert not out.exists() or not any(out.rglob("*"))

@@ -51,3 +51,16 @@ def test_tables_pool_sides_and_name_the_worst_subject() -> None:
     md = "\n".join(joints_markdown(runs))
     assert "| knee | 6 | 10.0 |" in md and "subject_002 l" in md
     assert joints_markdown([Run("s", "noer", "bsv", True)]) == []
+
+
+def test_joint_figure_is_written_only_with_joints(tmp_path) -> None:
+    from bsv.bench.joints import FIGURE, joint_figure
+    from bsv.bench.output import FIGURE_PATTERNS
+
+    assert FIGURE in FIGURE_PATTERNS  # an existing figure blocks a rerun without --overwrite
+    runs = [Run(f"subject_{i:03d}", "noer", "bsv", True, info={INFO_KEY: {"hip_l": [float(i), 2.0, 3.0]}})
+            for i in range(4)]
+    out = joint_figure(runs, tmp_path / FIGURE)
+    assert out is not None and out.stat().st_size > 1000
+    assert joint_figure([Run("s", "noer", "bsv", True)], tmp_path / "none.png") is None
+    assert not (tmp_path / "none.png").exists()

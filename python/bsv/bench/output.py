@@ -31,7 +31,7 @@ from .tables import (
 #: Files every benchmark writes into its output folder (besides the figures, :data:`FIGURE_PATTERNS`).
 OUTPUT_FILES = ("results.json", "results.csv", "report.md")
 #: Glob patterns of the figures a benchmark writes.
-FIGURE_PATTERNS = ("rve_per_segment.png", "trunk_limbs_hist_*.png")
+FIGURE_PATTERNS = ("rve_per_segment.png", "trunk_limbs_hist_*.png", "joint_errors.png")
 
 
 def existing_outputs(out: str | Path) -> list[str]:
@@ -103,9 +103,11 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
     if "bsv" in summary:
         md += ["## Signed error per segment (%, mean over subjects; bsv)", "", signed_table(summary), "",
                "## Worst subject per segment (signed error %, subject index; bsv)", "", worst_table(table), ""]
-    from .joints import joints_markdown
+    from .joints import joint_figure, joints_markdown
 
     md += joints_markdown(runs)
+    if joint_figure(runs, d / "joint_errors.png") is not None:
+        figs.append("joint_errors.png")
     md += ["## Registration time per subject (s)", "", timing_table(runs), ""]
     far = cloud_table(runs)
     if far:

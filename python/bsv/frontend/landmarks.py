@@ -45,6 +45,7 @@ from .segment import (
     detect,
     label_detection,
     resolve_landmarks,
+    unconfident_landmarks,
 )
 
 #: Joint centres estimated, named as :func:`bsv.bodies.joints.rig_joints` and :data:`bsv.biomech` name them.
@@ -257,11 +258,11 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
     for v in views:
         o = "back" if v == "front" else "front"
         own_bad = [n for n, _ in _unconfident(dets[v])]
-        other_ok = {n for n, _ in _unconfident(dets[o])}
+        other_bad = {n for n, _ in _unconfident(dets[o])}
         from_other: dict[str, np.ndarray] = {}
         for name in own_bad:
-            if name in other_ok:
-                continue
+            if name in other_bad:
+                continue  # neither view sees it confidently: the hand model or the lower threshold may
             p = _lift_from(dets[o], cameras[o], depths[o], name)
             if p is not None:
                 uv = cameras[v].project(p[None])[0]
@@ -274,8 +275,7 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
 
 
 def _unconfident(det: Detection) -> list[tuple[str, str]]:
-    from .segment import unconfident_landmarks
-
+    """The required landmarks of a detection under its ``min_visibility`` (or outside the image)."""
     return unconfident_landmarks(det.pose, det.shape, det.params.min_visibility)
 
 
@@ -286,7 +286,8 @@ def _limb_error(missing: Mapping[str, Mapping[str, str]]) -> LimbMissingError:
     what = "; ".join(
         f"{n} (" + ", ".join(f"{v}: {m[n]}" for v, m in missing.items() if n in m) + ")" for n in names)
     err = LimbMissingError(
-        f"{' and '.join(limbs)} not found in either camera view: {what}. Capture again: step back so that the whole "
+        f"{' and '.join(limbs)} not found in the camera views (nor by the other view, the hand model or the "
+        f"lower visibility threshold): {what}. Capture again: step back so that the whole "
         "body, hands and feet included, is inside both images; hold the arms open, away from the body (A-pose); "
         "light the subject evenly from the front and the back")
     err.missing = names

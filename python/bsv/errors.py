@@ -12,6 +12,8 @@ while it initialises.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 
 class BsvError(Exception):
     """Base class of every BSV error."""
@@ -176,6 +178,17 @@ class PersonNotFoundError(SegmentationError):
 
 class LandmarkMissingError(SegmentationError):
     """A landmark needed for the segmentation (an ankle, a wrist, ...) was not detected confidently."""
+
+    #: The missing landmark names.
+    missing: Sequence[str] = ()
+
+
+class LimbMissingError(LandmarkMissingError):
+    """A limb's landmark was found in neither view (nor the hand model, nor at the lower threshold): the
+    message names the limb and says what to do (step back, open the arms, better light)."""
+
+    #: The limbs concerned, e.g. ["left arm"].
+    limbs: Sequence[str] = ()
 
 
 # --- the synthetic bodies (bsv.bodies) -----------------------------------------------------------

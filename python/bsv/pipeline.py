@@ -63,6 +63,10 @@ class ProcessResult:
     comparison: list[dict[str, Any]] = field(default_factory=list)
     #: Body-segment inertial parameters (:class:`bsv.biomech.BSIP`), with ``bsip=True``.
     bsip: Any = None
+    #: Joint centres in 3-D (:class:`bsv.frontend.landmarks.JointCentre` by name), camera segmentation only.
+    joints: dict[str, Any] = field(default_factory=dict)
+    #: Warnings of the run (each landmark taken from another source than its own confident detection).
+    warnings: list[str] = field(default_factory=list)
 
     @property
     def mesh(self) -> Mesh:
@@ -157,22 +161,37 @@ def _read_label_png(path: Path) -> np.ndarray:
     return np.ascontiguousarray(img.astype(np.uint8))
 
 
+def _segment_cameras(data: dict[str, dict[str, Any]], extrinsics: dict[str, dict[str, Any]], cameras: Sequence[str],
+                     params: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Both cameras segmented together (landmarks filled in across views, :mod:`bsv.frontend.landmarks`)
+    and the joint centres in 3-D; a single camera is segmented alone."""
+    from .frontend.landmarks import Camera, joint_centres, segment_views
+    from .frontend.segment import segment_image
+
+    if sorted(cameras) != ["back", "front"]:
+        return {c: segment_image(data[c]["colour"], view=c, depth=data[c]["depth_m"], **params) for c in cameras}, {}
+    cams = {c: Camera.from_json(data[c]["intrinsics"], extrinsics[c]) for c in cameras}
+    segs = segment_views({c: data[c] for c in cameras}, cams, **params)
+    return segs, joint_centres(segs, {c: data[c]["depth_m"] for c in cameras}, cams)
+
+
 def _segment(cam: str, data: dict[str, Any], folder: Path, mode: str, params: dict[str, Any],
-             seg_out: Path) -> tuple[np.ndarray, dict, Any]:
+             seg_out: Path, seg: Any = None) -> tuple[np.ndarray, dict, Any]:
     """Per-pixel segment labels of one camera, a summary of the segmentation and the camera segmentation
     to save into ``seg_out`` (in the output folder, never into the capture ``folder``) once the whole run
-    has succeeded (None for the oracle)."""
-    seg = None
+    has succeeded (None for the oracle). ``seg``: the camera's segmentation, when already done."""
     if mode == "oracle":
         labels = _read_label_png(folder / data["meta"].get("labels", "labels.png"))
         summary = {"source": "oracle", "labelled_pixels": int((labels > 0).sum())}
     else:
         from .frontend.segment import segment_image
 
-        seg = segment_image(data["colour"], view=cam, depth=data["depth_m"], **params)
+        if seg is None:
+            seg = segment_image(data["colour"], view=cam, depth=data["depth_m"], **params)
         labels = seg.labels
         summary = {"source": "camera (MediaPipe Holistic)", "labelled_pixels": int((labels > 0).sum()),
-                   "hands_found": list(seg.hands_found), "counts": seg.counts(), "files": str(seg_out)}
+                   "hands_found": list(seg.hands_found), "counts": seg.counts(), "files": str(seg_out),
+                   "landmark_sources": dict(seg.sources), "warnings": list(seg.warnings)}
     if labels.shape != data["depth_m"].shape:
         raise SegmentationError(
             f"{cam}: label image {labels.shape} and depth image {data['depth_m'].shape} differ in size; the depth must "
@@ -325,19 +344,30 @@ def process(
 
     seg_summary: dict[str, dict[str, Any]] = {}
     seg_files: dict[str, Any] = {}
+    joints: dict[str, Any] = {}
+    camera_segs: dict[str, Any] = {}
+    if segmentation == "camera":
+        camera_segs, joints = steps.run("segment", "segmenting both cameras (MediaPipe) and their joint centres",
+                                        lambda: _segment_cameras(data, extrinsics, cameras, segment_params or {}))
     views = []
     for cam in cameras:
         d = data[cam]
 
         def segment_camera(cam: str = cam, d: dict[str, Any] = d) -> tuple[np.ndarray, dict, Any]:
-            return _segment(cam, d, dirs[cam], segmentation, segment_params or {}, out / SEGMENTATION_DIR / cam)
+            return _segment(cam, d, dirs[cam], segmentation, segment_params or {}, out / SEGMENTATION_DIR / cam,
+                            camera_segs.get(cam))
 
-        labels, summary, seg_files[cam] = steps.run(f"segment_{cam}", f"segmenting the {cam} camera ({segmentation})",
-                                                    segment_camera)
+        labels, summary, seg_files[cam] = (segment_camera() if camera_segs else
+                                           steps.run(f"segment_{cam}", f"segmenting the {cam} camera ({segmentation})",
+                                                     segment_camera))
         seg_summary[cam] = summary
         views.append({"name": cam, "intrinsics": d["intrinsics"].to_json(), "camera_to_world": extrinsics[cam],
                       "depth": np.ascontiguousarray(d["depth_m"], dtype=np.float32), "labels": labels,
                       "colors": np.ascontiguousarray(d["colour"], dtype=np.uint8)})
+    landmark_warnings = [w for seg in camera_segs.values() for w in seg.warnings]
+    if progress:
+        for w in landmark_warnings:
+            print(f"[bsv]   warning: {w}", flush=True)
 
     cloud, cloud_report = steps.run(
         "cloud", "building the cloud (deprojection, only the person, merge)",
@@ -358,6 +388,8 @@ def process(
                              lambda: compute_bsip(reg, bsip_density, sex=bsip_sex))
     vols = dict(reg.volumes)
     vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report}
+    vols["joints_m"] = {name: j.to_json() for name, j in joints.items()}
+    vols["warnings"] = landmark_warnings
     out.mkdir(parents=True, exist_ok=True)
     files = {"cloud": out / "cloud.ply", "fitted": out / "fitted.ply", "volumes": out / "volumes.json",
              "report": out / "report.html"}
@@ -380,7 +412,7 @@ def process(
 
     steps.run("write", "writing the segmentation, cloud.ply, fitted.ply, volumes.json", write_all)
     result = ProcessResult(out, cloud, reg, vols, cloud_report, seg_summary, steps.timings, files, truth=truth,
-                           bsip=inertial)
+                           bsip=inertial, joints=joints, warnings=landmark_warnings)
     if truth is not None:
         result.comparison = compare(vols, truth)
     figs = steps.run("report", "drawing the report", lambda: write_report(result, out, title=title, overwrite=overwrite))

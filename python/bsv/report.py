@@ -183,6 +183,13 @@ def cleaning_html(cloud_report: dict[str, Any]) -> str:
     return f"<h2>Cloud cleaning</h2>{table}{agree_html}{warn_html}"
 
 
+def _landmark_warnings_html(vols: dict[str, Any]) -> str:
+    """The volumes JSON's ``warnings`` (landmarks not seen confidently and where they came from), highlighted."""
+    warnings = vols.get("warnings") or []
+    return ("<ul class=\"warn\">" + "".join(f"<li>{html.escape(str(w))}</li>" for w in warnings) + "</ul>"
+            if warnings else "")
+
+
 def _fmt(x: Any, digits: int = 3) -> str:
     if isinstance(x, (int, float)) and math.isfinite(float(x)):
         return f"{float(x):.{digits}f}"
@@ -268,7 +275,7 @@ def write_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", o
 <div><h2>Distal / proximal ratios</h2>{_table(["ratio", "value"], ratio_rows)}
 <h2>Left / right asymmetry</h2>{_table(["part", "(L-R)/mean %"], asym_rows)}</div>
 <div><h2>Cloud</h2>{_table(["camera", "mask px", "points", "SOR removed", "dropped", "kept"], cloud_rows)}
-<h2>Segmentation</h2>{_table(["camera", "source", "labelled px"], seg_rows)}
+<h2>Segmentation</h2>{_table(["camera", "source", "labelled px"], seg_rows)}{_landmark_warnings_html(vols)}
 <h2>Registration</h2>{_table(["", ""], reg_rows)}
 <h2>Timings (s)</h2>{_table(["step", "s"], timing_rows)}</div>
 </div>

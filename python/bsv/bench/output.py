@@ -11,6 +11,7 @@ from typing import Any
 from ..errors import OutputExistsError
 from .common import Run
 from .figures import rve_bars, trunk_limbs_histogram
+from .joints import summarise as joint_summary
 from .tables import (
     bias_table,
     cloud_table,
@@ -30,7 +31,7 @@ from .tables import (
 #: Files every benchmark writes into its output folder (besides the figures, :data:`FIGURE_PATTERNS`).
 OUTPUT_FILES = ("results.json", "results.csv", "report.md")
 #: Glob patterns of the figures a benchmark writes.
-FIGURE_PATTERNS = ("rve_per_segment.png", "trunk_limbs_hist_*.png")
+FIGURE_PATTERNS = ("rve_per_segment.png", "trunk_limbs_hist_*.png", "joint_errors.png")
 
 
 def existing_outputs(out: str | Path) -> list[str]:
@@ -75,7 +76,7 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
         "bsv_version": __version__, "benchmark": title, "config": dict(config),
         "created": time.strftime("%Y-%m-%d %H:%M:%S"), "machine": platform.platform(),
         "wall_seconds": wall_seconds, "subjects": list(infos), "runs": [r.to_json() for r in runs],
-        "summary": summary, "failures": failures,
+        "summary": summary, "failures": failures, "joints": joint_summary(runs),
         "targets": [{"target": n, "met": ok, "measured": ev} for n, ok, ev in checks],
     })
     write_csv(d / "results.csv", table)
@@ -102,6 +103,11 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
     if "bsv" in summary:
         md += ["## Signed error per segment (%, mean over subjects; bsv)", "", signed_table(summary), "",
                "## Worst subject per segment (signed error %, subject index; bsv)", "", worst_table(table), ""]
+    from .joints import joint_figure, joints_markdown
+
+    md += joints_markdown(runs)
+    if joint_figure(runs, d / "joint_errors.png") is not None:
+        figs.append("joint_errors.png")
     md += ["## Registration time per subject (s)", "", timing_table(runs), ""]
     far = cloud_table(runs)
     if far:

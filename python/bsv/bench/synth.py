@@ -112,13 +112,16 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
                       template: Mesh, methods: Iterable[str], segmentation: str = "oracle",
                       params: dict[str, Any] | None = None, truth_mesh: Mesh | None = None,
                       cloud_mode: str = "raw", room: bool | dict[str, Any] = False,
-                      cloud_params: dict[str, Any] | None = None) -> list[Run]:
+                      cloud_params: dict[str, Any] | None = None,
+                      truth_joints: dict[str, Any] | None = None) -> list[Run]:
     """Scan ``mesh`` in one condition, compute the floor if calibrated, register with every method.
 
     ``cloud_mode``: ``raw`` registers the scanner's cloud; ``lab`` (forced by camera segmentation) rebuilds
     it from the capture images like ``bsv process`` (its defaults, or ``cloud_params``).
     ``room``: scan inside a clinic room, or the room given as a dict (:func:`bsv.scan`). The floor moves ``truth_mesh`` (default ``mesh``:
     it must be closed and labelled like the truth); the cloud's far-point percentages are measured against it.
+    ``truth_joints``: the rig's joint centres; with camera segmentation each run's ``info`` records the
+    joint-centre errors (:mod:`bsv.bench.joints`).
     Never raises for a failed registration: the Run carries ``ok=False`` and the error text."""
     from .. import scan
     from .common import cloud_far_pct
@@ -128,6 +131,7 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
     floor: dict[str, float] = {}
     truth_surface = mesh if truth_mesh is None else truth_mesh
     unfiltered: tuple[float | None, float | None] = (None, None)
+    joint_errs: dict[str, list[float]] | None = None
     lab = cloud_mode == "lab" or segmentation == "camera"
     need_files = condition in CALIBRATED or lab
     with tempfile.TemporaryDirectory(prefix="bsv-bench-") as tmp:
@@ -137,7 +141,14 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
         if lab:
             from .camera import build_views_cloud, capture_views
 
-            views = capture_views(tmp, segmentation)
+            if segmentation == "camera":
+                from .joints import camera_segmentations, joint_errors
+
+                segs, joints = camera_segmentations(tmp)
+                views = capture_views(tmp, segmentation, labels={v: s.labels for v, s in segs.items()})
+                joint_errs = joint_errors(joints, truth_joints) if truth_joints else None
+            else:
+                views = capture_views(tmp, segmentation)
             raw = build_views_cloud(views, tmp, **(cloud_params or {}))[0]
             # The mask's own cloud, before any cleaning: what floor, wall and edge removal had to remove.
             uncleaned = build_views_cloud(views, tmp, sor=False, remove_floor=False, isolate_person=False)[0]
@@ -155,6 +166,8 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
         except Exception as exc:  # a failed registration is reported, the run goes on
             run.error = f"{type(exc).__name__}: {exc}"
             run.info = {"traceback": traceback.format_exc(limit=3)}
+        if joint_errs:
+            run.info["joint_errors_mm"] = joint_errs
         runs.append(run)
     return runs
 
@@ -186,12 +199,15 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] |
     truth = {k: float(v) for k, v in s.volumes_l().items()}
     template = load_template(cfg.template)
     mesh = s.body.mesh()
+    from ..bodies.joints import rig_joints
+
+    truth_joints = rig_joints(s.phenotype, s.pose) if cfg.segmentation == "camera" and cfg.cohort == "standard" else None
     runs = []
     for cond in cfg.conditions:
         try:
             runs += measure_condition(name, mesh, truth, cond, scan_seed(cfg.seed, index), template,
                                       cfg.methods, cfg.segmentation, cfg.params, cloud_mode=cfg.cloud,
-                                      room=cfg.room_arg(), cloud_params=cfg.cloud_params)
+                                      room=cfg.room_arg(), cloud_params=cfg.cloud_params, truth_joints=truth_joints)
         except Exception as exc:  # a failed scan/floor is reported, the run goes on
             runs += [Run(name, cond, m, False, truth_l=truth, error=f"{type(exc).__name__}: {exc}")
                      for m in cfg.methods]

@@ -14,6 +14,7 @@ from .errors import (
     CaptureError,
     FrontendError,
     LandmarkMissingError,
+    LimbMissingError,
     MarkerNotFoundError,
     NoCameraError,
     PersonNotFoundError,
@@ -24,7 +25,7 @@ from .errors import (
 from .intrinsics import Intrinsics, load_intrinsics
 from .marker import Board, MarkerSpec
 
-_SUBMODULES = ("calibrate", "capture", "segment", "marker", "intrinsics", "errors")
+_SUBMODULES = ("calibrate", "capture", "segment", "landmarks", "marker", "intrinsics", "errors")
 
 
 def __getattr__(name: str) -> Any:
@@ -43,6 +44,7 @@ __all__ = [
     "FrontendError",
     "Intrinsics",
     "LandmarkMissingError",
+    "LimbMissingError",
     "MarkerNotFoundError",
     "MarkerSpec",
     "NoCameraError",

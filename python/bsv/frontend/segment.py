@@ -102,8 +102,13 @@ class SegmentParams:
     model_complexity: int = 1
     #: Person detection confidence of MediaPipe.
     min_detection_confidence: float = 0.75
-    #: Visibility below which a required landmark (ankle, wrist, ...) counts as missing.
+    #: Visibility below which a required landmark (ankle, wrist, ...) is not trusted (the paper's 0.75): it is
+    #: then taken from the other view, the hand model (wrists) or, last, accepted down to
+    #: ``fallback_visibility`` with a warning (:mod:`bsv.frontend.landmarks`).
     min_visibility: float = 0.75
+    #: The documented lower threshold: a required landmark seen with at least this visibility is used, with a
+    #: warning, when neither the other view nor the hand model gives it; below it the landmark is missing.
+    fallback_visibility: float = 0.5
     #: Threshold of MediaPipe's soft person mask (0.35 gives the best mask IoU on the scanner's renders).
     mask_threshold: float = 0.35
     #: Segment the back view on the horizontally flipped image (and map the result back).
@@ -145,10 +150,13 @@ class SegmentParams:
     def __post_init__(self) -> None:
         if self.model_complexity not in _POSE_MODELS:
             raise SegmentationError(f"model_complexity must be 0, 1 or 2, got {self.model_complexity!r}")
-        for name in ("min_detection_confidence", "min_visibility", "mask_threshold"):
+        for name in ("min_detection_confidence", "min_visibility", "fallback_visibility", "mask_threshold"):
             v = getattr(self, name)
             if not (0.0 <= v <= 1.0):
                 raise SegmentationError(f"segmentation parameter {name} must lie in [0, 1], got {v!r}")
+        if self.fallback_visibility > self.min_visibility:
+            raise SegmentationError(f"fallback_visibility {self.fallback_visibility} must not exceed min_visibility "
+                                    f"{self.min_visibility}")
         if self.depth_band <= 0 or self.depth_grow_px < 0 or self.torso_weight <= 0:
             raise SegmentationError("depth_band and torso_weight must be positive and depth_grow_px >= 0")
 
@@ -187,6 +195,11 @@ class Segmentation:
     swapped: tuple[str, ...] = field(default_factory=tuple)
     #: The 33 pose landmarks (x, y, visibility; subject's left/right), as :func:`label_pixels` takes them.
     pose: np.ndarray | None = None
+    #: Where each required landmark not seen confidently came from ("other view", "hand model",
+    #: "low visibility"); landmarks seen confidently are absent.
+    sources: dict[str, str] = field(default_factory=dict)
+    #: One sentence per degraded landmark (also in the volumes JSON's ``warnings`` and the report).
+    warnings: tuple[str, ...] = field(default_factory=tuple)
 
     def landmark(self, name: str) -> np.ndarray:
         """(x, y, visibility) of one landmark by name (KeyError naming it if unknown)."""
@@ -302,27 +315,148 @@ def _orient(pose: np.ndarray, hands: list, view: str) -> tuple[np.ndarray, list,
     return pose, new, tuple(swapped)
 
 
-def _check_landmarks(pose: np.ndarray, shape: tuple[int, int], min_vis: float, view: str) -> None:
-    """LandmarkMissingError naming every required landmark that is outside the image or not visible enough
-    (its ``missing`` attribute lists them)."""
+def _landmark_problem(xyv: np.ndarray, shape: tuple[int, int], min_vis: float) -> str | None:
+    """Why a landmark (x, y, visibility) is not usable at ``min_vis`` (None if it is)."""
     h, w = shape
-    missing = []
+    x, y, v = (float(c) for c in xyv[:3])
+    finite = bool(np.isfinite(x) and np.isfinite(y))
+    if not (finite and -0.02 * w <= x <= 1.02 * w and -0.02 * h <= y <= 1.02 * h):
+        return "outside the image"
+    if not v >= min_vis:
+        return f"visibility {v:.2f} < {min_vis:.2f}"
+    return None
+
+
+def unconfident_landmarks(pose: np.ndarray, shape: tuple[int, int], min_vis: float) -> list[tuple[str, str]]:
+    """(name, why) of every required landmark of the oriented pose that is outside the image or seen with a
+    visibility under ``min_vis``."""
+    out = []
     for name in REQUIRED_LANDMARKS:
-        x, y, v = pose[POSE_NAMES.index(name)]
-        finite = bool(np.isfinite(x) and np.isfinite(y))
-        inside = finite and -0.02 * w <= x <= 1.02 * w and -0.02 * h <= y <= 1.02 * h
-        if not inside:
-            missing.append((name, "outside the image"))
-        elif not v >= min_vis:
-            missing.append((name, f"visibility {v:.2f} < {min_vis:.2f}"))
-    if missing:
-        what = ", ".join(f"{n} ({why})" for n, why in missing)
-        err = LandmarkMissingError(
-            f"{view} image: landmark{'s' if len(missing) > 1 else ''} of the subject not found confidently: {what}; "
-            "the whole body, feet and hands included, must be in view and unoccluded"
-        )
-        err.missing = [n for n, _ in missing]  # type: ignore[attr-defined]
-        raise err
+        why = _landmark_problem(pose[POSE_NAMES.index(name)], shape, min_vis)
+        if why is not None:
+            out.append((name, why))
+    return out
+
+
+@dataclass
+class Detection:
+    """MediaPipe Holistic's result on one view, oriented to the subject's left/right, before labelling."""
+
+    #: "front" or "back".
+    view: str
+    #: (height, width) of the image.
+    shape: tuple[int, int]
+    #: (33, 3) pose landmarks, x, y (pixels), visibility, subject's left/right.
+    pose: np.ndarray
+    #: The subject's (left, right) hand landmarks, (21, 2) pixels, or None.
+    hands: list
+    #: MediaPipe's soft person mask (H, W) float32, or None.
+    mask_soft: np.ndarray | None
+    #: Left/right pairs whose MediaPipe names were swapped.
+    swapped: tuple[str, ...]
+    #: The parameters it was detected with (and is labelled with).
+    params: SegmentParams
+
+
+def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | None = None,
+           **overrides: Any) -> Detection:
+    """MediaPipe Holistic on one RGB uint8 (H, W, 3) image of the ``view`` camera, oriented to the subject's
+    left/right (the first half of :func:`segment_image`; no landmark check). PersonNotFoundError when
+    no person is found."""
+    if view not in VIEWS:
+        raise SegmentationError(f"view must be 'front' or 'back', got {view!r}")
+    try:
+        base = params if params is not None else DEFAULT_PARAMS[view]
+        prm = dataclasses.replace(base, **overrides)
+    except TypeError as e:
+        raise SegmentationError(f"unknown segmentation parameter ({e}); see SegmentParams") from e
+    img = np.asarray(colour_rgb)
+    if img.ndim != 3 or img.shape[2] != 3 or img.dtype != np.uint8:
+        raise SegmentationError(f"colour image must be RGB uint8 (H, W, 3), got {img.dtype} {img.shape}")
+    h, w = img.shape[:2]
+    flip = view == "back" and prm.flip_back
+    res = run_holistic(img[:, ::-1] if flip else img, prm)
+    if res["pose"] is None:
+        raise PersonNotFoundError(f"no person found in the {view} image ({w} x {h}): the subject must stand in "
+                                  "full view of the camera, lit, against a plain background")
+    pose = res["pose"]
+    hands = res["hands"]
+    mask_soft = res["mask"]
+    if flip:  # back to the input image's pixels
+        pose = pose.copy()
+        pose[:, 0] = w - 1 - pose[:, 0]
+        hands = [None if hd is None else np.column_stack([w - 1 - hd[:, 0], hd[:, 1]]) for hd in hands]
+        mask_soft = None if mask_soft is None else mask_soft[:, ::-1]
+    pose, hands, swapped = _orient(pose, hands, view)
+    return Detection(view, (h, w), pose, hands, mask_soft, swapped, prm)
+
+
+def resolve_landmarks(det: Detection, from_other: dict[str, np.ndarray] | None = None,
+                      ) -> tuple[np.ndarray, dict[str, str], list[str], list[tuple[str, str]]]:
+    """The required landmarks of one view made usable, in this order of sources: seen confidently
+    (visibility >= ``min_visibility``); the other view's (``from_other``: name -> (x, y, visibility) already
+    projected into this image through the calibration, :mod:`bsv.frontend.landmarks`); the hand model's
+    wrist (MediaPipe Holistic's hand landmark 0, for a wrist); this view's own landmark if its visibility is
+    at least the documented lower threshold ``fallback_visibility``. Returns the pose with the substitutes,
+    {name: source}, one warning per substitute and the (name, why) still missing."""
+    prm = det.params
+    pose = det.pose.copy()
+    sources: dict[str, str] = {}
+    warnings: list[str] = []
+    missing: list[tuple[str, str]] = []
+    for name, why in unconfident_landmarks(pose, det.shape, prm.min_visibility):
+        i = POSE_NAMES.index(name)
+        side = 0 if name.startswith("left_") else 1
+        hand = det.hands[side]
+        other = (from_other or {}).get(name)
+        if other is not None and _landmark_problem(other, det.shape, prm.min_visibility) is None:
+            pose[i] = other
+            sources[name] = "other view"
+            warnings.append(f"{det.view} image: {name} ({why}) taken from the other view through the calibration")
+        elif (name.endswith("_wrist") and hand is not None
+              and _landmark_problem(np.array([*hand[0], 1.0]), det.shape, 0.0) is None):
+            pose[i, :2] = hand[0]
+            pose[i, 2] = max(float(pose[i, 2]), prm.min_visibility)
+            sources[name] = "hand model"
+            warnings.append(f"{det.view} image: {name} ({why}) taken from the hand model's wrist")
+        elif _landmark_problem(pose[i], det.shape, prm.fallback_visibility) is None:
+            sources[name] = "low visibility"
+            warnings.append(f"{det.view} image: {name} used with {why} (accepted down to the lower threshold "
+                            f"{prm.fallback_visibility:.2f}): check its segment boundaries")
+        else:
+            missing.append((name, why))
+    return pose, sources, warnings, missing
+
+
+def label_detection(det: Detection, depth: np.ndarray | None = None, pose: np.ndarray | None = None,
+                    sources: dict[str, str] | None = None, warnings: Sequence[str] = ()) -> Segmentation:
+    """The second half of :func:`segment_image`: the person mask (refined by ``depth``, metres, if given)
+    and its per-pixel labels from the resolved ``pose`` (default: the detection's own)."""
+    prm = det.params
+    pose = det.pose if pose is None else pose
+    if det.mask_soft is None:
+        raise PersonNotFoundError(f"MediaPipe returned no person mask for the {det.view} image")
+    mask = _clean_mask(det.mask_soft > prm.mask_threshold)
+    if depth is not None:
+        mask = refine_mask_with_depth(mask, depth, prm.depth_band, prm.depth_grow_px)
+    if mask.sum() < 100:
+        raise PersonNotFoundError(f"the person mask of the {det.view} image is (nearly) empty ({int(mask.sum())} px)")
+    hands = det.hands
+    labels = label_pixels(mask, pose, hands, prm)
+    return Segmentation(labels=labels, mask=mask, landmarks=_landmarks71(pose, hands), view=det.view,
+                        hands_found=(hands[0] is not None, hands[1] is not None), swapped=det.swapped, pose=pose,
+                        sources=dict(sources or {}), warnings=tuple(warnings))
+
+
+def missing_error(view: str, missing: Sequence[tuple[str, str]]) -> LandmarkMissingError:
+    """LandmarkMissingError naming every missing landmark of one view (its ``missing`` attribute lists them)."""
+    what = ", ".join(f"{n} ({why})" for n, why in missing)
+    err = LandmarkMissingError(
+        f"{view} image: landmark{'s' if len(missing) > 1 else ''} of the subject not found confidently: {what}; "
+        "the whole body, feet and hands included, must be in view and unoccluded"
+    )
+    err.missing = [n for n, _ in missing]
+    return err
 
 
 def _landmarks71(pose: np.ndarray, hands: list) -> np.ndarray:
@@ -526,44 +660,16 @@ def segment_image(colour_rgb: np.ndarray, view: str = "front", depth: np.ndarray
     """Segments one RGB uint8 (H, W, 3) image of a standing subject seen from the ``view`` ("front" or
     "back") camera. ``depth`` (metres, aligned to the colour image, 0 = none) refines the person mask.
     ``params`` defaults to :data:`DEFAULT_PARAMS` of the view; keyword overrides set fields of
-    :class:`SegmentParams` on top. Raises PersonNotFoundError when no person is
-    found and LandmarkMissingError naming a required landmark that is missing or not visible enough."""
-    if view not in VIEWS:
-        raise SegmentationError(f"view must be 'front' or 'back', got {view!r}")
-    try:
-        base = params if params is not None else DEFAULT_PARAMS[view]
-        prm = dataclasses.replace(base, **overrides)
-    except TypeError as e:
-        raise SegmentationError(f"unknown segmentation parameter ({e}); see SegmentParams") from e
-    img = np.asarray(colour_rgb)
-    if img.ndim != 3 or img.shape[2] != 3 or img.dtype != np.uint8:
-        raise SegmentationError(f"colour image must be RGB uint8 (H, W, 3), got {img.dtype} {img.shape}")
-    h, w = img.shape[:2]
-    flip = view == "back" and prm.flip_back
-    res = run_holistic(img[:, ::-1] if flip else img, prm)
-    if res["pose"] is None:
-        raise PersonNotFoundError(f"no person found in the {view} image ({w} x {h}): the subject must stand in "
-                                  "full view of the camera, lit, against a plain background")
-    pose = res["pose"]
-    hands = res["hands"]
-    mask_soft = res["mask"]
-    if flip:  # back to the input image's pixels
-        pose = pose.copy()
-        pose[:, 0] = w - 1 - pose[:, 0]
-        hands = [None if hd is None else np.column_stack([w - 1 - hd[:, 0], hd[:, 1]]) for hd in hands]
-        mask_soft = None if mask_soft is None else mask_soft[:, ::-1]
-    pose, hands, swapped = _orient(pose, hands, view)
-    _check_landmarks(pose, (h, w), prm.min_visibility, view)
-    if mask_soft is None:
-        raise PersonNotFoundError(f"MediaPipe returned no person mask for the {view} image")
-    mask = _clean_mask(mask_soft > prm.mask_threshold)
-    if depth is not None:
-        mask = refine_mask_with_depth(mask, depth, prm.depth_band, prm.depth_grow_px)
-    if mask.sum() < 100:
-        raise PersonNotFoundError(f"the person mask of the {view} image is (nearly) empty ({int(mask.sum())} px)")
-    labels = label_pixels(mask, pose, hands, prm)
-    return Segmentation(labels=labels, mask=mask, landmarks=_landmarks71(pose, hands), view=view,
-                        hands_found=(hands[0] is not None, hands[1] is not None), swapped=swapped, pose=pose)
+    :class:`SegmentParams` on top. A required landmark under ``min_visibility`` is taken from the hand
+    model (wrists) or accepted down to ``fallback_visibility``, with a warning (:attr:`Segmentation.warnings`);
+    both views together also use each other (:func:`bsv.frontend.landmarks.segment_views`). Raises
+    PersonNotFoundError when no person is found and LandmarkMissingError naming the required landmarks
+    still missing."""
+    det = detect(colour_rgb, view, params, **overrides)
+    pose, sources, warnings, missing = resolve_landmarks(det)
+    if missing:
+        raise missing_error(view, missing)
+    return label_detection(det, depth, pose, sources, warnings)
 
 
 def segment_capture(folder: PathLike, cameras: Sequence[str] = ("front", "back"), use_depth: bool = True,
@@ -615,7 +721,8 @@ def write_segmentation(seg: Segmentation, folder: PathLike, overwrite: bool = Fa
     lm = {n: (None if not np.isfinite(r[0]) else [float(r[0]), float(r[1]), float(r[2])])
           for n, r in zip(seg.names, seg.landmarks, strict=False)}
     meta = {"view": seg.view, "segments": dict(SEGMENT_IDS), "hands_found": list(seg.hands_found),
-            "swapped_pairs": list(seg.swapped), "counts": seg.counts(), "landmarks_px": lm}
+            "swapped_pairs": list(seg.swapped), "counts": seg.counts(), "landmarks_px": lm,
+            "landmark_sources": dict(seg.sources), "warnings": list(seg.warnings)}
     (d / "landmarks.json").write_text(json.dumps(meta, indent=1))
 
 
@@ -650,13 +757,19 @@ __all__ = [
     "SEGMENTATION_FILES",
     "SEGMENT_IDS",
     "SEGMENT_NAMES",
+    "Detection",
     "SegmentParams",
     "Segmentation",
+    "detect",
     "label_accuracy",
+    "label_detection",
     "label_pixels",
+    "missing_error",
     "refine_mask_with_depth",
+    "resolve_landmarks",
     "run_holistic",
     "segment_capture",
     "segment_image",
+    "unconfident_landmarks",
     "write_segmentation",
 ]

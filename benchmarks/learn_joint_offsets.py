@@ -1,0 +1,116 @@
+"""Learns the joint-centre offsets of bsv.frontend.landmarks.JOINT_OFFSETS_M on synthetic cohorts and
+evaluates them on others.
+
+For every subject of the training cohorts (seeds ``--train-seeds``) and the evaluation cohorts (``--eval-seeds``)
+the virtual rig captures the body in a room (noer), the camera path lifts the joints to 3-D WITHOUT the
+offsets, and the signed errors against the rig's joint centres are taken in the body frame. The offset of
+a joint kind is minus the least-squares fit of the training errors (left and right pooled, lateral
+mirrored) as a + b (T - TRUNK_REF_M), T the estimated trunk length; the script prints the table and the
+evaluation cohorts' errors without offsets, with a constant offset (the median) and with the fit.
+
+    .venv/bin/python benchmarks/learn_joint_offsets.py --n 6 --train-seeds 11,13 --eval-seeds 12,14
+
+``--cache FILE`` keeps the uncorrected joint centres (JSON) so that a second run re-learns without MediaPipe.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+import bsv
+from bsv.bench.joints import KINDS, camera_segmentations, joint_errors
+from bsv.bodies.joints import rig_joints
+from bsv.frontend.landmarks import TRUNK_REF_M, apply_offsets, trunk_length
+
+
+def raw_joints(n: int, seed: int, condition: str, cache: dict) -> list[tuple[dict, dict]]:
+    """(uncorrected joint centres, true joint centres) of the first ``n`` subjects of a cohort seed (read
+    from and added to ``cache``: key "seed/index/condition" -> {"est": ..., "truth": ...})."""
+    out = []
+    for i in tqdm(range(n), desc=f"seed {seed}", unit="subject"):
+        key = f"{seed}/{i}/{condition}"
+        if key not in cache:
+            s = bsv.bodies.subject(i, seed)
+            with tempfile.TemporaryDirectory(prefix="bsv-joints-") as tmp:
+                bsv.scan(s.body.mesh(), condition, seed * 1000 + i, images=tmp, overwrite=True, room=True)
+                _, joints = camera_segmentations(tmp, correct=False)
+            cache[key] = {"est": {k: j.xyz.tolist() for k, j in joints.items()},
+                          "truth": {k: v.tolist() for k, v in rig_joints(s.phenotype, s.pose).items()}}
+        c = cache[key]
+        out.append(({k: np.array(v) for k, v in c["est"].items()}, {k: np.array(v) for k, v in c["truth"].items()}))
+    return out
+
+
+def table(pairs: list[tuple[dict, dict]], offsets: dict | None) -> dict[str, tuple[float, float, list[float]]]:
+    """kind -> (median, p95 of the 3-D error mm, median signed [lat, up, fwd] mm), offsets applied if given."""
+    errs: dict[str, list[list[float]]] = {k: [] for k in KINDS}
+    for est, truth in pairs:
+        moved = apply_offsets(est, offsets) if offsets is not None else est
+        for j, e in joint_errors(moved, truth).items():
+            errs[j.rsplit("_", 1)[0]].append(e)
+    out = {}
+    allv = []
+    for k, v in errs.items():
+        a = np.array(v)
+        allv += v
+        d = np.linalg.norm(a, axis=1)
+        out[k] = (float(np.median(d)), float(np.percentile(d, 95)), np.median(a, axis=0).round(1).tolist())
+    a = np.array(allv)
+    d = np.linalg.norm(a, axis=1)
+    out["all"] = (float(np.median(d)), float(np.percentile(d, 95)), np.median(a, axis=0).round(1).tolist())
+    return out
+
+
+def main() -> None:
+    """Command line: learn on one seed, evaluate on another, print the tables."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, default=6)
+    ap.add_argument("--train-seeds", default="11,13")
+    ap.add_argument("--eval-seeds", default="12,14")
+    ap.add_argument("--condition", default="noer")
+    ap.add_argument("--cache", help="JSON file of uncorrected joint centres (read if present, then written)")
+    a = ap.parse_args()
+    cache: dict = {}
+    if a.cache and Path(a.cache).is_file():
+        cache = json.loads(Path(a.cache).read_text())
+    train = [p for s in a.train_seeds.split(",") for p in raw_joints(a.n, int(s), a.condition, cache)]
+    evaluation = [p for s in a.eval_seeds.split(",") for p in raw_joints(a.n, int(s), a.condition, cache)]
+    if a.cache:
+        Path(a.cache).write_text(json.dumps(cache))
+    constant = {k: (tuple(-c / 1000.0 for c in v[2]), (0.0, 0.0, 0.0)) for k, v in table(train, None).items()
+                if k != "all"}
+    learned = fit(train)
+    print("JOINT_OFFSETS_M = {")
+    for k, (av, bv) in learned.items():
+        print(f'    "{k}": (({av[0]:.4f}, {av[1]:.4f}, {av[2]:.4f}), ({bv[0]:.4f}, {bv[1]:.4f}, {bv[2]:.4f})),')
+    print("}")
+    for name, pairs, off in (("train, raw", train, None), ("eval, raw", evaluation, None),
+                             ("eval, constant offset", evaluation, constant), ("eval, fitted", evaluation, learned)):
+        print(f"\n{name}: joint | median mm | p95 mm | signed median lat/up/fwd mm")
+        for k, (med, p95, signed) in table(pairs, off).items():
+            print(f"  {k:9s} {med:6.1f} {p95:6.1f}  {signed}")
+
+
+def fit(pairs: list[tuple[dict, dict]]) -> dict[str, tuple[tuple[float, ...], tuple[float, ...]]]:
+    """Per kind (a, b): minus the least-squares fit of the signed errors (m) as a + b (T - TRUNK_REF_M)."""
+    rows: dict[str, list[tuple[float, list[float]]]] = {k: [] for k in KINDS}
+    for est, truth in pairs:
+        t = trunk_length(est) - TRUNK_REF_M
+        for j, e in joint_errors(est, truth).items():
+            rows[j.rsplit("_", 1)[0]].append((t, e))
+    out = {}
+    for k, r in rows.items():
+        x = np.array([[1.0, t] for t, _ in r])
+        y = np.array([e for _, e in r]) / 1000.0
+        coef = np.linalg.lstsq(x, y, rcond=None)[0]
+        out[k] = (tuple(round(float(-c), 4) for c in coef[0]), tuple(round(float(-c), 4) for c in coef[1]))
+    return out
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,170 @@
+"""Joint-centre accuracy of the camera path: the 3-D joint centres lifted from MediaPipe's landmarks of
+both views (:func:`bsv.frontend.landmarks.joint_centres`) against the rig's true joint centres of the
+synthetic body (:func:`bsv.bodies.joints.rig_joints`, the posed heads of the MakeHuman bones).
+
+Errors are signed vectors in millimetres in the TRUE body frame (:func:`bsv.frontend.landmarks.body_frame`
+of the true joints): lateral (toward the joint's own side, so left and right pool), up (hips to
+shoulders), forward (the subject's facing direction). The tables give per joint kind (left and right
+pooled) the median and 95th percentile of the 3-D distance, the median signed components and the worst
+subject.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .common import Run
+from .reference import CONDITIONS
+
+#: Key of :attr:`Run.info` holding a run's joint errors ({joint: [lateral, up, forward] mm}).
+INFO_KEY = "joint_errors_mm"
+#: Joint kinds in table order.
+KINDS: tuple[str, ...] = ("shoulder", "elbow", "wrist", "hip", "knee", "ankle")
+#: The target of the landmarks issue: median 3-D error at most this (mm) over the six kinds.
+TARGET_MEDIAN_MM = 15.0
+
+
+def camera_segmentations(capture_dir: str | Path, correct: bool = True) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The camera path's segmentations of both views of a (virtual) capture folder, made together
+    (:func:`bsv.frontend.landmarks.segment_views`, the cameras' calibrated ``camera_to_world`` of
+    camera.json), and their joint centres; ``correct``: with the learned joint offsets."""
+    from ..frontend.capture import read_capture
+    from ..frontend.landmarks import Camera, joint_centres, segment_views
+    from ..frontend.segment import VIEWS
+
+    d = Path(capture_dir)
+    data = {v: read_capture(d / v) for v in VIEWS}
+    cams = {v: Camera.from_json(data[v]["intrinsics"], data[v]["meta"]["camera_to_world"]) for v in VIEWS}
+    segs = segment_views({v: {"colour": data[v]["colour"], "depth_m": data[v]["depth_m"]} for v in VIEWS}, cams)
+    return segs, joint_centres(segs, {v: data[v]["depth_m"] for v in VIEWS}, cams, correct=correct)
+
+
+def joint_errors(estimated: Mapping[str, Any], truth: Mapping[str, np.ndarray]) -> dict[str, list[float]]:
+    """{joint: [lateral, up, forward] mm} of the estimated joint centres (JointCentre or arrays, metres)
+    against the true ones, in the true body frame; joints missing from either side are left out."""
+    from ..frontend.landmarks import body_frame
+
+    frame = body_frame(truth)
+    if frame is None:
+        return {}
+    out = {}
+    for name, est in estimated.items():
+        if name not in truth:
+            continue
+        xyz = np.asarray(getattr(est, "xyz", est), dtype=np.float64)
+        e = frame @ (xyz - np.asarray(truth[name], dtype=np.float64)) * 1000.0
+        if name.endswith("_r"):
+            e[0] = -e[0]
+        out[name] = [round(float(c), 2) for c in e]
+    return out
+
+
+def _collect(runs: Sequence[Run]) -> dict[tuple[str, str], list[tuple[str, np.ndarray]]]:
+    """(condition, kind) -> [(subject, signed error vector)], one entry per subject, joint side and condition."""
+    out: dict[tuple[str, str], list[tuple[str, np.ndarray]]] = {}
+    seen = set()
+    for r in runs:
+        errs = (r.info or {}).get(INFO_KEY)
+        if not errs or (r.subject, r.condition) in seen:
+            continue  # one entry per scan, whatever the number of methods
+        seen.add((r.subject, r.condition))
+        for joint, e in errs.items():
+            kind = joint.rsplit("_", 1)[0]
+            out.setdefault((r.condition, kind), []).append((f"{r.subject} {joint[-1]}", np.asarray(e, dtype=float)))
+    return out
+
+
+def summarise(runs: Sequence[Run]) -> dict[str, dict[str, dict[str, Any]]]:
+    """{condition: {kind or "all": {n, median_mm, p95_mm, signed_median_mm [lat, up, fwd], worst, worst_mm}}}."""
+    table: dict[str, dict[str, dict[str, Any]]] = {}
+    data = _collect(runs)
+    for cond in _ordered({c for c, _ in data}):
+        rows: dict[str, dict[str, Any]] = {}
+        everything: list[tuple[str, np.ndarray]] = []
+        for kind in KINDS:
+            items = data.get((cond, kind), [])
+            everything += items
+            if items:
+                rows[kind] = _stats(items)
+        if everything:
+            rows["all"] = _stats(everything)
+        table[cond] = rows
+    return table
+
+
+def _ordered(conditions: set[str]) -> list[str]:
+    """Conditions in the benchmark's order (unknown ones last, by name)."""
+    return sorted(conditions, key=lambda c: (CONDITIONS.index(c) if c in CONDITIONS else len(CONDITIONS), c))
+
+
+def _stats(items: Sequence[tuple[str, np.ndarray]]) -> dict[str, Any]:
+    vecs = np.array([e for _, e in items])
+    dist = np.linalg.norm(vecs, axis=1)
+    w = int(np.argmax(dist))
+    return {"n": len(items), "median_mm": float(np.median(dist)), "p95_mm": float(np.percentile(dist, 95)),
+            "signed_median_mm": [float(c) for c in np.median(vecs, axis=0)], "worst": items[w][0],
+            "worst_mm": float(dist[w])}
+
+
+#: File name of the joint-error figure in a benchmark's output folder.
+FIGURE = "joint_errors.png"
+
+
+def joint_figure(runs: Sequence[Run], path: str | Path) -> Path | None:
+    """Box plot of the 3-D joint-centre error (mm) per joint kind, one box per condition, with the target
+    line; None (nothing written) when no run measured joints."""
+    from .figures import _plt
+
+    data = _collect(runs)
+    conds = _ordered({c for c, _ in data})
+    if not conds:
+        return None
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(8.0, 4.0))
+    width = 0.8 / len(conds)
+    for k, cond in enumerate(conds):
+        vals = [[float(np.linalg.norm(e)) for _, e in data.get((cond, kind), [])] or [np.nan] for kind in KINDS]
+        pos = np.arange(len(KINDS)) + (k - len(conds) / 2 + 0.5) * width
+        b = ax.boxplot(vals, positions=pos, widths=width * 0.9, patch_artist=True, showfliers=True)
+        for patch in b["boxes"]:
+            patch.set_facecolor(plt.get_cmap("tab10")(k))
+        ax.plot([], [], color=plt.get_cmap("tab10")(k), lw=6, label=cond)
+    ax.axhline(TARGET_MEDIAN_MM, color="k", ls="--", lw=1, label=f"target median {TARGET_MEDIAN_MM:.0f} mm")
+    ax.set_xticks(np.arange(len(KINDS)), KINDS)
+    ax.set_ylabel("3-D joint-centre error (mm)")
+    ax.set_title("Joint centres from the camera path against the rig")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    out = Path(path)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
+
+
+def joints_markdown(runs: Sequence[Run]) -> list[str]:
+    """The report.md section of the joint-centre errors (empty when no run measured them)."""
+    table = summarise(runs)
+    if not table:
+        return []
+    md = ["## Joint centres: 3-D error against the rig (mm; camera path)", "",
+          ("MediaPipe's landmarks of both views lifted to 3-D (bsv.frontend.landmarks) against the MakeHuman "
+           "rig's joint centres (bsv.bodies.joints.rig_joints). Left and right pooled; signed median in the true "
+           "body frame: lateral (+ = outward), up, forward. Target: median <= "
+           f"{TARGET_MEDIAN_MM:.0f} mm. Figure: {FIGURE}."), ""]
+    for cond, rows in table.items():
+        md += [f"**{cond}**", "", "| joint | n | median | p95 | signed median lat / up / fwd | worst (subject side) |",
+               "|---|---|---|---|---|---|"]
+        for kind, s in rows.items():
+            lat, up, fwd = s["signed_median_mm"]
+            md.append(f"| {kind} | {s['n']} | {s['median_mm']:.1f} | {s['p95_mm']:.1f} | "
+                      f"{lat:+.1f} / {up:+.1f} / {fwd:+.1f} | {s['worst_mm']:.1f} ({s['worst']}) |")
+        md.append("")
+    return md
+
+
+__all__ = ["FIGURE", "INFO_KEY", "KINDS", "TARGET_MEDIAN_MM", "camera_segmentations", "joint_errors", "joint_figure", "joints_markdown",
+           "summarise"]

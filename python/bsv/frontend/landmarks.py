@@ -1,0 +1,444 @@
+"""Both camera views together: landmarks filled in across views, and 3-D joint centres.
+
+**No capture thrown away for one landmark.** :func:`segment_views` runs MediaPipe on the front and back
+images, then makes every required landmark (shoulders, elbows, wrists, hips, knees, ankles) of each view
+usable, in this order (:func:`bsv.frontend.segment.resolve_landmarks`):
+
+1. seen confidently in this view (visibility >= ``min_visibility``, the paper's 0.75);
+2. seen confidently in the OTHER view: lifted to 3-D there (the median depth of the person around it,
+   pushed inward by the limb's half-thickness, the half width of the mask across the limb) and
+   projected into this image through the calibration (both cameras' intrinsics and extrinsics);
+3. for a wrist, the hand model's wrist (MediaPipe Holistic's hand landmark 0);
+4. this view's own landmark, if its visibility is at least the documented lower threshold
+   ``fallback_visibility`` (0.5).
+
+Every substitute is a warning naming the landmark (:attr:`Segmentation.warnings`, the volumes JSON's
+``warnings``, the report). Only a landmark that none of these gives (in practice: a limb not seen in
+either view) fails, with :class:`bsv.errors.LimbMissingError` naming the limb and what to do.
+
+**Joint centres in 3-D.** :func:`joint_centres` lifts the 2-D joints of both views to the world frame:
+per view, the surface point under the landmark (the median depth of that side's pixels of the two
+segments meeting at the joint, within :data:`DEPTH_RADIUS_PX`); seen from both views, the centre is the
+midpoint of the front and back surface points (the joint lies midway between the two opposite surfaces
+of the limb's cross-section); seen usably by one view only, the surface point pushed along the ray by the
+limb's half-thickness. An offset per joint kind in the body's own frame, linear in the trunk length
+(:data:`JOINT_OFFSETS_M`, learned on synthetic subjects, see there), then moves MediaPipe's landmark to the
+anatomical joint centre.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import LimbMissingError, SegmentationError
+from .intrinsics import Intrinsics
+from .segment import (
+    POSE_NAMES,
+    SEGMENT_IDS,
+    VIEWS,
+    Detection,
+    Segmentation,
+    detect,
+    label_detection,
+    resolve_landmarks,
+    unconfident_landmarks,
+)
+
+#: Joint centres estimated, named as :func:`bsv.bodies.joints.rig_joints` and :data:`bsv.biomech` name them.
+JOINTS: tuple[str, ...] = tuple(f"{j}_{s}" for s in ("l", "r")
+                                for j in ("shoulder", "elbow", "wrist", "hip", "knee", "ankle"))
+#: The limbs, by their landmarks (a landmark found in neither view names its limb).
+LIMBS: dict[str, tuple[str, ...]] = {
+    f"{side} {limb}": tuple(f"{side}_{j}" for j in joints)
+    for side in ("left", "right")
+    for limb, joints in (("arm", ("shoulder", "elbow", "wrist")), ("leg", ("hip", "knee", "ankle")))
+}
+#: Per joint kind: the two segments that meet there (their pixels of the joint's side give its depth), and
+#: the joints the limb's axis runs between (the limb's width is measured across that axis).
+_KINDS: dict[str, tuple[tuple[str, str], tuple[str, str], float]] = {
+    # kind: (segments, (axis from, axis to), where along the axis the width is measured)
+    "shoulder": (("upper_arm", "torso"), ("shoulder", "elbow"), 0.25),
+    "elbow": (("upper_arm", "forearm"), ("shoulder", "wrist"), 0.5),
+    "wrist": (("forearm", "hand"), ("elbow", "wrist"), 1.0),
+    "hip": (("thigh", "torso"), ("hip", "knee"), 0.25),
+    "knee": (("thigh", "shin"), ("hip", "ankle"), 0.5),
+    "ankle": (("shin", "foot"), ("knee", "ankle"), 1.0),
+}
+#: Pixels around a landmark whose depth gives the surface under it.
+DEPTH_RADIUS_PX = 7
+#: Trunk length (metres, mid-hip to mid-shoulder of the uncorrected estimates) at which the offsets of
+#: :data:`JOINT_OFFSETS_M` are the constant term.
+TRUNK_REF_M = 0.48
+#: Offset (metres) from the landmark-based estimate to the anatomical joint centre, per joint kind, in the
+#: body frame (x: lateral, toward the joint's own side; y: up, hips to shoulders; z: forward, the
+#: subject's facing direction), linear in the trunk length T (an anthropometric scaling, like the
+#: regression hip-joint-centre models of gait labs): offset = a + b (T - :data:`TRUNK_REF_M`), as
+#: ``(a, b)``. Least squares on cohort seeds 11 and 13 (12 subjects, clinic room, noer; left and right
+#: pooled) by ``benchmarks/learn_joint_offsets.py``; on the held-out seeds 12 and 14 the median 3-D error
+#: over the six joints goes from 18.6 mm (no offset) and 10.4 mm (a constant offset) to 9.3 mm, the hip's
+#: from 26.0 and 19.6 to 13.9 mm (95th percentile over all joints 46.8, 28.8, 26.3 mm). What it corrects: MediaPipe's ankle is the malleoli's outline, about
+#: 40 mm above the rig's ankle joint (the head of the foot bone); its hip, knee, elbow and shoulder lie
+#: 10-15 mm medial of the joint centres; its hip marks the hip's outline, not the femoral head, and the
+#: vertical gap grows with the trunk's length.
+JOINT_OFFSETS_M: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
+    "shoulder": ((0.0139, -0.0021, 0.0060), (0.1991, 0.0965, -0.1487)),
+    "elbow": ((0.0128, -0.0028, -0.0068), (0.0493, -0.0653, -0.1181)),
+    "wrist": ((0.0015, -0.0038, -0.0005), (0.0233, -0.0488, 0.0683)),
+    "hip": ((0.0155, -0.0051, -0.0074), (0.1852, 0.2488, -0.1738)),
+    "knee": ((0.0103, -0.0150, 0.0022), (0.0726, -0.1360, 0.0801)),
+    "ankle": ((0.0054, -0.0476, 0.0017), (0.0331, -0.3308, 0.0174)),
+}
+
+
+@dataclass(frozen=True)
+class Camera:
+    """One calibrated camera: its intrinsics and camera-to-world rotation and translation (metres)."""
+
+    intrinsics: Intrinsics
+    rotation: np.ndarray
+    translation: np.ndarray
+
+    @classmethod
+    def from_json(cls, intrinsics: Intrinsics, camera_to_world: Mapping[str, Any]) -> Camera:
+        """From the intrinsics and a ``{"rotation": 3x3, "translation": 3}`` camera-to-world transform."""
+        try:
+            r = np.asarray(camera_to_world["rotation"], dtype=np.float64).reshape(3, 3)
+            t = np.asarray(camera_to_world["translation"], dtype=np.float64).reshape(3)
+        except (KeyError, TypeError, ValueError) as e:
+            raise SegmentationError(f"camera_to_world needs a 3x3 rotation and a 3-vector translation ({e})") from e
+        return cls(intrinsics, r, t)
+
+    def _normalised(self, uv: np.ndarray) -> np.ndarray:
+        """(N, 2) pixels -> (N, 2) undistorted normalised image coordinates."""
+        import cv2
+
+        k = self.intrinsics
+        pts = np.asarray(uv, dtype=np.float64).reshape(-1, 1, 2)
+        if any(k.coeffs):
+            return np.asarray(cv2.undistortPoints(pts, k.matrix, k.dist)).reshape(-1, 2)
+        return np.column_stack([(pts[:, 0, 0] - k.cx) / k.fx, (pts[:, 0, 1] - k.cy) / k.fy])
+
+    def deproject(self, uv: np.ndarray, depth: np.ndarray | float) -> np.ndarray:
+        """World points (N, 3) of pixels (N, 2) at depth (z in the camera frame, metres)."""
+        n = self._normalised(uv)
+        z = np.broadcast_to(np.asarray(depth, dtype=np.float64), (len(n),))
+        cam = np.column_stack([n * z[:, None], z])
+        return cam @ self.rotation.T + self.translation
+
+    def project(self, xyz: np.ndarray) -> np.ndarray:
+        """Pixels (N, 2) of world points (N, 3)."""
+        import cv2
+
+        cam = (np.asarray(xyz, dtype=np.float64).reshape(-1, 3) - self.translation) @ self.rotation
+        k = self.intrinsics
+        uv, _ = cv2.projectPoints(cam, np.zeros(3), np.zeros(3), k.matrix, k.dist)
+        return np.asarray(uv).reshape(-1, 2)
+
+    def axis(self) -> np.ndarray:
+        """The viewing direction (the camera's z axis) in the world frame."""
+        return np.asarray(self.rotation[:, 2], dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class JointCentre:
+    """One estimated joint centre (world frame, metres) with its confidence (0..1) and how it was found."""
+
+    xyz: np.ndarray
+    confidence: float
+    #: "front+back", "front" or "back", with any degraded landmark in brackets, e.g.
+    #: "front+back (back: hand model)".
+    source: str
+
+    def to_json(self) -> dict[str, Any]:
+        """``{"xyz": [x, y, z], "confidence": c, "source": s}`` (the volumes JSON's ``joints_m`` entry)."""
+        return {"xyz": [round(float(c), 5) for c in self.xyz], "confidence": round(float(self.confidence), 3),
+                "source": self.source}
+
+
+def _kind(joint: str) -> tuple[str, str]:
+    """("knee", "left") of "knee_l"."""
+    kind, s = joint.rsplit("_", 1)
+    return kind, "left" if s == "l" else "right"
+
+
+def _xy(pose: np.ndarray, name: str) -> np.ndarray:
+    return np.asarray(pose[POSE_NAMES.index(name), :2], dtype=np.float64)
+
+
+def _surface_depth(depth: np.ndarray, region: np.ndarray, uv: np.ndarray) -> float:
+    """Median depth of the ``region`` pixels within :data:`DEPTH_RADIUS_PX` of ``uv`` (NaN if none)."""
+    h, w = depth.shape
+    r = DEPTH_RADIUS_PX
+    x, y = round(float(uv[0])), round(float(uv[1]))
+    y0, y1, x0, x1 = max(y - r, 0), min(y + r + 1, h), max(x - r, 0), min(x + r + 1, w)
+    if y0 >= y1 or x0 >= x1:
+        return float("nan")
+    yy, xx = np.mgrid[y0:y1, x0:x1]
+    near = (xx - x) ** 2 + (yy - y) ** 2 <= r * r
+    d = depth[y0:y1, x0:x1]
+    ok = near & region[y0:y1, x0:x1] & (d > 0) & np.isfinite(d)
+    return float(np.median(d[ok])) if ok.sum() >= 3 else float("nan")
+
+
+def _width_px(mask: np.ndarray, at: np.ndarray, along: np.ndarray, limit: int = 200) -> float:
+    """Width (pixels) of the mask across the direction ``along`` through the point ``at`` (NaN if off it)."""
+    h, w = mask.shape
+    n = float(np.hypot(*along))
+    if n < 1e-9:
+        return float("nan")
+    perp = np.array([-along[1], along[0]]) / n
+    total = 0
+    for sign in (1.0, -1.0):
+        steps = np.arange(limit)
+        pts = at[None] + sign * steps[:, None] * perp[None]
+        xi, yi = np.round(pts[:, 0]).astype(int), np.round(pts[:, 1]).astype(int)
+        inside = (xi >= 0) & (xi < w) & (yi >= 0) & (yi < h)
+        on = np.zeros(limit, dtype=bool)
+        on[inside] = mask[yi[inside], xi[inside]]
+        if not on[0]:
+            return float("nan")
+        off = np.nonzero(~on)[0]
+        total += int(off[0]) if off.size else limit
+    return float(total - 1)
+
+
+def _half_thickness(mask: np.ndarray, pose: np.ndarray, joint: str, depth_m: float, fx: float) -> float:
+    """Half the limb's width (metres) across its axis near the joint, from one view's mask."""
+    kind, side = _kind(joint)
+    _, (a, b), t = _KINDS[kind]
+    pa, pb = _xy(pose, f"{side}_{a}"), _xy(pose, f"{side}_{b}")
+    own = _xy(pose, f"{side}_{kind}")
+    at = own + (t if kind in ("shoulder", "hip") else 0.0) * (pb - pa)
+    wpx = _width_px(mask, at, pb - pa)
+    return 0.5 * wpx * depth_m / fx if np.isfinite(wpx) else float("nan")
+
+
+def _region(labels: np.ndarray, kind: str, side: str) -> np.ndarray:
+    """Pixels of the side's two segments meeting at a joint of this kind (the torso has no side)."""
+    sfx = "_l" if side == "left" else "_r"
+    ids = [SEGMENT_IDS[s] if s == "torso" else SEGMENT_IDS[s + sfx] for s in _KINDS[kind][0]]
+    return np.isin(labels, ids)
+
+
+def _lift_from(det: Detection, cam: Camera, depth: np.ndarray, name: str) -> np.ndarray | None:
+    """3-D point of a confident landmark of one view, before labelling (the person mask, the surface depth
+    under it pushed inward by the limb's half-thickness); None without depth there."""
+    if det.mask_soft is None:
+        return None
+    mask = np.asarray(det.mask_soft > det.params.mask_threshold)
+    uv = _xy(det.pose, name)
+    d = _surface_depth(depth, mask, uv)
+    if not np.isfinite(d):
+        return None
+    side, kind = name.split("_", 1)
+    joint = f"{kind}_{side[0]}"
+    half = _half_thickness(mask, det.pose, joint, d, cam.intrinsics.fx)
+    return np.asarray(cam.deproject(uv[None], d + (half if np.isfinite(half) else 0.0))[0])
+
+
+def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str, Camera],
+                  use_depth: bool = True, **params: Any) -> dict[str, Segmentation]:
+    """Segments the front and back images of one capture together: ``images[view]`` holds ``colour`` (RGB
+    uint8) and ``depth_m`` (metres, aligned to the colour, 0 = none), ``cameras[view]`` its calibrated
+    :class:`Camera`. Required landmarks not seen confidently in one view are filled in from the other view,
+    the hand model or the lower threshold (see the module notes), each a warning in the result's
+    :attr:`~bsv.frontend.segment.Segmentation.warnings`. ``params``: :class:`SegmentParams` overrides for
+    both views. Raises :class:`bsv.errors.LimbMissingError` when a limb's landmark is found in neither view."""
+    views = [v for v in VIEWS if v in images]
+    if set(images) != set(views) or len(views) != 2 or any(v not in cameras for v in views):
+        raise SegmentationError(f"segment_views needs the front and back images and cameras, got images "
+                                f"{sorted(images)} and cameras {sorted(cameras)}")
+    dets = {v: detect(images[v]["colour"], v, **params) for v in views}
+    depths = {v: np.asarray(images[v]["depth_m"], dtype=np.float64) for v in views}
+    resolved = {}
+    for v in views:
+        o = "back" if v == "front" else "front"
+        own_bad = [n for n, _ in _unconfident(dets[v])]
+        other_bad = {n for n, _ in _unconfident(dets[o])}
+        from_other: dict[str, np.ndarray] = {}
+        for name in own_bad:
+            if name in other_bad:
+                continue  # neither view sees it confidently: the hand model or the lower threshold may
+            p = _lift_from(dets[o], cameras[o], depths[o], name)
+            if p is not None:
+                uv = cameras[v].project(p[None])[0]
+                from_other[name] = np.array([uv[0], uv[1], dets[o].pose[POSE_NAMES.index(name), 2]])
+        resolved[v] = resolve_landmarks(dets[v], from_other)
+    missing = {v: dict(r[3]) for v, r in resolved.items()}
+    if any(missing.values()):
+        raise _limb_error(missing)
+    return {v: label_detection(dets[v], depths[v] if use_depth else None, *resolved[v][:3]) for v in views}
+
+
+def _unconfident(det: Detection) -> list[tuple[str, str]]:
+    """The required landmarks of a detection under its ``min_visibility`` (or outside the image)."""
+    return unconfident_landmarks(det.pose, det.shape, det.params.min_visibility)
+
+
+def _limb_error(missing: Mapping[str, Mapping[str, str]]) -> LimbMissingError:
+    """LimbMissingError naming every limb with a landmark found in neither view, and what to do."""
+    names = sorted({n for m in missing.values() for n in m}, key=POSE_NAMES.index)
+    limbs = [limb for limb, lms in LIMBS.items() if any(n in lms for n in names)]
+    what = "; ".join(
+        f"{n} (" + ", ".join(f"{v}: {m[n]}" for v, m in missing.items() if n in m) + ")" for n in names)
+    err = LimbMissingError(
+        f"{' and '.join(limbs)} not found in the camera views (nor by the other view, the hand model or the "
+        f"lower visibility threshold): {what}. Capture again: step back so that the whole "
+        "body, hands and feet included, is inside both images; hold the arms open, away from the body (A-pose); "
+        "light the subject evenly from the front and the back")
+    err.missing = names
+    err.limbs = limbs
+    return err
+
+
+def _body_frame(pts: Mapping[str, np.ndarray]) -> np.ndarray | None:
+    """Rows x (subject's left), y (up, hips to shoulders), z (forward) of the body frame, from the hip and
+    shoulder centres; None when they are missing."""
+    need = ("hip_l", "hip_r", "shoulder_l", "shoulder_r")
+    if any(k not in pts or not np.all(np.isfinite(pts[k])) for k in need):
+        return None
+    x = pts["hip_l"] - pts["hip_r"]
+    y = (pts["shoulder_l"] + pts["shoulder_r"] - pts["hip_l"] - pts["hip_r"]) / 2
+    x = x / np.linalg.norm(x)
+    y = y - (y @ x) * x
+    y = y / np.linalg.norm(y)
+    return np.vstack([x, y, np.cross(x, y)])
+
+
+def body_frame(joints: Mapping[str, np.ndarray]) -> np.ndarray | None:
+    """The body frame (3x3, rows x left, y up, z forward) of joint centres by name; None without hips and
+    shoulders. The frame of :data:`JOINT_OFFSETS_M`."""
+    return _body_frame(joints)
+
+
+def joint_centres(segs: Mapping[str, Segmentation], depths: Mapping[str, np.ndarray],
+                  cameras: Mapping[str, Camera], correct: bool = True) -> dict[str, JointCentre]:
+    """3-D centres (world frame, metres) of the joints of :data:`JOINTS` from the two views' segmentations
+    (:func:`segment_views`), their aligned depth images (metres) and calibrated cameras; see the module
+    notes. ``correct``: add the learned offsets of :data:`JOINT_OFFSETS_M`. A joint that no view could
+    place (no depth under it) is left out."""
+    views = [v for v in VIEWS if v in segs]
+    raw: dict[str, np.ndarray] = {}
+    conf: dict[str, float] = {}
+    src: dict[str, str] = {}
+    for joint in JOINTS:
+        kind, side = _kind(joint)
+        name = f"{side}_{kind}"
+        per: dict[str, tuple[np.ndarray, float, float, str]] = {}
+        for v in views:
+            s = segs[v]
+            how = s.sources.get(name, "")
+            if how == "other view" or s.pose is None:
+                continue  # not independent of the other view
+            uv = _xy(s.pose, name)
+            d = _surface_depth(np.asarray(depths[v], dtype=np.float64), _region(s.labels, kind, side), uv)
+            if not np.isfinite(d):
+                d = _surface_depth(np.asarray(depths[v], dtype=np.float64), s.mask, uv)
+            if not np.isfinite(d):
+                continue
+            cam = cameras[v]
+            surf = np.asarray(cam.deproject(uv[None], d)[0])
+            half = _half_thickness(s.mask, s.pose, joint, d, cam.intrinsics.fx)
+            vis = float(s.pose[POSE_NAMES.index(name), 2]) * (0.5 if how else 1.0)
+            per[v] = (surf, half, vis, how)
+        if not per:
+            continue
+        notes = [f"{v}: {how}" for v, (_, _, _, how) in per.items() if how]
+        if len(per) == 2:
+            (sf, _, vf, _), (sb, _, vb, _) = per["front"], per["back"]
+            xyz = (sf + sb) / 2
+            ax = cameras["front"].axis()
+            gap = sf - sb - ((sf - sb) @ ax) * ax  # the two views' disagreement across the viewing axis
+            confidence = min(vf, vb) * max(0.0, 1.0 - float(np.linalg.norm(gap)) / 0.05)
+            where = "front+back"
+        else:
+            (v, (surf, half, vis, _)), = per.items()
+            xyz = surf + cameras[v].axis() * (half if np.isfinite(half) else 0.0)
+            confidence = 0.5 * vis
+            where = v
+        raw[joint] = xyz
+        conf[joint] = float(np.clip(confidence, 0.0, 1.0))
+        src[joint] = where + (f" ({'; '.join(notes)})" if notes else "")
+    out_xyz = apply_offsets(raw) if correct else raw
+    return {j: JointCentre(out_xyz[j], conf[j], src[j]) for j in raw}
+
+
+def trunk_length(joints: Mapping[str, np.ndarray]) -> float:
+    """Distance (metres) from the mid-hip to the mid-shoulder of joint centres by name (NaN without them)."""
+    need = ("hip_l", "hip_r", "shoulder_l", "shoulder_r")
+    if any(k not in joints for k in need):
+        return float("nan")
+    p = {k: np.asarray(joints[k], dtype=np.float64) for k in need}
+    return float(np.linalg.norm((p["shoulder_l"] + p["shoulder_r"] - p["hip_l"] - p["hip_r"]) / 2))
+
+
+def apply_offsets(joints: Mapping[str, np.ndarray],
+                  offsets: Mapping[str, tuple[Sequence[float], Sequence[float]]] | None = None,
+                  ) -> dict[str, np.ndarray]:
+    """Joint centres moved by the per-kind offsets ``(a, b)`` (default :data:`JOINT_OFFSETS_M`):
+    a + b (T - :data:`TRUNK_REF_M`) in the body frame of the given joints (x mirrored for the right side),
+    T their trunk length; unchanged without hips and shoulders to build the frame. Joints that are not
+    of :data:`JOINTS` (e.g. the neck) are not moved."""
+    table = JOINT_OFFSETS_M if offsets is None else offsets
+    frame = _body_frame(joints)
+    trunk = trunk_length(joints)
+    if frame is None or not np.isfinite(trunk):
+        return {j: np.asarray(p, dtype=np.float64) for j, p in joints.items()}
+    out = {}
+    for j, p in joints.items():
+        if j not in JOINTS or _kind(j)[0] not in table:
+            out[j] = np.asarray(p, dtype=np.float64)
+            continue
+        kind, side = _kind(j)
+        a, b = (np.asarray(v, dtype=np.float64) for v in table[kind])
+        off = (a + b * (trunk - TRUNK_REF_M)) * np.array([1.0 if side == "left" else -1.0, 1.0, 1.0])
+        out[j] = np.asarray(p, dtype=np.float64) + off @ frame
+    return out
+
+
+def capture_joints(capture_dir: Any, calibration: Any = None, cameras: Sequence[str] = VIEWS,
+                   **params: Any) -> tuple[dict[str, JointCentre], dict[str, Segmentation]]:
+    """Joint centres of a capture folder (``<dir>/front``, ``<dir>/back`` with colour, depth, camera.json):
+    the calibration is ``calibration`` (calibration.json, as ``bsv process`` takes it) or, when None, each
+    camera.json's ``camera_to_world`` (the virtual scanner's). Returns (joints by name, segmentations)."""
+    from pathlib import Path
+
+    from .capture import read_capture
+
+    root = Path(capture_dir)
+    data = {v: read_capture(root / v) for v in cameras}
+    if calibration is None:
+        try:
+            ext = {v: data[v]["meta"]["camera_to_world"] for v in cameras}
+        except KeyError as e:
+            raise SegmentationError(f"{root}: camera.json has no camera_to_world; pass the calibration.json") from e
+    else:
+        from .calibrate import read_calibration
+
+        c = read_calibration(calibration)
+        ext = {v: {"rotation": c.cameras[v].rotation, "translation": c.cameras[v].translation} for v in cameras}
+    cams = {v: Camera.from_json(data[v]["intrinsics"], ext[v]) for v in cameras}
+    segs = segment_views({v: {"colour": data[v]["colour"], "depth_m": data[v]["depth_m"]} for v in cameras}, cams,
+                         **params)
+    return joint_centres(segs, {v: data[v]["depth_m"] for v in cameras}, cams), segs
+
+
+__all__ = [
+    "DEPTH_RADIUS_PX",
+    "JOINTS",
+    "JOINT_OFFSETS_M",
+    "LIMBS",
+    "TRUNK_REF_M",
+    "Camera",
+    "JointCentre",
+    "apply_offsets",
+    "body_frame",
+    "capture_joints",
+    "joint_centres",
+    "segment_views",
+    "trunk_length",
+]

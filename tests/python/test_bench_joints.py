@@ -1,0 +1,66 @@
+"""bsv.bench.joints: signed joint-centre errors in the true body frame and their tables (no MediaPipe)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from bsv.bench.common import Run
+from bsv.bench.joints import INFO_KEY, joint_errors, joints_markdown, summarise
+from bsv.bodies.joints import rig_joints
+from bsv.frontend.landmarks import JOINT_OFFSETS_M, TRUNK_REF_M, apply_offsets, body_frame, trunk_length
+
+
+def test_errors_are_signed_in_the_body_frame_and_mirrored() -> None:
+    truth = rig_joints()
+    frame = body_frame(truth)
+    assert frame is not None and np.allclose(frame @ frame.T, np.eye(3), atol=1e-9)
+    assert frame[0] @ (truth["shoulder_l"] - truth["shoulder_r"]) > 0   # x: the subject's left
+    est = {k: v.copy() for k, v in truth.items()}
+    est["knee_l"] = truth["knee_l"] + frame[0] * 0.010                   # 10 mm outward (left)
+    est["knee_r"] = truth["knee_r"] - frame[0] * 0.010 + frame[1] * 0.02  # 10 mm outward (right), 20 mm up
+    e = joint_errors(est, truth)
+    assert np.allclose(e["knee_l"], [10, 0, 0], atol=1e-6)
+    assert np.allclose(e["knee_r"], [10, 20, 0], atol=1e-6)
+    assert np.allclose(e["hip_l"], 0.0)
+
+
+def test_offsets_move_each_side_outward_alike() -> None:
+    truth = rig_joints()
+    moved = apply_offsets(truth, {"knee": ((0.01, -0.02, 0.005), (0.0, 0.0, 0.0))})
+    e = joint_errors(moved, truth)
+    assert np.allclose(e["knee_l"], [10, -20, 5], atol=0.05) and np.allclose(e["knee_r"], [10, -20, 5], atol=0.05)
+    assert np.allclose(e["ankle_l"], 0.0)
+    # the trunk-length term: b (T - T_ref)
+    t = trunk_length(truth)
+    assert 0.3 < t < 0.7
+    moved = apply_offsets(truth, {"hip": ((0.0, 0.0, 0.0), (0.0, 0.1, 0.0))})
+    assert np.allclose(joint_errors(moved, truth)["hip_r"], [0, 100 * (t - TRUNK_REF_M), 0], atol=0.05)
+    assert set(JOINT_OFFSETS_M) == {"shoulder", "elbow", "wrist", "hip", "knee", "ankle"}
+
+
+def test_tables_pool_sides_and_name_the_worst_subject() -> None:
+    runs = []
+    for i, err in enumerate((5.0, 10.0, 40.0)):
+        info = {INFO_KEY: {"knee_l": [err, 0.0, 0.0], "knee_r": [0.0, -err, 0.0]}}
+        runs.append(Run(f"subject_{i:03d}", "noer", "bsv", True, info=info))
+        runs.append(Run(f"subject_{i:03d}", "noer", "trimesh", True, info=info))  # counted once per scan
+    s = summarise(runs)["noer"]
+    assert s["knee"]["n"] == 6 and s["all"]["n"] == 6
+    assert s["knee"]["median_mm"] == 10.0 and s["knee"]["worst"] == "subject_002 l" and s["knee"]["worst_mm"] == 40.0
+    assert np.allclose(s["knee"]["signed_median_mm"], [2.5, -2.5, 0.0])
+    md = "\n".join(joints_markdown(runs))
+    assert "| knee | 6 | 10.0 |" in md and "subject_002 l" in md
+    assert joints_markdown([Run("s", "noer", "bsv", True)]) == []
+
+
+def test_joint_figure_is_written_only_with_joints(tmp_path) -> None:
+    from bsv.bench.joints import FIGURE, joint_figure
+    from bsv.bench.output import FIGURE_PATTERNS
+
+    assert FIGURE in FIGURE_PATTERNS  # an existing figure blocks a rerun without --overwrite
+    runs = [Run(f"subject_{i:03d}", "noer", "bsv", True, info={INFO_KEY: {"hip_l": [float(i), 2.0, 3.0]}})
+            for i in range(4)]
+    out = joint_figure(runs, tmp_path / FIGURE)
+    assert out is not None and out.stat().st_size > 1000
+    assert joint_figure([Run("s", "noer", "bsv", True)], tmp_path / "none.png") is None
+    assert not (tmp_path / "none.png").exists()

@@ -1,0 +1,175 @@
+"""Landmarks of both views (bsv.frontend.landmarks): a landmark not seen confidently in one view is filled in
+(from the other view through the calibration, the hand model, the lower threshold) with a warning, a limb
+seen in neither view is a typed error naming it, and the joint centres lifted to 3-D lie near the rig's
+true joint centres. MediaPipe runs once per image (cached); a landmark's visibility is lowered by wrapping
+its result, as a real low-confidence detection would come."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+
+import numpy as np
+import pytest
+
+pytest.importorskip("cv2")
+pytest.importorskip("mediapipe", reason="mediapipe not installed (pip install -r requirements-frontend.txt)")
+bsv = pytest.importorskip("bsv")
+
+from bsv.bodies.joints import rig_joints  # noqa: E402
+from bsv.errors import LandmarkMissingError, LimbMissingError  # noqa: E402
+from bsv.frontend import landmarks as lm  # noqa: E402
+from bsv.frontend import segment as seg  # noqa: E402
+from bsv.frontend.capture import read_capture  # noqa: E402
+from bsv.frontend.intrinsics import Intrinsics  # noqa: E402
+
+SUBJECT, SEED = 1, 5  # a cohort subject the segmentation was not tuned on (seed 1)
+_REAL = seg.run_holistic
+_CACHE: dict[str, dict] = {}
+
+
+def _cached(rgb, params=None):
+    key = hashlib.sha1(np.ascontiguousarray(rgb).tobytes()).hexdigest()
+    if key not in _CACHE:
+        _CACHE[key] = _REAL(rgb, params or seg.SegmentParams())
+    r = _CACHE[key]
+    return {"pose": None if r["pose"] is None else r["pose"].copy(), "hands": list(r["hands"]), "mask": r["mask"]}
+
+
+@pytest.fixture(scope="module")
+def capture(tmp_path_factory):
+    """A virtual capture (room, noer) of one cohort subject, its images, cameras and the subject."""
+    folder = tmp_path_factory.mktemp("landmarks") / "capture"
+    s = bsv.bodies.subject(SUBJECT, SEED)
+    bsv.scan(s.body.mesh(), "noer", 0, images=str(folder), room=True)
+    data = {v: read_capture(folder / v) for v in seg.VIEWS}
+    cams = {v: lm.Camera.from_json(data[v]["intrinsics"], data[v]["meta"]["camera_to_world"]) for v in seg.VIEWS}
+    return folder, data, cams, s
+
+
+def _lower(monkeypatch, data, where: dict[tuple[str, str], float]) -> None:
+    """MediaPipe's result with the visibility of (view, subject landmark) set as given. The view is told by
+    the image (front and back differ); the subject's left is on the image right from the front, left from
+    the back (the rule of segment._orient)."""
+    views = {hashlib.sha1(np.ascontiguousarray(data[v]["colour"]).tobytes()).hexdigest(): v for v in seg.VIEWS}
+
+    def fake(rgb, params=None):
+        r = _cached(rgb, params)
+        view = views[hashlib.sha1(np.ascontiguousarray(rgb).tobytes()).hexdigest()]
+        pose = r["pose"]
+        for (v, name), vis in where.items():
+            if v != view:
+                continue
+            joint = name.split("_", 1)[1]
+            i, j = seg.POSE_NAMES.index(f"left_{joint}"), seg.POSE_NAMES.index(f"right_{joint}")
+            left_is_larger_x = view == "front"
+            li = (i if pose[i, 0] > pose[j, 0] else j) if left_is_larger_x else (i if pose[i, 0] < pose[j, 0] else j)
+            k = li if name.startswith("left_") else (j if li == i else i)
+            pose[k, 2] = vis
+        return r
+
+    monkeypatch.setattr(seg, "run_holistic", fake)
+
+
+def _images(data):
+    return {v: {"colour": data[v]["colour"], "depth_m": data[v]["depth_m"]} for v in seg.VIEWS}
+
+
+def test_camera_projects_back_what_it_deprojects():
+    k = Intrinsics(640, 480, 600.0, 610.0, 319.5, 239.5)
+    r = np.array([[1.0, 0, 0], [0, -1, 0], [0, 0, -1]])
+    cam = lm.Camera(k, r, np.array([0.1, 1.0, 2.0]))
+    uv = np.array([[10.0, 20.0], [320.0, 240.0], [600.5, 470.25]])
+    xyz = cam.deproject(uv, np.array([1.5, 2.0, 2.5]))
+    assert np.allclose(cam.project(xyz), uv, atol=1e-6)
+    assert np.allclose(xyz[1], [0.1 + 0.5 / 600 * 2.0, 1.0 - 0.5 / 610 * 2.0, 0.0])  # 2 m in front, along -z
+    assert np.allclose(cam.axis(), [0, 0, -1])
+
+
+def test_a_low_wrist_in_one_view_comes_from_the_other(capture, monkeypatch):
+    _, data, cams, _ = capture
+    _lower(monkeypatch, data, {})
+    clean = lm.segment_views(_images(data), cams)
+    assert clean["back"].warnings == () and clean["front"].warnings == ()
+    _lower(monkeypatch, data, {("back", "left_wrist"): 0.3})
+    segs = lm.segment_views(_images(data), cams)
+    assert segs["back"].sources == {"left_wrist": "other view"}
+    assert segs["front"].sources == {}
+    (w,) = segs["back"].warnings
+    assert "left_wrist" in w and "back" in w and "other view" in w
+    # the wrist projected from the front view lands near MediaPipe's own back-view wrist
+    got, own = segs["back"].landmark("left_wrist"), clean["back"].landmark("left_wrist")
+    assert np.hypot(*(got[:2] - own[:2])) < 12.0, (got, own)
+    # and the labels barely move
+    same = (segs["back"].labels == clean["back"].labels).mean()
+    assert same > 0.99
+
+
+def test_single_view_hand_model_then_lower_threshold(capture, monkeypatch):
+    _, data, _, _ = capture
+    _lower(monkeypatch, data, {("front", "left_wrist"): 0.3, ("front", "right_knee"): 0.6})
+    s = seg.segment_image(data["front"]["colour"], "front", data["front"]["depth_m"])
+    assert s.hands_found[0], "the hand model should find the left hand of this render"
+    assert s.sources == {"left_wrist": "hand model", "right_knee": "low visibility"}
+    assert any("right_knee" in w and "0.50" in w for w in s.warnings)
+    _lower(monkeypatch, data, {("front", "right_knee"): 0.3})
+    with pytest.raises(LandmarkMissingError, match="right_knee") as e:
+        seg.segment_image(data["front"]["colour"], "front")
+    assert e.value.missing == ["right_knee"]
+
+
+def test_a_limb_missing_in_both_views_is_a_typed_error(capture, monkeypatch):
+    _, data, cams, _ = capture
+    _lower(monkeypatch, data, {("front", "left_knee"): 0.2, ("back", "left_knee"): 0.1})
+    with pytest.raises(LimbMissingError, match="left leg") as e:
+        lm.segment_views(_images(data), cams)
+    msg = str(e.value)
+    assert "left_knee" in msg and "front" in msg and "back" in msg and "step back" in msg and "light" in msg
+    assert e.value.limbs == ["left leg"] and e.value.missing == ["left_knee"]
+    assert isinstance(e.value, LandmarkMissingError)
+
+
+def test_joint_centres_near_the_rig(capture, monkeypatch):
+    _, data, cams, s = capture
+    _lower(monkeypatch, data, {})
+    segs = lm.segment_views(_images(data), cams)
+    joints = lm.joint_centres(segs, {v: data[v]["depth_m"] for v in seg.VIEWS}, cams)
+    truth = rig_joints(s.phenotype, s.pose)
+    assert set(joints) == set(lm.JOINTS)
+    err = {j: float(np.linalg.norm(joints[j].xyz - truth[j])) * 1000 for j in joints}
+    # measured 13 mm median, 20 mm worst (the knees); the issue's target is a median of 15 mm over a cohort
+    assert np.median(list(err.values())) < 16.0, err
+    assert max(err.values()) < 35.0, err
+    raw = lm.joint_centres(segs, {v: data[v]["depth_m"] for v in seg.VIEWS}, cams, correct=False)
+    raw_err = [float(np.linalg.norm(raw[j].xyz - truth[j])) * 1000 for j in raw]
+    assert np.median(raw_err) > np.median(list(err.values())), "the learned offsets should help a held-out subject"
+    for j in joints.values():
+        assert 0.0 <= j.confidence <= 1.0 and j.source == "front+back"
+        assert json.loads(json.dumps(j.to_json()))["source"] == "front+back"
+
+
+def test_process_keeps_the_capture_and_records_the_warning(capture, monkeypatch, tmp_path):
+    folder, data, _, _ = capture
+    _lower(monkeypatch, data, {("back", "right_wrist"): 0.7})
+    from bsv.pipeline import process
+
+    res = process(folder, folder / "calibration.json", tmp_path / "out", progress=False)
+    vols = json.loads((tmp_path / "out" / "volumes.json").read_text())
+    assert len(vols["warnings"]) == 1 and "right_wrist" in vols["warnings"][0]
+    assert res.warnings == vols["warnings"]
+    assert set(vols["joints_m"]) == set(lm.JOINTS)
+    assert vols["joints_m"]["wrist_r"]["source"] == "front"  # the back view's wrist came from the front
+    assert "right_wrist" in (tmp_path / "out" / "report.html").read_text()
+    assert vols["volumes_l"]["trunk_limbs"] > 0
+
+
+def test_bsv_process_names_the_missing_limb_and_writes_nothing(capture, monkeypatch, tmp_path, capsys):
+    from bsv.pipeline import main_process
+
+    folder, data, _, _ = capture
+    _lower(monkeypatch, data, {("front", "right_elbow"): 0.1, ("back", "right_elbow"): 0.2})
+    out = tmp_path / "out"
+    assert main_process([str(folder), "-c", str(folder / "calibration.json"), "-o", str(out), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "right arm" in err and "right_elbow" in err and "step back" in err and "Traceback" not in err
+    assert not out.exists() or not any(out.rglob("*"))

@@ -220,6 +220,13 @@ class FloorError(BsvError, ValueError):
     """A capture folder lacks the per-camera extrinsics the floor needs."""
 
 
+# --- uncertainty (bsv.uncertainty) ------------------------------------------------------------------
+
+
+class UncertaintyError(BsvError, ValueError):
+    """An interval cannot be computed: a bad covariance, error-model table or sample count; says which."""
+
+
 __all__ = [
     "AssetError", "BenchError", "BlurredImageError", "BsvError", "CalibrationError", "CalibrationFileError",
     "CaptureError", "FloorError", "FormatError", "FrontendError", "ImplausibleCaptureError", "InputError", "LabelError",
@@ -227,5 +234,5 @@ __all__ = [
     "PersonIsolationError", "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",
     "RegistrationInputError", "RegistrationNumericError", "RegistrationParameterError",
     "RegistrationResourceError", "RegistrationStopped", "ScanError", "SegmentationError", "SolveError",
-    "TemplateError", "VolumeError", "WriteError", "WrongMarkerError",
+    "TemplateError", "UncertaintyError", "VolumeError", "WriteError", "WrongMarkerError",
 ]

@@ -67,6 +67,14 @@ class ProcessResult:
         """The fitted, labelled template."""
         return self.registration.mesh
 
+    @property
+    def intervals(self) -> Any:
+        """The 95 % intervals of the volumes and ratios (:class:`bsv.uncertainty.Intervals`), or None."""
+        from .uncertainty import Intervals
+
+        doc = self.volumes.get("intervals")
+        return None if doc is None else Intervals.from_json(doc)
+
 
 class _Steps:
     """Prints each step with its wall time (or stays silent)."""
@@ -139,8 +147,20 @@ def _calibration(calibration: PathLike | None, capture_dir: Path, cameras: Seque
             raise CalibrationFileError(f"{p} has no camera {cam!r} (it has {sorted(c.cameras)}); calibrate that camera")
         cc = c.cameras[cam]
         out[cam] = {"rotation": np.asarray(cc.rotation, dtype=np.float64).tolist(),
-                    "translation": np.asarray(cc.translation, dtype=np.float64).tolist()}
+                    "translation": np.asarray(cc.translation, dtype=np.float64).tolist(),
+                    "covariance": cc.covariance, "covariance_source": cc.covariance_source}
     return out
+
+
+def _camera_spread(cam: str, extrinsics: dict[str, Any]) -> Any:
+    """The camera's extrinsics and covariance for :func:`bsv.uncertainty.intervals` (the paper's
+    repeatability when calibration.json has no covariance)."""
+    from .uncertainty import CameraSpread, paper_covariance
+
+    cov = extrinsics.get("covariance")
+    return CameraSpread(cam, np.asarray(extrinsics["rotation"]), np.asarray(extrinsics["translation"]),
+                        paper_covariance(cam) if cov is None else np.asarray(cov),
+                        extrinsics.get("covariance_source") or "paper default (calibration.json has none)")
 
 
 def _read_label_png(path: Path) -> np.ndarray:
@@ -319,7 +339,7 @@ def process(
         labels, summary, seg_files[cam] = steps.run(f"segment_{cam}", f"segmenting the {cam} camera ({segmentation})",
                                                     segment_camera)
         seg_summary[cam] = summary
-        views.append({"name": cam, "intrinsics": d["intrinsics"].to_json(), "camera_to_world": extrinsics[cam],
+        views.append({"name": cam, "intrinsics": d["intrinsics"].to_json(), "camera_to_world": {k: extrinsics[cam][k] for k in ("rotation", "translation")},
                       "depth": np.ascontiguousarray(d["depth_m"], dtype=np.float32), "labels": labels,
                       "colors": np.ascontiguousarray(d["colour"], dtype=np.uint8)})
 
@@ -335,6 +355,12 @@ def process(
         lambda: bsv_register(cloud, template=template, progress=False, density=density, **register_params))
 
     vols = dict(reg.volumes)
+    from .uncertainty import intervals
+
+    vols["intervals"] = steps.run(
+        "intervals", "95 % intervals (calibration Monte Carlo + error model)",
+        lambda: intervals(reg.mesh, reg.volumes, [_camera_spread(c, extrinsics[c]) for c in cameras],
+                          density=density)).to_json()
     vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report}
     out.mkdir(parents=True, exist_ok=True)
     files = {"cloud": out / "cloud.ply", "fitted": out / "fitted.ply", "volumes": out / "volumes.json",
@@ -499,10 +525,17 @@ def main_process(argv: Sequence[str] | None = None) -> int:
 
 
 def _print_process(res: Any) -> None:
+    from .uncertainty import asymmetry_text
+
     v = res.volumes.get("volumes_l", {})
+    iv = res.intervals
     for name in (*TRUNK_LIMBS, "trunk_limbs"):
         if name in v:
-            print(f"{name:<14}{v[name]:>9.3f} L")
+            b = iv.get(name) if iv else None
+            print(f"{name:<14}{v[name]:>9.3f} L" + (f"  (95 % {b[0]:.3f} to {b[1]:.3f})" if b else ""))
+    for name, value in res.volumes.get("ratios", {}).items():
+        if name.startswith("asymmetry_") and value is not None:
+            print(f"{name:<26}{asymmetry_text(value, iv.get(name) if iv else None)}")
     print(f"report: {res.files['report']}")
 
 

@@ -14,6 +14,7 @@ from .figures import rve_bars, trunk_limbs_histogram
 from .tables import (
     bias_table,
     cloud_table,
+    coverage_md,
     p2pv_table,
     paper_table,
     rows,
@@ -67,13 +68,14 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
     failures = [{"subject": r.subject, "condition": r.condition, "method": r.method, "error": r.error}
                 for r in runs if not r.ok]
     checks = target_check(summary) if "bsv" in summary else []
+    coverage, coverage_lines = coverage_md(runs)
     from .. import __version__
 
     write_json(d / "results.json", {
         "bsv_version": __version__, "benchmark": title, "config": dict(config),
         "created": time.strftime("%Y-%m-%d %H:%M:%S"), "machine": platform.platform(),
         "wall_seconds": wall_seconds, "subjects": list(infos), "runs": [r.to_json() for r in runs],
-        "summary": summary, "failures": failures,
+        "summary": summary, "coverage": coverage, "failures": failures,
         "targets": [{"target": n, "met": ok, "measured": ev} for n, ok, ev in checks],
     })
     write_csv(d / "results.csv", table)
@@ -105,6 +107,7 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
                 "`uncleaned`: the lab path's cloud of the person mask alone, before floor removal, person isolation "
                 "and outlier removal (what the mask let through)."),
                "", far, ""]
+    md += coverage_lines
     if checks:
         md += ["## Targets (bsv)", "", targets_md(checks), ""]
     if failures:

@@ -289,3 +289,47 @@ def test_table_and_report_say_when_an_asymmetry_is_within_the_noise(demo_l5ca, c
             line = unc.asymmetry_text(value, iv.get(name))
             assert line in text
             assert ("not distinguishable from symmetric" in line) == (iv.distinguishable(name) is False)
+
+
+# ----------------------------------------------------------------------------------------------------
+# Floor-plane refinement
+
+
+def test_fit_plane_recovers_a_tilted_plane_through_outliers():
+    from bsv.frontend.floorplane import fit_plane
+
+    rng = np.random.default_rng(2)
+    n_true = unc.rodrigues(np.array([0.01, 0.0, -0.02])) @ np.array([0.0, 1.0, 0.0])
+    xz = rng.uniform(-1.5, 1.5, (5000, 2))
+    pts = np.column_stack([xz[:, 0], np.zeros(5000), xz[:, 1]])
+    pts -= np.outer(pts @ n_true + 0.004, n_true)  # the plane n . p + 0.004 = 0
+    pts += rng.normal(0, 0.002, pts.shape)
+    wall = np.column_stack([rng.uniform(-1.5, 1.5, 800), rng.uniform(0, 0.05, 800), np.full(800, -1.5)])
+    n, d, inl = fit_plane(np.vstack([pts, wall]))
+    assert math.degrees(math.acos(min(1.0, float(n @ n_true)))) < 0.02
+    assert d == pytest.approx(0.004, abs=3e-4)
+    assert inl[5000:].mean() < 0.2 and inl[:5000].mean() > 0.95
+
+
+def test_the_floor_fixes_pitch_roll_and_height_of_a_miscalibrated_camera(tmp_path):
+    """Ground truth: the virtual rig's true extrinsics. After the refinement the vertical translation,
+    pitch and roll errors are gone; yaw and horizontal translation are untouched (not observable)."""
+    from bsv.bench.refine import refine_capture
+    from bsv.frontend.errors import CalibrationError
+    from bsv.frontend.floorplane import refine_with_floor
+
+    bsv.scan(_box_mesh(), "l5ca", 3, images=tmp_path, room=True)
+    cams, _refined, info = refine_capture(tmp_path)
+    for c in cams:
+        before, after = np.abs(info[c.name]["error_before_sd"]), np.abs(info[c.name]["error_after_sd"])
+        assert np.all(after[[1, 3, 5]] < 0.15), (c.name, after)  # ty, rx (pitch), rz (roll)
+        np.testing.assert_allclose(after[[0, 2, 4]], before[[0, 2, 4]], rtol=0.05, atol=0.02)
+    with pytest.raises(CalibrationError, match="near the floor"):  # no floor in view
+        refine_with_floor(cams[0].est_rotation, cams[0].est_translation, np.zeros((1024, 768)),
+                          _intrinsics(tmp_path), name="front")
+
+
+def _intrinsics(cap: Path):
+    from bsv.frontend.intrinsics import Intrinsics
+
+    return Intrinsics.from_json(json.loads((cap / "front" / "camera.json").read_text())["intrinsics"], "test")

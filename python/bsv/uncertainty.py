@@ -13,7 +13,9 @@ Two independent sources are combined:
    with :func:`bsv.volumes`: no new registration. A fixed seed makes it reproducible.
 2. **Depth noise and registration** (an error model): per quantity, the bias and the prediction standard
    deviation of the registration error measured on a synthetic cohort (``bsv/data/noise_model.json``,
-   derived by :mod:`bsv.bench.noisemodel`; its ``derivation`` says from which runs).
+   derived by :mod:`bsv.bench.noisemodel`; its ``derivation`` says from which runs). The table has one
+   model per depth sensor: ``l515`` (the L515's depth noise and flying pixels: what every real capture
+   gets, :data:`DEFAULT_DEPTH`) and ``exact`` (noise-free depth, for the benchmark's noer and cali).
 
 Quantities are compared in a transformed space where errors are close to additive and normal: the
 natural log of volumes, masses and ratios, the asymmetry itself (percentage points). With ``est`` the
@@ -53,6 +55,9 @@ PAPER_STD: dict[str, tuple[float, ...]] = {
     "front": (0.0003, 0.0011, 0.0006, math.radians(0.01), math.radians(0.03), math.radians(0.21)),
     "back": (0.0002, 0.0015, 0.0034, math.radians(0.11), math.radians(0.28), math.radians(0.10)),
 }
+
+#: The error model of real captures (an L515's depth noise).
+DEFAULT_DEPTH: str = "l515"
 
 #: Monte Carlo draws of the calibration part and their seed (fixed: the same input gives the same interval).
 DEFAULT_SAMPLES: int = 200
@@ -220,14 +225,24 @@ class ErrorModel:
 
 
 @lru_cache(maxsize=1)
-def default_error_model() -> ErrorModel:
-    """The packaged model (``bsv/data/noise_model.json``, see :mod:`bsv.bench.noisemodel`)."""
+def error_models() -> dict[str, ErrorModel]:
+    """The packaged models by depth sensor (``bsv/data/noise_model.json``, see :mod:`bsv.bench.noisemodel`)."""
     path = resources.files("bsv") / "data" / "noise_model.json"
     try:
         doc = json.loads(path.read_text())
-    except (OSError, json.JSONDecodeError) as exc:
+        models = doc["depth_models"]
+        return {str(k): ErrorModel.from_json({**v, "derivation": doc.get("derivation", {})}, f"{path} [{k}]")
+                for k, v in models.items()}
+    except (OSError, json.JSONDecodeError, KeyError, TypeError, AttributeError) as exc:
         raise UncertaintyError(f"{path}: cannot read the packaged error model ({exc}); reinstall bsv") from exc
-    return ErrorModel.from_json(doc, str(path))
+
+
+def default_error_model(depth: str = DEFAULT_DEPTH) -> ErrorModel:
+    """The packaged model of depth sensor ``depth`` ("l515" for real captures, "exact" for noise-free depth)."""
+    models = error_models()
+    if depth not in models:
+        raise UncertaintyError(f"no error model for depth {depth!r}; the packaged ones: {sorted(models)}")
+    return models[depth]
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -317,8 +332,8 @@ def asymmetry_text(value: float, interval: tuple[float, float] | None) -> str:
 
 
 __all__ = [
-    "DEFAULT_SAMPLES", "DEFAULT_SEED", "FRAME", "LEVEL", "PAPER_STD", "PARAMETERS", "CameraSpread", "ErrorModel",
+    "DEFAULT_DEPTH", "DEFAULT_SAMPLES", "DEFAULT_SEED", "FRAME", "LEVEL", "PAPER_STD", "PARAMETERS", "CameraSpread", "ErrorModel",
     "Intervals", "asymmetry_text", "calibration_spread", "check_covariance", "combine", "default_error_model",
-    "intervals", "is_additive", "paper_covariance", "perturb", "pose_delta", "quantities", "rodrigues",
+    "error_models", "intervals", "is_additive", "paper_covariance", "perturb", "pose_delta", "quantities", "rodrigues",
     "rotation_vector", "transform", "untransform",
 ]

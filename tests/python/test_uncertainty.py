@@ -156,6 +156,10 @@ def test_intervals_json_round_trip_and_asymmetry_text():
 
 
 def test_error_model_table_is_packaged_and_checked():
+    assert set(unc.error_models()) == {"exact", "l515"}
+    assert unc.default_error_model("exact").entries["trunk_limbs"][1] < unc.default_error_model().entries["trunk_limbs"][1]
+    with pytest.raises(UncertaintyError, match="no error model"):
+        unc.default_error_model("kinect")
     m = unc.default_error_model()
     assert {"trunk_limbs", "torso", "asymmetry_forearm_pct", "forearm_to_upper_arm_l"} <= set(m.entries)
     assert "whole" not in m.entries
@@ -168,6 +172,7 @@ def test_error_model_table_is_packaged_and_checked():
 
 def test_t_quantile_and_derivation_rule():
     from bsv.bench.noisemodel import derive, t975
+    from bsv.errors import BenchError
 
     assert t975(19) == pytest.approx(2.093, abs=0.002)
     assert t975(9) == pytest.approx(2.262, abs=0.004)
@@ -179,9 +184,11 @@ def test_t_quantile_and_derivation_rule():
             "estimate": {"torso": 30.0 * math.exp(e), "whole": 40.0}, "truth": {"torso": 30.0, "whole": 50.0}}}))
     runs.append(Run("cal", "cali", "bsv", True, info={"uncertainty": {"estimate": {"torso": 99.0},
                                                                       "truth": {"torso": 30.0}}}))
-    doc = derive(runs)
-    q = doc["quantities"]
-    assert set(q) == {"torso"} and q["torso"]["n"] == 12  # whole excluded, cali not pooled
+    with pytest.raises(BenchError, match="noer"):  # no noer run: the exact model cannot be derived
+        derive(runs)
+    doc = derive(runs, {"l515": "l515"})
+    q = doc["depth_models"]["l515"]["quantities"]
+    assert set(q) == {"torso"} and q["torso"]["n"] == 12  # whole excluded, cali not used
     assert q["torso"]["sd"] == pytest.approx(q["torso"]["raw_sd"] * math.sqrt(1 + 1 / 12) * t975(11) / 1.959963984540054)
 
 
@@ -193,13 +200,14 @@ def test_coverage_rows_count_truth_inside_and_false_asymmetries():
             "estimate": {"trunk_limbs": tl_est, "asymmetry_forearm_pct": asym_est},
             "truth": {"trunk_limbs": 60.0, "asymmetry_forearm_pct": asym_true}, "calibration_sd": {}}})
 
-    rows = coverage_rows([run(60.5, 0.0, 0.0), run(63.0, 10.0, 0.5), run(60.0, 2.0, 10.0)], MODEL)
+    models = {"exact": MODEL, "l515": unc.ErrorModel({})}  # noer is scored with the exact-depth model
+    rows = coverage_rows([run(60.5, 0.0, 0.0), run(63.0, 10.0, 0.5), run(60.0, 2.0, 10.0)], models)
     (r,) = rows
     assert r["segment_coverage_pct"] == pytest.approx(200 / 3)  # 63 L is outside +-2 % of 60 L
     assert r["asymmetry_coverage_pct"] == pytest.approx(100 / 3)  # truth 0 / 0.5 / 10 vs centres -1 / 9 / 1
     assert r["symmetric_pairs"] == 2 and r["symmetric_false_pct"] == 50.0
     assert r["trunk_limbs_halfwidth_pct"] == pytest.approx((math.exp(0.0196) - math.exp(-0.0196)) / 2 * 100, rel=1e-3)
-    assert "| noer | 3 |" in "\n".join(coverage_markdown(rows, MODEL))
+    assert "| noer | exact | 3 |" in "\n".join(coverage_markdown(rows, models))
 
 
 # ----------------------------------------------------------------------------------------------------

@@ -3,7 +3,8 @@
 Per registration, :func:`record` keeps what the intervals need (the estimate's and the truth's volumes
 and ratios, the calibration Monte Carlo spread: the paper's covariance at the capture's estimated
 extrinsics in cali/l5ca, none in noer/l515 where the calibration is exact) in ``Run.info["uncertainty"]``.
-:func:`coverage_rows` then combines them with an error model, per condition:
+:func:`coverage_rows` then combines them with the error model of the condition's depth sensor
+(:data:`DEPTH_OF_CONDITION`: noise-free depth in noer and cali, the L515's in l515 and l5ca), per condition:
 
 - ``segment_coverage_pct``: the fraction of (subject, segment) with the true volume inside the interval
   (the 9 trunk-and-limb segments and trunk_limbs);
@@ -20,7 +21,7 @@ the packaged model was derived from cohort seed 1; the benchmark's default seed 
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from statistics import median
 from typing import Any
 
@@ -29,6 +30,8 @@ from ..uncertainty import CameraSpread, ErrorModel, calibration_spread, combine,
 from .common import Run
 from .floor import CameraPose
 
+#: The depth model (:func:`bsv.uncertainty.error_models`) of each benchmark condition.
+DEPTH_OF_CONDITION: dict[str, str] = {"noer": "exact", "cali": "exact", "l515": "l515", "l5ca": "l515"}
 #: Limb segments whose left/right asymmetry is scored.
 LIMB_PARTS: tuple[str, ...] = ("upper_arm", "forearm", "thigh", "shin")
 #: Volumes whose coverage is scored.
@@ -58,8 +61,9 @@ def _asym(part: str) -> str:
     return f"asymmetry_{part}_pct"
 
 
-def coverage_rows(runs: Iterable[Run], model: ErrorModel) -> list[dict[str, Any]]:
-    """One row per condition (see the module doc); runs without ``info["uncertainty"]`` are skipped."""
+def coverage_rows(runs: Iterable[Run], models: Mapping[str, ErrorModel]) -> list[dict[str, Any]]:
+    """One row per condition (see the module doc) with the model of its depth sensor (``models`` by
+    :data:`DEPTH_OF_CONDITION`); runs without ``info["uncertainty"]`` are skipped."""
     by: dict[str, list[dict[str, Any]]] = {}
     for r in runs:
         u = r.info.get("uncertainty") if r.ok else None
@@ -67,6 +71,7 @@ def coverage_rows(runs: Iterable[Run], model: ErrorModel) -> list[dict[str, Any]
             by.setdefault(r.condition, []).append(u)
     rows = []
     for cond, recs in by.items():
+        model = models[DEPTH_OF_CONDITION.get(cond, "l515")]
         inside_v, inside_a, hw_tl, hw_a, sym = [], [], [], [], []
         for u in recs:
             est, truth = u["estimate"], u["truth"]
@@ -85,7 +90,7 @@ def coverage_rows(runs: Iterable[Run], model: ErrorModel) -> list[dict[str, Any]
                     hw_a.append((hi - lo) / 2.0)
                     if abs(truth[n]) <= SYMMETRIC_PTS:
                         sym.append(not (lo <= 0.0 <= hi))
-        rows.append({"condition": cond, "runs": len(recs),
+        rows.append({"condition": cond, "depth_model": DEPTH_OF_CONDITION.get(cond, "l515"), "runs": len(recs),
                      "segment_coverage_pct": _pct(inside_v), "asymmetry_coverage_pct": _pct(inside_a),
                      "trunk_limbs_halfwidth_pct": median(hw_tl) if hw_tl else None,
                      "asymmetry_halfwidth_pts": median(hw_a) if hw_a else None,
@@ -97,7 +102,7 @@ def _pct(flags: Sequence[bool]) -> float | None:
     return 100.0 * sum(flags) / len(flags) if flags else None
 
 
-def coverage_markdown(rows: Sequence[dict[str, Any]], model: ErrorModel) -> list[str]:
+def coverage_markdown(rows: Sequence[dict[str, Any]], models: Mapping[str, ErrorModel]) -> list[str]:
     """The coverage section of report.md (empty without rows)."""
     if not rows:
         return []
@@ -105,18 +110,40 @@ def coverage_markdown(rows: Sequence[dict[str, Any]], model: ErrorModel) -> list
     def f(x: float | None, fmt: str) -> str:
         return "n/a" if x is None else format(x, fmt)
 
-    src = model.derivation.get("source", "see bsv/data/noise_model.json")
+    src = next(iter(models.values())).derivation.get("source", "see bsv/data/noise_model.json") if models else ""
+    desc = "; ".join(f"{k}: {m.description}" for k, m in models.items())
     out = ["## Coverage of the 95 % intervals", "",
-           (f"Error model: {model.description} (derived from {src}; never from the subjects scored here "
+           (f"Error models ({desc}), derived from {src}; never from the subjects scored here "
            "unless this run used the same cohort seed). Calibration part: the paper's covariance at each "
            "capture's estimated extrinsics (cali, l5ca)."), "",
-           ("| condition | runs | segments: truth inside % | asymmetries: truth inside % | trunk_limbs median "
+           ("| condition | depth model | runs | segments: truth inside % | asymmetries: truth inside % | trunk_limbs median "
            "half-width % | limb asymmetry median half-width (points) | symmetric pairs | false 'distinguishable' % |"),
-           "|---|---|---|---|---|---|---|---|"]
+           "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        out.append(f"| {r['condition']} | {r['runs']} | {f(r['segment_coverage_pct'], '.1f')} | "
+        out.append(f"| {r['condition']} | {r['depth_model']} | {r['runs']} | {f(r['segment_coverage_pct'], '.1f')} | "
                    f"{f(r['asymmetry_coverage_pct'], '.1f')} | {f(r['trunk_limbs_halfwidth_pct'], '.2f')} | "
                    f"{f(r['asymmetry_halfwidth_pts'], '.1f')} | {r['symmetric_pairs']} | "
                    f"{f(r['symmetric_false_pct'], '.1f')} |")
     out.append("")
     return out
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m bsv.bench.coverage RESULTS.json``: the coverage table of a finished benchmark with the
+    packaged error models."""
+    import argparse
+
+    from ..uncertainty import error_models
+    from .noisemodel import load_runs
+
+    ap = argparse.ArgumentParser(prog="python -m bsv.bench.coverage", description=main.__doc__)
+    ap.add_argument("results", nargs="+", help="results.json of bsv bench synth")
+    a = ap.parse_args(argv)
+    runs, _ = load_runs(a.results)
+    models = error_models()
+    print("\n".join(coverage_markdown(coverage_rows(runs, models), models)))
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())

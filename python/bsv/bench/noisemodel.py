@@ -3,8 +3,8 @@
 Input: ``results.json`` files of ``bsv bench synth`` (each bsv run keeps the estimate's and the truth's
 volumes and ratios in ``info["uncertainty"]``, :func:`bsv.bench.coverage.record`). For every quantity
 present in both (``whole`` excepted: the fitted template has no head, hands or feet), over the runs of
-the chosen conditions (default noer and l515: no calibration error, whose share the calibration Monte
-Carlo adds), the residual ``T(estimate) - T(truth)`` (natural log of volumes and ratios, points of
+one condition without calibration error (whose share the calibration Monte Carlo adds: noer gives the
+``exact`` depth model, l515 the ``l515`` one), the residual ``T(estimate) - T(truth)`` (natural log of volumes and ratios, points of
 asymmetry) gives ``bias`` = its mean and ``sd`` = its standard deviation widened to a 95 % prediction
 interval for a new subject: ``s * sqrt(1 + 1/n) * t(0.975, n - 1) / 1.96``.
 
@@ -30,8 +30,8 @@ from ..errors import BenchError, OutputExistsError
 from ..uncertainty import Z95, transform
 from .common import Run
 
-#: Conditions whose residuals the packaged model pools.
-MODEL_CONDITIONS: tuple[str, ...] = ("noer", "l515")
+#: Depth model -> the benchmark condition whose residuals define it.
+MODEL_CONDITIONS: dict[str, str] = {"exact": "noer", "l515": "l515"}
 #: Quantities never modelled (the fitted template's "whole" lacks the head, hands and feet of the truth's).
 EXCLUDED: tuple[str, ...] = ("whole",)
 
@@ -45,7 +45,7 @@ def t975(dof: int) -> float:
             + (3 * z**7 + 19 * z**5 + 17 * z**3 - 15 * z) / (384 * v**3))
 
 
-def residuals(runs: Sequence[Run], conditions: Sequence[str] = MODEL_CONDITIONS) -> dict[str, list[float]]:
+def residuals(runs: Sequence[Run], conditions: Sequence[str]) -> dict[str, list[float]]:
     """Per quantity, ``T(estimate) - T(truth)`` over the bsv runs of ``conditions`` that kept their ingredients."""
     out: dict[str, list[float]] = {}
     for r in runs:
@@ -62,11 +62,11 @@ def residuals(runs: Sequence[Run], conditions: Sequence[str] = MODEL_CONDITIONS)
     return out
 
 
-def derive(runs: Sequence[Run], conditions: Sequence[str] = MODEL_CONDITIONS, source: str = "") -> dict[str, Any]:
-    """The error-model document (``bsv/data/noise_model.json``) from benchmark runs."""
-    res = residuals(runs, conditions)
+def derive_one(runs: Sequence[Run], condition: str) -> dict[str, Any]:
+    """One depth model (``{"condition", "quantities"}``) from the runs of ``condition``."""
+    res = residuals(runs, (condition,))
     if not res:
-        raise BenchError(f"no bsv run of {','.join(conditions)} with interval ingredients (info['uncertainty']); "
+        raise BenchError(f"no bsv run of {condition} with interval ingredients (info['uncertainty']); "
                          "run `bsv bench synth` with this version first")
     q: dict[str, Any] = {}
     for name, d in sorted(res.items()):
@@ -77,11 +77,19 @@ def derive(runs: Sequence[Run], conditions: Sequence[str] = MODEL_CONDITIONS, so
         s = float(np.std(a, ddof=1))
         q[name] = {"bias": float(a.mean()), "sd": s * math.sqrt(1 + 1 / n) * t975(n - 1) / Z95, "raw_sd": s, "n": n,
                    "space": "points" if name.startswith("asymmetry_") else "log"}
-    return {"description": f"synthetic cohort, {'+'.join(conditions)}, oracle segmentation, default template",
-            "derivation": {"source": source, "conditions": list(conditions), "created": time.strftime("%Y-%m-%d"),
-                           "rule": "bias = mean residual; sd = s * sqrt(1 + 1/n) * t(0.975, n-1) / 1.96 "
-                                   "(95 % prediction interval for a new subject)"},
-            "quantities": q}
+    return {"condition": condition,
+            "description": f"synthetic cohort, {condition}, oracle segmentation, default template", "quantities": q}
+
+
+def derive(runs: Sequence[Run], models: dict[str, str] | None = None, source: str = "") -> dict[str, Any]:
+    """The error-model document (``bsv/data/noise_model.json``): one model per depth sensor (``models``:
+    depth name -> condition, default :data:`MODEL_CONDITIONS`)."""
+    m = models or MODEL_CONDITIONS
+    return {"derivation": {"source": source, "created": time.strftime("%Y-%m-%d"),
+                           "rule": "per quantity and depth model: bias = mean of T(estimate) - T(truth); "
+                                   "sd = s * sqrt(1 + 1/n) * t(0.975, n-1) / 1.96 (95 % prediction interval "
+                                   "for a new subject); T = log, or the value for asymmetries (points)"},
+            "depth_models": {depth: derive_one(runs, cond) for depth, cond in m.items()}}
 
 
 def load_runs(paths: Sequence[str | Path]) -> tuple[list[Run], str]:
@@ -105,18 +113,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m bsv.bench.noisemodel", description=__doc__.split("\n")[0])
     ap.add_argument("results", nargs="+", help="results.json of bsv bench synth runs (calibration cohort)")
     ap.add_argument("-o", "--out", required=True, help="output JSON (e.g. python/bsv/data/noise_model.json)")
-    ap.add_argument("--conditions", default=",".join(MODEL_CONDITIONS), help="comma list (default noer,l515)")
     ap.add_argument("--overwrite", action="store_true")
     a = ap.parse_args(argv)
     out = Path(a.out)
     if out.exists() and not a.overwrite:
         raise OutputExistsError(f"{out} exists; pass --overwrite to replace it")
     runs, source = load_runs(a.results)
-    doc = derive(runs, tuple(c.strip() for c in a.conditions.split(",") if c.strip()), source)
+    doc = derive(runs, source=source)
     tmp = out.with_suffix(out.suffix + ".tmp")
     tmp.write_text(json.dumps(doc, indent=1) + "\n")
     tmp.replace(out)
-    print(f"wrote {out}: {len(doc['quantities'])} quantities from {source}")
+    print(f"wrote {out}: depth models {', '.join(doc['depth_models'])} from {source}")
     return 0
 
 

@@ -291,6 +291,7 @@ def process(
     segment_params: dict[str, Any] | None = None,
     title: str = "BSV report",
     truth: dict[str, float] | None = None,
+    refine_floor: bool = False,
     **register_params: Any,
 ) -> ProcessResult:
     """Segmentation, cloud, registration and volumes of a capture folder (``CAPTURE_DIR/<camera>/`` with
@@ -306,7 +307,11 @@ def process(
 
     ``remove_floor`` / ``isolate_person`` (on by default; ``--keep-floor`` / ``--no-isolate`` for diagnosis)
     and ``cloud_params`` (more ``FuseParams`` thresholds): only the person reaches the registration, see
-    :func:`build_cloud`. The floor check's warnings are printed and shown in the report."""
+    :func:`build_cloud`. The floor check's warnings are printed and shown in the report.
+
+    ``refine_floor`` (``--refine-floor``): correct each camera's pitch, roll and height with the floor it
+    sees (:func:`bsv.frontend.floorplane.refine_extrinsics`; the camera must see the floor) before building
+    the cloud; the correction is in volumes.json's ``calibration_refinement``."""
     from . import register as bsv_register
     from . import write_mesh, write_point_cloud
     from .frontend.capture import read_capture
@@ -329,6 +334,7 @@ def process(
 
     seg_summary: dict[str, dict[str, Any]] = {}
     seg_files: dict[str, Any] = {}
+    refined: dict[str, dict[str, Any]] = {}
     views = []
     for cam in cameras:
         d = data[cam]
@@ -339,6 +345,15 @@ def process(
         labels, summary, seg_files[cam] = steps.run(f"segment_{cam}", f"segmenting the {cam} camera ({segmentation})",
                                                     segment_camera)
         seg_summary[cam] = summary
+        if refine_floor:
+            from .frontend.floorplane import refine_extrinsics
+
+            def refine_camera(cam: str = cam, d: dict[str, Any] = d, person: np.ndarray = labels > 0
+                              ) -> tuple[dict[str, Any], dict[str, Any]]:
+                return refine_extrinsics(cam, extrinsics[cam], d["depth_m"], d["intrinsics"], person)
+
+            extrinsics[cam], refined[cam] = steps.run(
+                f"refine_{cam}", f"refining the {cam} camera's pitch, roll and height with the floor", refine_camera)
         views.append({"name": cam, "intrinsics": d["intrinsics"].to_json(), "camera_to_world": {k: extrinsics[cam][k] for k in ("rotation", "translation")},
                       "depth": np.ascontiguousarray(d["depth_m"], dtype=np.float32), "labels": labels,
                       "colors": np.ascontiguousarray(d["colour"], dtype=np.uint8)})
@@ -361,6 +376,8 @@ def process(
         "intervals", "95 % intervals (calibration Monte Carlo + error model)",
         lambda: intervals(reg.mesh, reg.volumes, [_camera_spread(c, extrinsics[c]) for c in cameras],
                           density=density)).to_json()
+    if refined:
+        vols["calibration_refinement"] = {"method": "floor plane (pitch, roll, height)", "cameras": refined}
     vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report}
     out.mkdir(parents=True, exist_ok=True)
     files = {"cloud": out / "cloud.ply", "fitted": out / "fitted.ply", "volumes": out / "volumes.json",
@@ -497,6 +514,8 @@ def main_process(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--cloud-param", action="append", default=[], metavar="KEY=VALUE",
                     help="cloud-building parameter, e.g. floor_margin_m=0.03, link_m=0.03 (repeatable)")
     ap.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="registration parameter (repeatable)")
+    ap.add_argument("--refine-floor", action="store_true",
+                    help="correct each camera's pitch, roll and height with the floor it sees (the cameras must see it)")
     ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT")
     ap.add_argument("--quiet", action="store_true", help="no progress output")
     a = ap.parse_args(list(argv) if argv is not None else None)
@@ -516,7 +535,7 @@ def main_process(argv: Sequence[str] | None = None) -> int:
                       template=read_mesh(a.template) if a.template else None, progress=not a.quiet,
                       overwrite=a.overwrite, keep_extremities=a.keep_extremities, sor=a.sor, sor_k=a.sor_k,
                       sor_std_ratio=a.sor_std, remove_floor=not a.keep_floor, isolate_person=not a.no_isolate,
-                      cloud_params=_register_args(a.cloud_param, "--cloud-param"),
+                      cloud_params=_register_args(a.cloud_param, "--cloud-param"), refine_floor=a.refine_floor,
                       **_register_args(a.param))
         _print_process(res)
         return 0

@@ -119,6 +119,26 @@ def perturb(r: np.ndarray, t: np.ndarray, delta: np.ndarray) -> tuple[np.ndarray
     return np.asarray(r) @ rodrigues(delta[3:]), np.asarray(r) @ np.asarray(delta[:3]) + np.asarray(t)
 
 
+#: Precision of a floor-plane refinement (:mod:`bsv.frontend.floorplane`): height (m), tilts (rad); a
+#: conservative allowance for real floors (the virtual rig's floor gives ~0.05 mm / 0.005 deg).
+FLOOR_STD: tuple[float, float, float] = (0.001, math.radians(0.05), math.radians(0.05))
+
+
+def condition_on_floor(cov: np.ndarray, rotation: np.ndarray, std: Sequence[float] = FLOOR_STD) -> np.ndarray:
+    """The covariance after the floor has measured the camera's height and its tilts about the world's
+    horizontal x and z axes with standard deviations ``std``: Gaussian conditioning
+    ``S - S A^T (A S A^T + N)^-1 A S``, ``A`` the rows of those three world quantities in :data:`PARAMETERS`."""
+    r = np.asarray(rotation, dtype=np.float64)
+    a = np.zeros((3, 6))
+    a[0, :3] = r.T @ np.array([0.0, 1.0, 0.0])  # world height of the translation
+    a[1, 3:] = r.T @ np.array([1.0, 0.0, 0.0])  # rotation about the world x axis
+    a[2, 3:] = r.T @ np.array([0.0, 0.0, 1.0])  # rotation about the world z axis
+    s = np.asarray(cov, dtype=np.float64)
+    k = s @ a.T @ np.linalg.inv(a @ s @ a.T + np.diag(np.square(np.asarray(std, dtype=np.float64))))
+    out = s - k @ a @ s
+    return (out + out.T) / 2.0
+
+
 @dataclass(frozen=True)
 class CameraSpread:
     """One camera's camera-to-world extrinsics and their 6 x 6 covariance (:data:`FRAME`)."""
@@ -332,8 +352,8 @@ def asymmetry_text(value: float, interval: tuple[float, float] | None) -> str:
 
 
 __all__ = [
-    "DEFAULT_DEPTH", "DEFAULT_SAMPLES", "DEFAULT_SEED", "FRAME", "LEVEL", "PAPER_STD", "PARAMETERS", "CameraSpread", "ErrorModel",
-    "Intervals", "asymmetry_text", "calibration_spread", "check_covariance", "combine", "default_error_model",
+    "DEFAULT_DEPTH", "DEFAULT_SAMPLES", "DEFAULT_SEED", "FLOOR_STD", "FRAME", "LEVEL", "PAPER_STD", "PARAMETERS", "CameraSpread", "ErrorModel",
+    "Intervals", "asymmetry_text", "calibration_spread", "check_covariance", "combine", "condition_on_floor", "default_error_model",
     "error_models", "intervals", "is_additive", "paper_covariance", "perturb", "pose_delta", "quantities", "rodrigues",
     "rotation_vector", "transform", "untransform",
 ]

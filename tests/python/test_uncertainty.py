@@ -265,7 +265,8 @@ def demo_l5ca(tmp_path_factory):
     from bsv import pipeline
 
     out = tmp_path_factory.mktemp("demo_l5ca")
-    return pipeline.demo(out, seed=0, subject=1, condition="l5ca", segmentation="oracle", progress=False, room=False)
+    return pipeline.demo(out, seed=0, subject=1, condition="l5ca", segmentation="oracle", progress=False, room=True,
+                         refine_floor=True)
 
 
 def test_process_writes_intervals_that_hold_the_truth(demo_l5ca):
@@ -273,6 +274,9 @@ def test_process_writes_intervals_that_hold_the_truth(demo_l5ca):
     doc = json.loads((res.out_dir / "volumes.json").read_text())
     iv = doc["intervals"]
     assert iv["level"] == 0.95 and "Monte Carlo" in iv["method"] and "paper default" in iv["method"]
+    assert "refined by the floor" in iv["method"]
+    ref = doc["calibration_refinement"]["cameras"]
+    assert set(ref) == {"front", "back"} and all(r["floor_points"] > 1000 for r in ref.values())
     assert set(iv["volumes_l"]) >= {"trunk_limbs", "torso", "forearm_l"}
     assert set(iv["ratios"]) >= {"asymmetry_forearm_pct", "shin_to_thigh_l"}
     typed = res.intervals
@@ -341,3 +345,14 @@ def _intrinsics(cap: Path):
     from bsv.frontend.intrinsics import Intrinsics
 
     return Intrinsics.from_json(json.loads((cap / "front" / "camera.json").read_text())["intrinsics"], "test")
+
+
+def test_conditioning_on_the_floor_removes_height_pitch_and_roll_only():
+    rig = _rig()
+    for c in rig:
+        after = unc.condition_on_floor(c.covariance, c.rotation)
+        before_sd, after_sd = np.sqrt(np.diag(c.covariance)), np.sqrt(np.diag(after))
+        # level cameras: world height = camera -Y, world x/z rotations = camera X (pitch) and Z (roll)
+        assert np.all(after_sd[[1, 3, 5]] <= np.asarray(unc.FLOOR_STD) * 1.01)
+        np.testing.assert_allclose(after_sd[[0, 2, 4]], before_sd[[0, 2, 4]], rtol=1e-9)
+        unc.check_covariance(after, c.name)

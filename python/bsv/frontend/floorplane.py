@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -110,3 +111,22 @@ def refine_with_floor(rotation: np.ndarray, translation: np.ndarray, depth_m: np
     rms = float(np.sqrt(np.mean((cand[inl] @ n + d) ** 2))) * 1000.0
     return FloorRefinement(r_c @ r, t + np.array([0.0, lift, 0.0]), math.degrees(vec[0]), math.degrees(vec[2]),
                            lift * 1000.0, int(inl.sum()), rms)
+
+
+def refine_extrinsics(name: str, extrinsics: dict[str, Any], depth_m: np.ndarray, intrinsics: Intrinsics,
+                      person: np.ndarray | None) -> tuple[dict[str, Any], dict[str, Any]]:
+    """``bsv process --refine-floor`` for one camera: its extrinsics entry (rotation, translation,
+    covariance; the paper's when none) refined by the floor, the covariance conditioned on what the floor
+    measured (:func:`bsv.uncertainty.condition_on_floor`), and a JSON-ready report of the correction."""
+    from ..uncertainty import condition_on_floor, paper_covariance
+
+    ref = refine_with_floor(np.asarray(extrinsics["rotation"]), np.asarray(extrinsics["translation"]), depth_m,
+                            intrinsics, person, name=name)
+    cov = extrinsics.get("covariance")
+    base = paper_covariance(name) if cov is None else np.asarray(cov)
+    source = extrinsics.get("covariance_source") or "paper default (calibration.json has none)"
+    out = {"rotation": ref.rotation.tolist(), "translation": ref.translation.tolist(),
+           "covariance": condition_on_floor(base, ref.rotation), "covariance_source": f"{source}, refined by the floor"}
+    report = {"tilt_x_deg": ref.tilt_x_deg, "tilt_z_deg": ref.tilt_z_deg, "height_mm": ref.height_mm,
+              "floor_points": ref.points, "floor_rms_mm": ref.rms_mm}
+    return out, report

@@ -411,21 +411,26 @@ def process(
 
 
 def compare(volumes: dict[str, Any], truth: dict[str, float]) -> list[dict[str, Any]]:
-    """Rows (segment, true_l, estimated_l, error_pct) for the trunk-and-limb segments and their total."""
+    """Rows (segment, true_l, estimated_l, error_pct and, with intervals, interval_l) for the trunk-and-limb
+    segments and their total."""
     est = volumes.get("volumes_l", {})
+    bands = (volumes.get("intervals") or {}).get("volumes_l", {})
     rows = []
     for name in (*TRUNK_LIMBS, "trunk_limbs"):
         if name in truth and name in est:
             t, e = float(truth[name]), float(est[name])
-            rows.append({"segment": name, "true_l": t, "estimated_l": e, "error_pct": (e - t) / t * 100.0})
+            rows.append({"segment": name, "true_l": t, "estimated_l": e, "error_pct": (e - t) / t * 100.0,
+                         **({"interval_l": list(bands[name])} if name in bands else {})})
     return rows
 
 
 def comparison_table(rows: Sequence[dict[str, Any]]) -> str:
-    """The comparison rows as a plain-text table."""
-    lines = [f"{'segment':<14}{'true L':>9}{'estimated L':>13}{'error %':>9}"]
+    """The comparison rows as a plain-text table (with the 95 % interval when the rows have one)."""
+    lines = [f"{'segment':<14}{'true L':>9}{'estimated L':>13}{'error %':>9}{'95 % interval L':>20}"]
     for r in rows:
-        lines.append(f"{r['segment']:<14}{r['true_l']:>9.3f}{r['estimated_l']:>13.3f}{r['error_pct']:>+9.2f}")
+        b = r.get("interval_l")
+        band = f"{b[0]:>9.3f} to {b[1]:.3f}" if b else ""
+        lines.append(f"{r['segment']:<14}{r['true_l']:>9.3f}{r['estimated_l']:>13.3f}{r['error_pct']:>+9.2f}{band:>20}")
     return "\n".join(lines)
 
 
@@ -471,6 +476,7 @@ def demo(
     if progress:
         print()
         print(comparison_table(res.comparison))
+        print("\n".join(asymmetry_lines(res.volumes)))
         print(f"\nreport: {res.files['report']}  (total {res.timings['total']:.1f} s)")
     return res
 
@@ -543,18 +549,24 @@ def main_process(argv: Sequence[str] | None = None) -> int:
     return run_command("bsv process", run)
 
 
-def _print_process(res: Any) -> None:
-    from .uncertainty import asymmetry_text
+def asymmetry_lines(volumes: dict[str, Any]) -> list[str]:
+    """One line per left/right asymmetry of a volumes report, with its 95 % interval or "not
+    distinguishable from symmetric" (:func:`bsv.uncertainty.asymmetry_text`)."""
+    from .uncertainty import Intervals, asymmetry_text
 
+    iv = Intervals.from_json(volumes["intervals"]) if volumes.get("intervals") else None
+    return [f"{name:<26}{asymmetry_text(value, iv.get(name) if iv else None)}"
+            for name, value in (volumes.get("ratios") or {}).items() if name.startswith("asymmetry_") and value is not None]
+
+
+def _print_process(res: Any) -> None:
     v = res.volumes.get("volumes_l", {})
     iv = res.intervals
     for name in (*TRUNK_LIMBS, "trunk_limbs"):
         if name in v:
             b = iv.get(name) if iv else None
             print(f"{name:<14}{v[name]:>9.3f} L" + (f"  (95 % {b[0]:.3f} to {b[1]:.3f})" if b else ""))
-    for name, value in res.volumes.get("ratios", {}).items():
-        if name.startswith("asymmetry_") and value is not None:
-            print(f"{name:<26}{asymmetry_text(value, iv.get(name) if iv else None)}")
+    print("\n".join(asymmetry_lines(res.volumes)))
     print(f"report: {res.files['report']}")
 
 
@@ -592,6 +604,7 @@ def main_demo(argv: Sequence[str] | None = None) -> int:
                    progress=not a.quiet, overwrite=a.overwrite, room=not a.no_room, **_register_args(a.param))
         if a.quiet:
             print(comparison_table(res.comparison))
+            print("\n".join(asymmetry_lines(res.volumes)))
         return 0
 
     return run_command("bsv demo", run)
@@ -602,6 +615,7 @@ __all__ = [
     "OUTPUTS",
     "SEGMENTATION_DIR",
     "ProcessResult",
+    "asymmetry_lines",
     "build_cloud",
     "cleaning_summary",
     "compare",

@@ -285,6 +285,11 @@ def test_process_writes_intervals_that_hold_the_truth(demo_l5ca):
     assert lo < res.volumes["volumes_l"]["trunk_limbs"] < hi
     assert lo <= res.truth["trunk_limbs"] <= hi
     assert (hi - lo) / 2 / res.volumes["volumes_l"]["trunk_limbs"] < 0.06
+    row = next(r for r in res.comparison if r["segment"] == "trunk_limbs")
+    assert row["interval_l"] == [lo, hi]
+    from bsv.pipeline import comparison_table
+
+    assert "95 % interval L" in comparison_table(res.comparison)
 
 
 def test_table_and_report_say_when_an_asymmetry_is_within_the_noise(demo_l5ca, capsys):

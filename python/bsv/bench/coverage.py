@@ -146,4 +146,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    raise SystemExit(main())
+    from ..exitcodes import run_command
+
+    raise SystemExit(run_command("python -m bsv.bench.coverage", main))

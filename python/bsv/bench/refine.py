@@ -113,9 +113,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     rows = run_refine(a.n, a.seed, a.condition, progress=not a.quiet)
     print(summary_markdown(rows, a.condition))
     if a.out:
-        Path(a.out).write_text(json.dumps(rows, indent=1) + "\n")
+        tmp = Path(a.out).with_suffix(".tmp")
+        tmp.write_text(json.dumps(rows, indent=1) + "\n")
+        tmp.replace(a.out)
     return 0
 
 
 if __name__ == "__main__":  # pragma: no cover
-    raise SystemExit(main())
+    from ..exitcodes import run_command
+
+    raise SystemExit(run_command("python -m bsv.bench.refine", main))

@@ -258,8 +258,11 @@ def write_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", o
     seg_rows = [[html.escape(k), html.escape(str(s.get("source", ""))), s.get("labelled_pixels", "")]
                 for k, s in result.segmentation.items()]
     timing_rows = [[html.escape(k), _fmt(v, 2)] for k, v in result.timings.items()]
+    mband = iv.get("mass_trunk_limbs_kg") if iv else None
     mass_html = (f"<p><b>Estimated mass</b> of the measured segments ({html.escape(measured)}): "
-                 f"<b>{_fmt(mass, 1)} kg</b> (volume x {_fmt(density, 0)} kg/m&sup3;).</p>") if mass is not None else ""
+                 f"<b>{_fmt(mass, 1)} kg</b> (volume x {_fmt(density, 0)} kg/m&sup3;)"
+                 + (f"; trunk and limbs 95 % interval {_fmt(mband[0], 1)} to {_fmt(mband[1], 1)} kg" if mband else "")
+                 + ".</p>") if mass is not None else ""
     notes = "".join(f"<li>{html.escape(str(n))}</li>" for n in vols.get("notes", []) or [])
     doc = f"""<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>{html.escape(title)}</title><style>{CSS}</style></head><body>

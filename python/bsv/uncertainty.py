@@ -279,10 +279,12 @@ class Intervals:
     ratios: dict[str, tuple[float, float]]
     #: Seconds spent computing them.
     seconds: float = 0.0
+    #: Mass intervals (kg): ``mass_trunk_limbs_kg`` = the trunk_limbs interval x density.
+    mass_kg: dict[str, tuple[float, float]] = field(default_factory=dict)
 
     def get(self, name: str) -> tuple[float, float] | None:
         """The interval of a volume or ratio by name (None when it has none)."""
-        return self.volumes_l.get(name) or self.ratios.get(name)
+        return self.volumes_l.get(name) or self.ratios.get(name) or self.mass_kg.get(name)
 
     def distinguishable(self, name: str) -> bool | None:
         """For an asymmetry: whether its interval excludes 0 (None without an interval)."""
@@ -293,7 +295,8 @@ class Intervals:
         """The ``"intervals"`` section of volumes.json."""
         return {"level": self.level, "method": self.method, "seconds": self.seconds,
                 "volumes_l": {k: [lo, hi] for k, (lo, hi) in self.volumes_l.items()},
-                "ratios": {k: [lo, hi] for k, (lo, hi) in self.ratios.items()}}
+                "ratios": {k: [lo, hi] for k, (lo, hi) in self.ratios.items()},
+                "mass_kg": {k: [lo, hi] for k, (lo, hi) in self.mass_kg.items()}}
 
     @staticmethod
     def from_json(doc: Mapping[str, Any]) -> Intervals:
@@ -302,7 +305,7 @@ class Intervals:
             return {str(k): (float(v[0]), float(v[1])) for k, v in (d or {}).items()}
 
         return Intervals(float(doc.get("level", LEVEL)), str(doc.get("method", "")), pairs(doc.get("volumes_l")),
-                         pairs(doc.get("ratios")), float(doc.get("seconds", 0.0)))
+                         pairs(doc.get("ratios")), float(doc.get("seconds", 0.0)), pairs(doc.get("mass_kg")))
 
 
 def combine(estimate: Mapping[str, float], model: ErrorModel, calibration_sd: Mapping[str, float] | None = None
@@ -337,8 +340,10 @@ def intervals(mesh: Mesh, volumes: Mapping[str, Any], cameras: Sequence[CameraSp
     method = (f"calibration Monte Carlo ({samples} draws, seed {seed}, covariance: {', '.join(sources) or 'none'}) "
               f"+ depth-noise/registration error model ({m.description or 'bsv/data/noise_model.json'}), "
               "combined in quadrature, normal")
+    tl = both.get("trunk_limbs")
+    mass = {} if tl is None else {"mass_trunk_limbs_kg": (tl[0] * density / 1000.0, tl[1] * density / 1000.0)}
     return Intervals(LEVEL, method, {k: v for k, v in both.items() if k in vol_keys},
-                     {k: v for k, v in both.items() if k not in vol_keys}, time.perf_counter() - t0)
+                     {k: v for k, v in both.items() if k not in vol_keys}, time.perf_counter() - t0, mass)
 
 
 def asymmetry_text(value: float, interval: tuple[float, float] | None) -> str:

@@ -285,6 +285,7 @@ def test_process_writes_intervals_that_hold_the_truth(demo_l5ca):
     assert lo < res.volumes["volumes_l"]["trunk_limbs"] < hi
     assert lo <= res.truth["trunk_limbs"] <= hi
     assert (hi - lo) / 2 / res.volumes["volumes_l"]["trunk_limbs"] < 0.06
+    assert typed.get("mass_trunk_limbs_kg") == pytest.approx((lo, hi))  # density 1000 kg/m^3
     row = next(r for r in res.comparison if r["segment"] == "trunk_limbs")
     assert row["interval_l"] == [lo, hi]
     from bsv.pipeline import comparison_table

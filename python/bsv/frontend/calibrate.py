@@ -692,6 +692,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     for k, c in cal.cameras.items():
         print(f"{k}: centre {np.round(c.translation, 4).tolist()} m, {c.frames} frames, reprojection "
               f"{c.reprojection_rms_px:.3f} px, spread {c.spread_mm:.2f} mm / {c.spread_deg:.3f} deg")
+        if c.covariance is not None:
+            sd = np.sqrt(np.diag(c.covariance))
+            print(f"{k}: extrinsics covariance ({c.covariance_source}): 1 sd translation "
+                  f"{np.round(sd[:3] * 1000, 3).tolist()} mm, rotation {np.round(np.degrees(sd[3:]), 3).tolist()} deg")
     print(f"wrote {a.out}")
     return 0
 

@@ -192,8 +192,8 @@ def test_t_quantile_and_derivation_rule():
     assert q["torso"]["sd"] == pytest.approx(q["torso"]["raw_sd"] * math.sqrt(1 + 1 / 12) * t975(11) / 1.959963984540054)
 
 
-def test_coverage_rows_count_truth_inside_and_false_asymmetries():
-    from bsv.bench.coverage import coverage_markdown, coverage_rows
+def test_coverage_rows_count_truth_inside_and_false_asymmetries(tmp_path):
+    from bsv.bench.coverage import coverage_figure, coverage_markdown, coverage_rows
 
     def run(tl_est: float, asym_est: float, asym_true: float) -> Run:
         return Run("s", "noer", "bsv", True, info={"uncertainty": {
@@ -208,6 +208,8 @@ def test_coverage_rows_count_truth_inside_and_false_asymmetries():
     assert r["symmetric_pairs"] == 2 and r["symmetric_false_pct"] == 50.0
     assert r["trunk_limbs_halfwidth_pct"] == pytest.approx((math.exp(0.0196) - math.exp(-0.0196)) / 2 * 100, rel=1e-3)
     assert "| noer | exact | 3 |" in "\n".join(coverage_markdown(rows, models))
+    png = coverage_figure(rows, tmp_path / "coverage.png")
+    assert png.read_bytes()[:4] == b"\x89PNG"
 
 
 # ----------------------------------------------------------------------------------------------------

@@ -22,8 +22,11 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
 from statistics import median
 from typing import Any
+
+import numpy as np
 
 from ..types import TRUNK_LIMBS, Mesh
 from ..uncertainty import CameraSpread, ErrorModel, calibration_spread, combine, paper_covariance, quantities
@@ -125,6 +128,31 @@ def coverage_markdown(rows: Sequence[dict[str, Any]], models: Mapping[str, Error
                    f"{f(r['asymmetry_halfwidth_pts'], '.1f')} | {r['symmetric_pairs']} | "
                    f"{f(r['symmetric_false_pct'], '.1f')} |")
     out.append("")
+    return out
+
+
+def coverage_figure(rows: Sequence[dict[str, Any]], path: str | Path) -> Path:
+    """Bars of the truth-inside percentages per condition (segments, asymmetries) against the 90-99 % target
+    band, with the median half-widths written under each condition."""
+    from .figures import _plt
+
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(7.0, 4.0))
+    x = np.arange(len(rows))
+    seg = [np.nan if r["segment_coverage_pct"] is None else r["segment_coverage_pct"] for r in rows]
+    asym = [np.nan if r["asymmetry_coverage_pct"] is None else r["asymmetry_coverage_pct"] for r in rows]
+    ax.axhspan(90.0, 99.0, color="tab:green", alpha=0.15, label="target 90-99 %")
+    ax.bar(x - 0.2, seg, 0.4, label="segment volumes")
+    ax.bar(x + 0.2, asym, 0.4, label="limb asymmetries")
+    ax.set_xticks(x, [f"{r['condition']}\ntl ±{r['trunk_limbs_halfwidth_pct'] or float('nan'):.1f} %\n"
+                      f"asym ±{r['asymmetry_halfwidth_pts'] or float('nan'):.1f} pt" for r in rows])
+    ax.set_ylim(50, 101)
+    ax.set_ylabel("truth inside the 95 % interval (%)")
+    ax.legend(loc="lower right", fontsize=8)
+    fig.tight_layout()
+    out = Path(path)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
     return out
 
 

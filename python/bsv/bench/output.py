@@ -29,7 +29,7 @@ from .tables import (
 #: Files every benchmark writes into its output folder (besides the figures, :data:`FIGURE_PATTERNS`).
 OUTPUT_FILES = ("results.json", "results.csv", "report.md")
 #: Glob patterns of the figures a benchmark writes.
-FIGURE_PATTERNS = ("rve_per_segment.png", "trunk_limbs_hist_*.png")
+FIGURE_PATTERNS = ("rve_per_segment.png", "trunk_limbs_hist_*.png", "coverage.png")
 
 
 def existing_outputs(out: str | Path) -> list[str]:
@@ -84,6 +84,10 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
         figs.append(rve_bars(summary, d / "rve_per_segment.png").name)
         for m in summary:
             figs.append(trunk_limbs_histogram(table, d / f"trunk_limbs_hist_{m}.png", m).name)
+    if coverage:
+        from .coverage import coverage_figure
+
+        figs.append(coverage_figure(coverage, d / "coverage.png").name)
     n_ok = sum(r.ok for r in runs)
     md = [f"# {title}", "",
           (f"bsv {__version__}; {len(infos)} subjects, {n_ok}/{len(runs)} registrations succeeded; "

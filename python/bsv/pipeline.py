@@ -42,6 +42,9 @@ DEMO_OUTPUT = "demo.json"
 SEGMENTATION_DIR = "segmentation"
 #: Segmentation sources: MediaPipe on the colour image, or the scanner's ground-truth label image.
 SEGMENTATIONS = ("camera", "oracle")
+#: What the intervals' error model (derived with the scanner's true labels) does not cover, per segmentation.
+_UNCOVERED = {"camera": "not included: the error of the camera segmentation's cut lines (the model was derived "
+                        "with true labels), so the intervals are too narrow for it"}
 #: Segments dropped from the cloud unless ``keep_extremities`` (head, hands, feet).
 EXTREMITY_IDS = (1, 7, 8, 13, 14)
 
@@ -375,7 +378,7 @@ def process(
     vols["intervals"] = steps.run(
         "intervals", "95 % intervals (calibration Monte Carlo + error model)",
         lambda: intervals(reg.mesh, reg.volumes, [_camera_spread(c, extrinsics[c]) for c in cameras],
-                          density=density)).to_json()
+                          density=density, note=_UNCOVERED.get(segmentation, ""))).to_json()
     if refined:
         vols["calibration_refinement"] = {"method": "floor plane (pitch, roll, height)", "cameras": refined}
     vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report}

@@ -327,9 +327,10 @@ def combine(estimate: Mapping[str, float], model: ErrorModel, calibration_sd: Ma
 
 def intervals(mesh: Mesh, volumes: Mapping[str, Any], cameras: Sequence[CameraSpread], *,
               model: ErrorModel | None = None, samples: int = DEFAULT_SAMPLES, seed: int = DEFAULT_SEED,
-              density: float = 1000.0) -> Intervals:
+              density: float = 1000.0, note: str = "") -> Intervals:
     """The 95 % intervals of the fitted ``mesh``'s ``volumes`` report (as :func:`bsv.register` returns it),
-    combining the calibration Monte Carlo over ``cameras`` and the error ``model`` (default: packaged)."""
+    combining the calibration Monte Carlo over ``cameras`` and the error ``model`` (default: packaged).
+    ``note`` is appended to the method text (what the intervals do not cover)."""
     t0 = time.perf_counter()
     m = model or default_error_model()
     cal = calibration_spread(mesh, cameras, samples=samples, seed=seed, density=density)
@@ -339,7 +340,7 @@ def intervals(mesh: Mesh, volumes: Mapping[str, Any], cameras: Sequence[CameraSp
     sources = sorted({c.source for c in cameras})
     method = (f"calibration Monte Carlo ({samples} draws, seed {seed}, covariance: {', '.join(sources) or 'none'}) "
               f"+ depth-noise/registration error model ({m.description or 'bsv/data/noise_model.json'}), "
-              "combined in quadrature, normal")
+              "combined in quadrature, normal" + (f"; {note}" if note else ""))
     tl = both.get("trunk_limbs")
     mass = {} if tl is None else {"mass_trunk_limbs_kg": (tl[0] * density / 1000.0, tl[1] * density / 1000.0)}
     return Intervals(LEVEL, method, {k: v for k, v in both.items() if k in vol_keys},

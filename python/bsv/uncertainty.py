@@ -257,6 +257,12 @@ def error_models() -> dict[str, ErrorModel]:
         raise UncertaintyError(f"{path}: cannot read the packaged error model ({exc}); reinstall bsv") from exc
 
 
+def model_for(depth: str = DEFAULT_DEPTH, segmentation: str = "oracle") -> str:
+    """The name of the error model for a depth sensor and a segmentation: ``depth``, or ``depth_camera``
+    for the camera (MediaPipe) segmentation, whose cut lines add their own error."""
+    return f"{depth}_camera" if segmentation == "camera" else depth
+
+
 def default_error_model(depth: str = DEFAULT_DEPTH) -> ErrorModel:
     """The packaged model of depth sensor ``depth`` ("l515" for real captures, "exact" for noise-free depth)."""
     models = error_models()
@@ -358,8 +364,33 @@ def asymmetry_text(value: float, interval: tuple[float, float] | None) -> str:
 
 
 __all__ = [
-    "DEFAULT_DEPTH", "DEFAULT_SAMPLES", "DEFAULT_SEED", "FLOOR_STD", "FRAME", "LEVEL", "PAPER_STD", "PARAMETERS", "CameraSpread", "ErrorModel",
-    "Intervals", "asymmetry_text", "calibration_spread", "check_covariance", "combine", "condition_on_floor", "default_error_model",
-    "error_models", "intervals", "is_additive", "paper_covariance", "perturb", "pose_delta", "quantities", "rodrigues",
-    "rotation_vector", "transform", "untransform",
+    "DEFAULT_DEPTH",
+    "DEFAULT_SAMPLES",
+    "DEFAULT_SEED",
+    "FLOOR_STD",
+    "FRAME",
+    "LEVEL",
+    "PAPER_STD",
+    "PARAMETERS",
+    "CameraSpread",
+    "ErrorModel",
+    "Intervals",
+    "asymmetry_text",
+    "calibration_spread",
+    "check_covariance",
+    "combine",
+    "condition_on_floor",
+    "default_error_model",
+    "error_models",
+    "intervals",
+    "is_additive",
+    "model_for",
+    "paper_covariance",
+    "perturb",
+    "pose_delta",
+    "quantities",
+    "rodrigues",
+    "rotation_vector",
+    "transform",
+    "untransform",
 ]

@@ -46,9 +46,10 @@ BENCH_SAMPLES: int = 100
 
 
 def record(fitted: Mesh, truth: Mesh, cameras: Sequence[CameraPose] | None, density: float = 1000.0,
-           samples: int = BENCH_SAMPLES) -> dict[str, Any]:
+           samples: int = BENCH_SAMPLES, segmentation: str = "oracle") -> dict[str, Any]:
     """What :func:`coverage_rows` needs from one registration (JSON-ready). ``cameras``: the capture's
-    true and estimated extrinsics in a calibrated condition (None: exact calibration)."""
+    true and estimated extrinsics in a calibrated condition (None: exact calibration); ``segmentation``
+    selects the error model (:func:`model_name`)."""
     from .. import volumes
 
     t0 = time.perf_counter()
@@ -57,7 +58,15 @@ def record(fitted: Mesh, truth: Mesh, cameras: Sequence[CameraPose] | None, dens
     cal = calibration_spread(fitted, spread, samples=samples, density=density) if spread else {}
     return {"estimate": quantities(volumes(fitted, islands=True, density=density)),
             "truth": quantities(volumes(truth, density=density)), "calibration_sd": cal,
-            "seconds": time.perf_counter() - t0}
+            "segmentation": segmentation, "seconds": time.perf_counter() - t0}
+
+
+def model_name(condition: str, segmentation: str = "oracle") -> str:
+    """The error model of a benchmark run: its condition's depth sensor (:data:`DEPTH_OF_CONDITION`),
+    suffixed ``_camera`` on the camera-segmentation path (:func:`bsv.uncertainty.model_for`)."""
+    from ..uncertainty import model_for
+
+    return model_for(DEPTH_OF_CONDITION.get(condition, "l515"), segmentation)
 
 
 def _asym(part: str) -> str:
@@ -67,14 +76,16 @@ def _asym(part: str) -> str:
 def coverage_rows(runs: Iterable[Run], models: Mapping[str, ErrorModel]) -> list[dict[str, Any]]:
     """One row per condition (see the module doc) with the model of its depth sensor (``models`` by
     :data:`DEPTH_OF_CONDITION`); runs without ``info["uncertainty"]`` are skipped."""
-    by: dict[str, list[dict[str, Any]]] = {}
+    by: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for r in runs:
         u = r.info.get("uncertainty") if r.ok else None
         if u:
-            by.setdefault(r.condition, []).append(u)
+            by.setdefault((r.condition, model_name(r.condition, u.get("segmentation", "oracle"))), []).append(u)
     rows = []
-    for cond, recs in by.items():
-        model = models[DEPTH_OF_CONDITION.get(cond, "l515")]
+    for (cond, name), recs in by.items():
+        if name not in models:
+            continue
+        model = models[name]
         inside_v, inside_a, hw_tl, hw_a, sym = [], [], [], [], []
         for u in recs:
             est, truth = u["estimate"], u["truth"]
@@ -93,7 +104,7 @@ def coverage_rows(runs: Iterable[Run], models: Mapping[str, ErrorModel]) -> list
                     hw_a.append((hi - lo) / 2.0)
                     if abs(truth[n]) <= SYMMETRIC_PTS:
                         sym.append(not (lo <= 0.0 <= hi))
-        rows.append({"condition": cond, "depth_model": DEPTH_OF_CONDITION.get(cond, "l515"), "runs": len(recs),
+        rows.append({"condition": cond, "depth_model": name, "runs": len(recs),
                      "segment_coverage_pct": _pct(inside_v), "asymmetry_coverage_pct": _pct(inside_a),
                      "trunk_limbs_halfwidth_pct": median(hw_tl) if hw_tl else None,
                      "asymmetry_halfwidth_pts": median(hw_a) if hw_a else None,

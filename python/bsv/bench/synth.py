@@ -149,7 +149,7 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
             if method == "bsv":  # the intervals' ingredients (bench/coverage.py)
                 from .coverage import record
 
-                run.info["uncertainty"] = record(fit.mesh, truth_surface, cams)
+                run.info["uncertainty"] = record(fit.mesh, truth_surface, cams, segmentation=segmentation)
         except Exception as exc:  # a failed registration is reported, the run goes on
             run.error = f"{type(exc).__name__}: {exc}"
             run.info = {"traceback": traceback.format_exc(limit=3)}

@@ -42,9 +42,6 @@ DEMO_OUTPUT = "demo.json"
 SEGMENTATION_DIR = "segmentation"
 #: Segmentation sources: MediaPipe on the colour image, or the scanner's ground-truth label image.
 SEGMENTATIONS = ("camera", "oracle")
-#: What the intervals' error model (derived with the scanner's true labels) does not cover, per segmentation.
-_UNCOVERED = {"camera": "not included: the error of the camera segmentation's cut lines (the model was derived "
-                        "with true labels), so the intervals are too narrow for it"}
 #: Segments dropped from the cloud unless ``keep_extremities`` (head, hands, feet).
 EXTREMITY_IDS = (1, 7, 8, 13, 14)
 
@@ -153,6 +150,20 @@ def _calibration(calibration: PathLike | None, capture_dir: Path, cameras: Seque
                     "translation": np.asarray(cc.translation, dtype=np.float64).tolist(),
                     "covariance": cc.covariance, "covariance_source": cc.covariance_source}
     return out
+
+
+def _intervals(reg: Registration, cameras: Sequence[Any], segmentation: str, density: float) -> Any:
+    """The 95 % intervals (:func:`bsv.uncertainty.intervals`) with the error model of an L515 and this
+    segmentation; without a packaged model for the segmentation, the true-label model, saying so."""
+    from .uncertainty import error_models, intervals, model_for
+
+    name = model_for("l515", segmentation)
+    models = error_models()
+    note = ""
+    if name not in models:
+        name, note = "l515", (f"not included: the error of the {segmentation} segmentation (no packaged model; the "
+                              "true-label model is used), so the intervals are too narrow for it")
+    return intervals(reg.mesh, reg.volumes, cameras, model=models[name], density=density, note=note)
 
 
 def _camera_spread(cam: str, extrinsics: dict[str, Any]) -> Any:
@@ -373,12 +384,10 @@ def process(
         lambda: bsv_register(cloud, template=template, progress=False, density=density, **register_params))
 
     vols = dict(reg.volumes)
-    from .uncertainty import intervals
 
     vols["intervals"] = steps.run(
         "intervals", "95 % intervals (calibration Monte Carlo + error model)",
-        lambda: intervals(reg.mesh, reg.volumes, [_camera_spread(c, extrinsics[c]) for c in cameras],
-                          density=density, note=_UNCOVERED.get(segmentation, ""))).to_json()
+        lambda: _intervals(reg, [_camera_spread(c, extrinsics[c]) for c in cameras], segmentation, density)).to_json()
     if refined:
         vols["calibration_refinement"] = {"method": "floor plane (pitch, roll, height)", "cameras": refined}
     vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report}

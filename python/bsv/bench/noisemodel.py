@@ -30,8 +30,12 @@ from ..errors import BenchError, OutputExistsError
 from ..uncertainty import Z95, transform
 from .common import Run
 
-#: Depth model -> the benchmark condition whose residuals define it.
-MODEL_CONDITIONS: dict[str, str] = {"exact": "noer", "l515": "l515"}
+#: Error model -> the benchmark condition and segmentation whose residuals define it
+#: (:func:`bsv.uncertainty.model_for`).
+MODEL_CONDITIONS: dict[str, tuple[str, str]] = {
+    "exact": ("noer", "oracle"), "l515": ("l515", "oracle"),
+    "exact_camera": ("noer", "camera"), "l515_camera": ("l515", "camera"),
+}
 #: Quantities never modelled (the fitted template's "whole" lacks the head, hands and feet of the truth's).
 EXCLUDED: tuple[str, ...] = ("whole",)
 
@@ -45,12 +49,13 @@ def t975(dof: int) -> float:
             + (3 * z**7 + 19 * z**5 + 17 * z**3 - 15 * z) / (384 * v**3))
 
 
-def residuals(runs: Sequence[Run], conditions: Sequence[str]) -> dict[str, list[float]]:
-    """Per quantity, ``T(estimate) - T(truth)`` over the bsv runs of ``conditions`` that kept their ingredients."""
+def residuals(runs: Sequence[Run], conditions: Sequence[str], segmentation: str = "oracle") -> dict[str, list[float]]:
+    """Per quantity, ``T(estimate) - T(truth)`` over the bsv runs of ``conditions`` and ``segmentation``
+    that kept their ingredients."""
     out: dict[str, list[float]] = {}
     for r in runs:
         u = r.info.get("uncertainty") if (r.ok and r.method == "bsv" and r.condition in conditions) else None
-        if not u:
+        if not u or u.get("segmentation", "oracle") != segmentation:
             continue
         for name, est in u["estimate"].items():
             tru = u["truth"].get(name)
@@ -62,12 +67,12 @@ def residuals(runs: Sequence[Run], conditions: Sequence[str]) -> dict[str, list[
     return out
 
 
-def derive_one(runs: Sequence[Run], condition: str) -> dict[str, Any]:
-    """One depth model (``{"condition", "quantities"}``) from the runs of ``condition``."""
-    res = residuals(runs, (condition,))
+def derive_one(runs: Sequence[Run], condition: str, segmentation: str = "oracle") -> dict[str, Any]:
+    """One error model (``{"condition", "segmentation", "quantities"}``) from the runs of ``condition``."""
+    res = residuals(runs, (condition,), segmentation)
     if not res:
-        raise BenchError(f"no bsv run of {condition} with interval ingredients (info['uncertainty']); "
-                         "run `bsv bench synth` with this version first")
+        raise BenchError(f"no bsv run of {condition} ({segmentation} segmentation) with interval ingredients "
+                         "(info['uncertainty']); run `bsv bench synth` with this version first")
     q: dict[str, Any] = {}
     for name, d in sorted(res.items()):
         n = len(d)
@@ -77,19 +82,26 @@ def derive_one(runs: Sequence[Run], condition: str) -> dict[str, Any]:
         s = float(np.std(a, ddof=1))
         q[name] = {"bias": float(a.mean()), "sd": s * math.sqrt(1 + 1 / n) * t975(n - 1) / Z95, "raw_sd": s, "n": n,
                    "space": "points" if name.startswith("asymmetry_") else "log"}
-    return {"condition": condition,
-            "description": f"synthetic cohort, {condition}, oracle segmentation, default template", "quantities": q}
+    return {"condition": condition, "segmentation": segmentation,
+            "description": f"synthetic cohort, {condition}, {segmentation} segmentation, default template", "quantities": q}
 
 
-def derive(runs: Sequence[Run], models: dict[str, str] | None = None, source: str = "") -> dict[str, Any]:
-    """The error-model document (``bsv/data/noise_model.json``): one model per depth sensor (``models``:
-    depth name -> condition, default :data:`MODEL_CONDITIONS`)."""
-    m = models or MODEL_CONDITIONS
+def derive(runs: Sequence[Run], models: dict[str, tuple[str, str]] | None = None, source: str = "") -> dict[str, Any]:
+    """The error-model document (``bsv/data/noise_model.json``): one model per depth sensor and
+    segmentation (``models``: name -> (condition, segmentation)); by default every model of
+    :data:`MODEL_CONDITIONS` that the runs hold (at least one)."""
+    if models is None:
+        have = {(r.condition, (r.info.get("uncertainty") or {}).get("segmentation", "oracle")) for r in runs}
+        m = {k: v for k, v in MODEL_CONDITIONS.items() if v in have}
+        if not m:
+            raise BenchError("no bsv run of noer or l515 with interval ingredients; run `bsv bench synth` first")
+    else:
+        m = models
     return {"derivation": {"source": source, "created": time.strftime("%Y-%m-%d"),
                            "rule": "per quantity and depth model: bias = mean of T(estimate) - T(truth); "
                                    "sd = s * sqrt(1 + 1/n) * t(0.975, n-1) / 1.96 (95 % prediction interval "
                                    "for a new subject); T = log, or the value for asymmetries (points)"},
-            "depth_models": {depth: derive_one(runs, cond) for depth, cond in m.items()}}
+            "depth_models": {name: derive_one(runs, cond, seg) for name, (cond, seg) in m.items()}}
 
 
 def load_runs(paths: Sequence[str | Path]) -> tuple[list[Run], str]:

@@ -156,7 +156,8 @@ def test_intervals_json_round_trip_and_asymmetry_text():
 
 
 def test_error_model_table_is_packaged_and_checked():
-    assert set(unc.error_models()) >= {"exact", "l515"}
+    assert set(unc.error_models()) == {"exact", "l515", "exact_camera", "l515_camera"}
+    assert unc.model_for("l515", "camera") == "l515_camera" and unc.model_for("l515", "oracle") == "l515"
     assert unc.default_error_model("exact").entries["trunk_limbs"][1] < unc.default_error_model().entries["trunk_limbs"][1]
     with pytest.raises(UncertaintyError, match="no error model"):
         unc.default_error_model("kinect")

@@ -14,8 +14,9 @@ Two independent sources are combined:
 2. **Depth noise and registration** (an error model): per quantity, the bias and the prediction standard
    deviation of the registration error measured on a synthetic cohort (``bsv/data/noise_model.json``,
    derived by :mod:`bsv.bench.noisemodel`; its ``derivation`` says from which runs). The table has one
-   model per depth sensor: ``l515`` (the L515's depth noise and flying pixels: what every real capture
-   gets, :data:`DEFAULT_DEPTH`) and ``exact`` (noise-free depth, for the benchmark's noer and cali).
+   model per depth sensor and segmentation (:func:`model_for`): ``l515`` (the L515's depth noise and
+   flying pixels: what every real capture gets, :data:`DEFAULT_DEPTH`) and ``exact`` (noise-free depth,
+   for the benchmark's noer and cali), each also as ``<depth>_camera`` for the MediaPipe segmentation.
 
 Quantities are compared in a transformed space where errors are close to additive and normal: the
 natural log of volumes, masses and ratios, the asymmetry itself (percentage points). With ``est`` the

@@ -15,7 +15,8 @@ extrinsics in cali/l5ca, none in noer/l515 where the calibration is exact) in ``
   :data:`SYMMETRIC_PTS` of 0, the percent reported distinguishable from symmetric (interval without 0).
 
 The error model must come from other subjects than the ones scored (see :mod:`bsv.bench.noisemodel`:
-the packaged model was derived from cohort seed 1; the benchmark's default seed is 0).
+the packaged models were derived from cohort seed 1, and seed 3 for the camera path; the benchmark's
+default seed is 0).
 """
 
 from __future__ import annotations

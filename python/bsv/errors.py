@@ -249,6 +249,13 @@ class BatchInputError(InputError):
     what to do); the batch does not start."""
 
 
+# --- uncertainty (bsv.uncertainty) ------------------------------------------------------------------
+
+
+class UncertaintyError(BsvError, ValueError):
+    """An interval cannot be computed: a bad covariance, error-model table or sample count; says which."""
+
+
 __all__ = [
     "AssetError", "BatchInputError", "BenchError", "BlurredImageError", "BsipError", "BsvError", "CalibrationError", "CalibrationFileError",
     "CaptureError", "FloorError", "FormatError", "FrontendError", "ImplausibleCaptureError", "InputError", "LabelError",
@@ -256,5 +263,5 @@ __all__ = [
     "PersonIsolationError", "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",
     "RegistrationInputError", "RegistrationNumericError", "RegistrationParameterError",
     "RegistrationResourceError", "RegistrationStopped", "ScanError", "SegmentationError", "SolveError",
-    "TemplateError", "VolumeError", "WriteError", "WrongMarkerError",
+    "TemplateError", "UncertaintyError", "VolumeError", "WriteError", "WrongMarkerError",
 ]

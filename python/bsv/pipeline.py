@@ -73,6 +73,14 @@ class ProcessResult:
         """The fitted, labelled template."""
         return self.registration.mesh
 
+    @property
+    def intervals(self) -> Any:
+        """The 95 % intervals of the volumes and ratios (:class:`bsv.uncertainty.Intervals`), or None."""
+        from .uncertainty import Intervals
+
+        doc = self.volumes.get("intervals")
+        return None if doc is None else Intervals.from_json(doc)
+
 
 class _Steps:
     """Prints each step with its wall time (or stays silent)."""
@@ -145,8 +153,34 @@ def _calibration(calibration: PathLike | None, capture_dir: Path, cameras: Seque
             raise CalibrationFileError(f"{p} has no camera {cam!r} (it has {sorted(c.cameras)}); calibrate that camera")
         cc = c.cameras[cam]
         out[cam] = {"rotation": np.asarray(cc.rotation, dtype=np.float64).tolist(),
-                    "translation": np.asarray(cc.translation, dtype=np.float64).tolist()}
+                    "translation": np.asarray(cc.translation, dtype=np.float64).tolist(),
+                    "covariance": cc.covariance, "covariance_source": cc.covariance_source}
     return out
+
+
+def _intervals(reg: Registration, cameras: Sequence[Any], segmentation: str, density: float) -> Any:
+    """The 95 % intervals (:func:`bsv.uncertainty.intervals`) with the error model of an L515 and this
+    segmentation; without a packaged model for the segmentation, the true-label model, saying so."""
+    from .uncertainty import error_models, intervals, model_for
+
+    name = model_for("l515", segmentation)
+    models = error_models()
+    note = ""
+    if name not in models:
+        name, note = "l515", (f"not included: the error of the {segmentation} segmentation (no packaged model; the "
+                              "true-label model is used), so the intervals are too narrow for it")
+    return intervals(reg.mesh, reg.volumes, cameras, model=models[name], density=density, note=note)
+
+
+def _camera_spread(cam: str, extrinsics: dict[str, Any]) -> Any:
+    """The camera's extrinsics and covariance for :func:`bsv.uncertainty.intervals` (the paper's
+    repeatability when calibration.json has no covariance)."""
+    from .uncertainty import CameraSpread, paper_covariance
+
+    cov = extrinsics.get("covariance")
+    return CameraSpread(cam, np.asarray(extrinsics["rotation"]), np.asarray(extrinsics["translation"]),
+                        paper_covariance(cam) if cov is None else np.asarray(cov),
+                        extrinsics.get("covariance_source") or "paper default (calibration.json has none)")
 
 
 def _read_label_png(path: Path) -> np.ndarray:
@@ -297,6 +331,7 @@ def process(
     bsip: bool = False,
     bsip_density: float | dict[str, float] | None = None,
     bsip_sex: str = "male",
+    refine_floor: bool = False,
     **register_params: Any,
 ) -> ProcessResult:
     """Segmentation, cloud, registration and volumes of a capture folder (``CAPTURE_DIR/<camera>/`` with
@@ -315,7 +350,11 @@ def process(
     :func:`build_cloud`. The floor check's warnings are printed and shown in the report.
 
     ``bsip``: also the body-segment inertial parameters of the fitted mesh (:func:`bsv.bsip`; densities
-    ``bsip_density``, de Leva's values for ``bsip_sex``): bsip.json, bsip.csv and model.osim (OpenSim)."""
+    ``bsip_density``, de Leva's values for ``bsip_sex``): bsip.json, bsip.csv and model.osim (OpenSim).
+
+    ``refine_floor`` (``--refine-floor``): correct each camera's pitch, roll and height with the floor it
+    sees (:func:`bsv.frontend.floorplane.refine_extrinsics`; the camera must see the floor) before building
+    the cloud; the correction is in volumes.json's ``calibration_refinement``."""
     from . import register as bsv_register
     from . import write_mesh, write_point_cloud
     from .frontend.capture import read_capture
@@ -349,6 +388,7 @@ def process(
     if segmentation == "camera":
         camera_segs, joints = steps.run("segment", "segmenting both cameras (MediaPipe) and their joint centres",
                                         lambda: _segment_cameras(data, extrinsics, cameras, segment_params or {}))
+    refined: dict[str, dict[str, Any]] = {}
     views = []
     for cam in cameras:
         d = data[cam]
@@ -361,7 +401,16 @@ def process(
                                            steps.run(f"segment_{cam}", f"segmenting the {cam} camera ({segmentation})",
                                                      segment_camera))
         seg_summary[cam] = summary
-        views.append({"name": cam, "intrinsics": d["intrinsics"].to_json(), "camera_to_world": extrinsics[cam],
+        if refine_floor:
+            from .frontend.floorplane import refine_extrinsics
+
+            def refine_camera(cam: str = cam, d: dict[str, Any] = d, person: np.ndarray = labels > 0
+                              ) -> tuple[dict[str, Any], dict[str, Any]]:
+                return refine_extrinsics(cam, extrinsics[cam], d["depth_m"], d["intrinsics"], person)
+
+            extrinsics[cam], refined[cam] = steps.run(
+                f"refine_{cam}", f"refining the {cam} camera's pitch, roll and height with the floor", refine_camera)
+        views.append({"name": cam, "intrinsics": d["intrinsics"].to_json(), "camera_to_world": {k: extrinsics[cam][k] for k in ("rotation", "translation")},
                       "depth": np.ascontiguousarray(d["depth_m"], dtype=np.float32), "labels": labels,
                       "colors": np.ascontiguousarray(d["colour"], dtype=np.uint8)})
     landmark_warnings = [w for seg in camera_segs.values() for w in seg.warnings]
@@ -387,6 +436,12 @@ def process(
         inertial = steps.run("bsip", "segment masses, centres of mass, inertia (bsip)",
                              lambda: compute_bsip(reg, bsip_density, sex=bsip_sex))
     vols = dict(reg.volumes)
+
+    vols["intervals"] = steps.run(
+        "intervals", "95 % intervals (calibration Monte Carlo + error model)",
+        lambda: _intervals(reg, [_camera_spread(c, extrinsics[c]) for c in cameras], segmentation, density)).to_json()
+    if refined:
+        vols["calibration_refinement"] = {"method": "floor plane (pitch, roll, height)", "cameras": refined}
     vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report}
     vols["joints_m"] = {name: j.to_json() for name, j in joints.items()}
     vols["warnings"] = landmark_warnings
@@ -428,21 +483,26 @@ def process(
 
 
 def compare(volumes: dict[str, Any], truth: dict[str, float]) -> list[dict[str, Any]]:
-    """Rows (segment, true_l, estimated_l, error_pct) for the trunk-and-limb segments and their total."""
+    """Rows (segment, true_l, estimated_l, error_pct and, with intervals, interval_l) for the trunk-and-limb
+    segments and their total."""
     est = volumes.get("volumes_l", {})
+    bands = (volumes.get("intervals") or {}).get("volumes_l", {})
     rows = []
     for name in (*TRUNK_LIMBS, "trunk_limbs"):
         if name in truth and name in est:
             t, e = float(truth[name]), float(est[name])
-            rows.append({"segment": name, "true_l": t, "estimated_l": e, "error_pct": (e - t) / t * 100.0})
+            rows.append({"segment": name, "true_l": t, "estimated_l": e, "error_pct": (e - t) / t * 100.0,
+                         **({"interval_l": list(bands[name])} if name in bands else {})})
     return rows
 
 
 def comparison_table(rows: Sequence[dict[str, Any]]) -> str:
-    """The comparison rows as a plain-text table."""
-    lines = [f"{'segment':<14}{'true L':>9}{'estimated L':>13}{'error %':>9}"]
+    """The comparison rows as a plain-text table (with the 95 % interval when the rows have one)."""
+    lines = [f"{'segment':<14}{'true L':>9}{'estimated L':>13}{'error %':>9}{'95 % interval L':>20}"]
     for r in rows:
-        lines.append(f"{r['segment']:<14}{r['true_l']:>9.3f}{r['estimated_l']:>13.3f}{r['error_pct']:>+9.2f}")
+        b = r.get("interval_l")
+        band = f"{b[0]:>9.3f} to {b[1]:.3f}" if b else ""
+        lines.append(f"{r['segment']:<14}{r['true_l']:>9.3f}{r['estimated_l']:>13.3f}{r['error_pct']:>+9.2f}{band:>20}")
     return "\n".join(lines)
 
 
@@ -489,6 +549,7 @@ def demo(
     if progress:
         print()
         print(comparison_table(res.comparison))
+        print("\n".join(asymmetry_lines(res.volumes)))
         print(f"\nreport: {res.files['report']}  (total {res.timings['total']:.1f} s)")
     return res
 
@@ -532,6 +593,8 @@ def main_process(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--cloud-param", action="append", default=[], metavar="KEY=VALUE",
                     help="cloud-building parameter, e.g. floor_margin_m=0.03, link_m=0.03 (repeatable)")
     ap.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="registration parameter (repeatable)")
+    ap.add_argument("--refine-floor", action="store_true",
+                    help="correct each camera's pitch, roll and height with the floor it sees (the cameras must see it)")
     ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT")
     ap.add_argument("--bsip", action="store_true",
                     help="also segment masses, centres of mass, inertia, joint centres and lengths: bsip.json, "
@@ -560,6 +623,7 @@ def main_process(argv: Sequence[str] | None = None) -> int:
                       overwrite=a.overwrite, keep_extremities=a.keep_extremities, sor=a.sor, sor_k=a.sor_k,
                       sor_std_ratio=a.sor_std, remove_floor=not a.keep_floor, isolate_person=not a.no_isolate,
                       cloud_params=_register_args(a.cloud_param, "--cloud-param"),
+                      refine_floor=a.refine_floor,
                       **_bsip_args(a), **_register_args(a.param))
         _print_process(res)
         return 0
@@ -584,11 +648,24 @@ def _bsip_args(a: argparse.Namespace) -> dict[str, Any]:
     return {"bsip": True, "bsip_density": density, "bsip_sex": a.bsip_sex}
 
 
+def asymmetry_lines(volumes: dict[str, Any]) -> list[str]:
+    """One line per left/right asymmetry of a volumes report, with its 95 % interval or "not
+    distinguishable from symmetric" (:func:`bsv.uncertainty.asymmetry_text`)."""
+    from .uncertainty import Intervals, asymmetry_text
+
+    iv = Intervals.from_json(volumes["intervals"]) if volumes.get("intervals") else None
+    return [f"{name:<26}{asymmetry_text(value, iv.get(name) if iv else None)}"
+            for name, value in (volumes.get("ratios") or {}).items() if name.startswith("asymmetry_") and value is not None]
+
+
 def _print_process(res: Any) -> None:
     v = res.volumes.get("volumes_l", {})
+    iv = res.intervals
     for name in (*TRUNK_LIMBS, "trunk_limbs"):
         if name in v:
-            print(f"{name:<14}{v[name]:>9.3f} L")
+            b = iv.get(name) if iv else None
+            print(f"{name:<14}{v[name]:>9.3f} L" + (f"  (95 % {b[0]:.3f} to {b[1]:.3f})" if b else ""))
+    print("\n".join(asymmetry_lines(res.volumes)))
     if res.bsip is not None:
         print(res.bsip.table())
     print(f"report: {res.files['report']}")
@@ -637,6 +714,7 @@ def main_demo(argv: Sequence[str] | None = None) -> int:
                    **_register_args(a.param))
         if a.quiet:
             print(comparison_table(res.comparison))
+            print("\n".join(asymmetry_lines(res.volumes)))
         if res.bsip is not None:
             print(res.bsip.table())
         return 0
@@ -649,6 +727,7 @@ __all__ = [
     "OUTPUTS",
     "SEGMENTATION_DIR",
     "ProcessResult",
+    "asymmetry_lines",
     "build_cloud",
     "cleaning_summary",
     "compare",

@@ -232,19 +232,28 @@ def write_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", o
     _cloud_figure(paths["cloud_over_mesh"], mesh, flabels, result.cloud)
     _volume_figure(paths["volumes"], volumes_l, truth)
 
-    # Volumes table (segments, then aggregates).
+    # Volumes table (segments, then aggregates), each with its 95 % interval (bsv.uncertainty).
+    from .uncertainty import Intervals, asymmetry_text
+
+    iv = Intervals.from_json(vols["intervals"]) if vols.get("intervals") else None
+
+    def band(name: str, digits: int = 3) -> str:
+        b = iv.get(name) if iv else None
+        return f"{_fmt(b[0], digits)} to {_fmt(b[1], digits)}" if b else "n/a"
+
     rows = []
     for name, v in volumes_l.items():
-        r = [html.escape(name), _fmt(v)]
+        r = [html.escape(name), _fmt(v), band(name)]
         if truth:
             t = truth.get(name)
             r += [_fmt(t) if t is not None else "", _fmt((v - t) / t * 100, 2) if t else ""]
         rows.append(r)
-    vol_table = _table(["segment", "volume (L)"] + (["true (L)", "error %"] if truth else []), rows)
+    vol_table = _table(["segment", "volume (L)", "95 % interval"] + (["true (L)", "error %"] if truth else []), rows)
     ratios = vols.get("ratios", {}) or {}
-    ratio_rows = [[html.escape(k), _fmt(v)] for k, v in ratios.items() if not k.startswith("asymmetry_")]
-    asym_rows = [[html.escape(k[len("asymmetry_"):].removesuffix("_pct")), _fmt(v, 1)] for k, v in ratios.items()
-                 if k.startswith("asymmetry_")]
+    ratio_rows = [[html.escape(k), _fmt(v), band(k)] for k, v in ratios.items() if not k.startswith("asymmetry_")]
+    asym_rows = [[html.escape(k[len("asymmetry_"):].removesuffix("_pct")),
+                  html.escape(asymmetry_text(v, iv.get(k) if iv else None)) if v is not None else _fmt(v, 1)]
+                 for k, v in ratios.items() if k.startswith("asymmetry_")]
     mass = vols.get("mass_kg")
     density = vols.get("density_kg_m3", 1000.0)
     measured = ", ".join(_segments(volumes_l))
@@ -256,8 +265,11 @@ def write_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", o
     seg_rows = [[html.escape(k), html.escape(str(s.get("source", ""))), s.get("labelled_pixels", "")]
                 for k, s in result.segmentation.items()]
     timing_rows = [[html.escape(k), _fmt(v, 2)] for k, v in result.timings.items()]
+    mband = iv.get("mass_trunk_limbs_kg") if iv else None
     mass_html = (f"<p><b>Estimated mass</b> of the measured segments ({html.escape(measured)}): "
-                 f"<b>{_fmt(mass, 1)} kg</b> (volume x {_fmt(density, 0)} kg/m&sup3;).</p>") if mass is not None else ""
+                 f"<b>{_fmt(mass, 1)} kg</b> (volume x {_fmt(density, 0)} kg/m&sup3;)"
+                 + (f"; trunk and limbs 95 % interval {_fmt(mband[0], 1)} to {_fmt(mband[1], 1)} kg" if mband else "")
+                 + ".</p>") if mass is not None else ""
     notes = "".join(f"<li>{html.escape(str(n))}</li>" for n in vols.get("notes", []) or [])
     doc = f"""<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>{html.escape(title)}</title><style>{CSS}</style></head><body>
@@ -270,9 +282,10 @@ def write_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", o
 </div>
 <div class="row"><div><img src="volumes.png" alt="segment volumes" style="max-height:300px"></div></div>
 {mass_html}
+{f'<p class="note">95 % intervals: {html.escape(iv.method)}.</p>' if iv else ""}
 <div class="row">
 <div><h2>Volumes</h2>{vol_table}</div>
-<div><h2>Distal / proximal ratios</h2>{_table(["ratio", "value"], ratio_rows)}
+<div><h2>Distal / proximal ratios</h2>{_table(["ratio", "value", "95 % interval"], ratio_rows)}
 <h2>Left / right asymmetry</h2>{_table(["part", "(L-R)/mean %"], asym_rows)}</div>
 <div><h2>Cloud</h2>{_table(["camera", "mask px", "points", "SOR removed", "dropped", "kept"], cloud_rows)}
 <h2>Segmentation</h2>{_table(["camera", "source", "labelled px"], seg_rows)}{_landmark_warnings_html(vols)}

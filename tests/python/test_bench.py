@@ -25,8 +25,10 @@ from bsv.bench.tables import (
     paper_table,
     read_csv,
     rows,
+    signed_table,
     summarise,
     target_check,
+    worst_table,
     write_csv,
     write_json,
 )
@@ -85,8 +87,12 @@ def test_markdown_tables_show_paper_values_and_marks() -> None:
     assert "98.00 ✓" in arm and f"{P2PV_BUFF['arm_l']:.2f}" in arm
     assert "+1.00 ± 4.24" in bias_table(s)                          # l5ca signed: +4 and -2 -> mean +1
     checks = {name: ok for name, ok, _ in target_check(s)}
-    assert checks["noer: trunk_limbs mean RVE <= 0.6 %"] is False
-    assert checks["l5ca: trunk_limbs excess over floor <= 0.5 %"] is False
+    assert checks["noer: trunk_limbs mean RVE <= 0.5 %"] is False
+    assert checks["l5ca: trunk_limbs excess over floor <= 0.3 %"] is False
+    assert "noer: no subject's segment worse than 6.0 %" in checks
+    worst = worst_table(rows(_runs()))
+    assert "| trunk_limbs |" in worst and "(" in worst                # the worst subject is named
+    assert "| torso |" in signed_table(s)
 
 
 def test_csv_and_json_writers_round_trip(tmp_path: Path) -> None:

@@ -86,11 +86,18 @@ def test_extrinsics_recovered_both_cameras(frames, tmp_path):
     assert set(front["intrinsics"]) >= {"width", "height", "fx", "fy", "cx", "cy", "coeffs", "k1"}
     assert np.asarray(front["camera_to_world"]["rotation"]).shape == (3, 3)
     assert doc["marker"]["id"] == 336 and doc["marker"]["board_thickness_m"] == 0.006
+    # issue 13: the frames' repeatability as a 6 x 6 covariance (8 noisy frames of a still board: well
+    # under a millimetre and 0.05 deg), read back with the calibration
+    cov = front["extrinsics_covariance"]
+    assert cov["source"] == "frames" and np.asarray(cov["matrix"]).shape == (6, 6)
+    sd = np.sqrt(np.diag(cov["matrix"]))
+    assert np.all(sd[:3] < 1e-3) and np.all(np.degrees(sd[3:]) < 0.05) and np.all(sd > 0)
     # the back camera really looks toward +Z, the front one toward -Z (world frame of DESIGN.md)
     assert np.asarray(doc["cameras"]["back"]["camera_to_world"]["rotation"])[2, 2] > 0.99
     assert np.asarray(front["camera_to_world"]["rotation"])[2, 2] < -0.99
     again = cal.read_calibration(out)
     np.testing.assert_allclose(again.cameras["back"].translation, result.cameras["back"].translation)
+    np.testing.assert_allclose(again.cameras["back"].covariance, result.cameras["back"].covariance)
     assert again.board == BOARD
     from bsv.errors import OutputExistsError
 

@@ -15,6 +15,7 @@ from .joints import summarise as joint_summary
 from .tables import (
     bias_table,
     cloud_table,
+    coverage_md,
     p2pv_table,
     paper_table,
     rows,
@@ -31,7 +32,7 @@ from .tables import (
 #: Files every benchmark writes into its output folder (besides the figures, :data:`FIGURE_PATTERNS`).
 OUTPUT_FILES = ("results.json", "results.csv", "report.md")
 #: Glob patterns of the figures a benchmark writes.
-FIGURE_PATTERNS = ("rve_per_segment.png", "trunk_limbs_hist_*.png", "joint_errors.png")
+FIGURE_PATTERNS = ("rve_per_segment.png", "trunk_limbs_hist_*.png", "joint_errors.png", "coverage.png")
 
 
 def existing_outputs(out: str | Path) -> list[str]:
@@ -70,13 +71,14 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
     failures = [{"subject": r.subject, "condition": r.condition, "method": r.method, "error": r.error}
                 for r in runs if not r.ok]
     checks = target_check(summary) if "bsv" in summary else []
+    coverage, coverage_lines = coverage_md(runs)
     from .. import __version__
 
     write_json(d / "results.json", {
         "bsv_version": __version__, "benchmark": title, "config": dict(config),
         "created": time.strftime("%Y-%m-%d %H:%M:%S"), "machine": platform.platform(),
         "wall_seconds": wall_seconds, "subjects": list(infos), "runs": [r.to_json() for r in runs],
-        "summary": summary, "failures": failures, "joints": joint_summary(runs),
+        "summary": summary, "failures": failures, "coverage": coverage, "joints": joint_summary(runs),
         "targets": [{"target": n, "met": ok, "measured": ev} for n, ok, ev in checks],
     })
     write_csv(d / "results.csv", table)
@@ -85,6 +87,10 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
         figs.append(rve_bars(summary, d / "rve_per_segment.png").name)
         for m in summary:
             figs.append(trunk_limbs_histogram(table, d / f"trunk_limbs_hist_{m}.png", m).name)
+    if coverage:
+        from .coverage import coverage_figure
+
+        figs.append(coverage_figure(coverage, d / "coverage.png").name)
     n_ok = sum(r.ok for r in runs)
     md = [f"# {title}", "",
           (f"bsv {__version__}; {len(infos)} subjects, {n_ok}/{len(runs)} registrations succeeded; "
@@ -117,6 +123,7 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
                 "`uncleaned`: the lab path's cloud of the person mask alone, before floor removal, person isolation "
                 "and outlier removal (what the mask let through)."),
                "", far, ""]
+    md += coverage_lines
     if checks:
         md += ["## Targets (bsv)", "", targets_md(checks), ""]
     if failures:

@@ -136,8 +136,9 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
     need_files = condition in CALIBRATED or lab
     with tempfile.TemporaryDirectory(prefix="bsv-bench-") as tmp:
         raw = scan(mesh, condition, seed, images=tmp if need_files else None, overwrite=True, room=room)
-        if condition in CALIBRATED:
-            floor = floor_volumes(mesh if truth_mesh is None else truth_mesh, read_camera_poses(tmp))
+        cams = read_camera_poses(tmp) if condition in CALIBRATED else None
+        if cams is not None:
+            floor = floor_volumes(mesh if truth_mesh is None else truth_mesh, cams)
         if lab:
             from .camera import build_views_cloud, capture_views
 
@@ -163,6 +164,10 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
         try:
             fit = register_method(method, cloud, template, params)
             run.estimated_l, run.seconds, run.info, run.ok = fit.volumes_l, fit.seconds, fit.info, True
+            if method == "bsv":  # the intervals' ingredients (bench/coverage.py)
+                from .coverage import record
+
+                run.info["uncertainty"] = record(fit.mesh, truth_surface, cams, segmentation=segmentation)
         except Exception as exc:  # a failed registration is reported, the run goes on
             run.error = f"{type(exc).__name__}: {exc}"
             run.info = {"traceback": traceback.format_exc(limit=3)}

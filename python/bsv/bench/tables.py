@@ -336,3 +336,14 @@ def _clean(x: Any) -> Any:
     if isinstance(x, np.ndarray):
         return _clean(x.tolist())
     return x
+
+
+def coverage_md(runs: Sequence[Run]) -> tuple[list[dict[str, Any]], list[str]]:
+    """Coverage rows of the 95 % intervals per condition and their report section (:mod:`bsv.bench.coverage`,
+    with the packaged error model); empty when no run kept the intervals' ingredients."""
+    from ..uncertainty import error_models
+    from .coverage import coverage_markdown, coverage_rows
+
+    models = error_models()
+    table = coverage_rows(runs, models)
+    return table, coverage_markdown(table, models)

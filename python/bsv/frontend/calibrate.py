@@ -8,10 +8,19 @@ camera-to-world transform of DESIGN.md's world frame. ``calibration.json``::
 
     {"cameras": {"front": {"intrinsics": {...}, "camera_to_world": {"rotation": [[3x3 rows]],
      "translation": [x, y, z]}, "serial": ..., "frames": n, "reprojection_rms_px": ...,
-     "spread": {...}}, "back": {...}}, "marker": {...}}
+     "spread": {...}, "extrinsics_covariance": {...}}, "back": {...}}, "marker": {...}}
 
 ``camera_to_world`` maps camera-frame points (OpenCV: +X right, +Y down, +Z forward) to the world:
 ``p_world = rotation @ p_cam + translation``.
+
+``extrinsics_covariance`` (read by :mod:`bsv.uncertainty`; files without it are accepted) is the 6 x 6
+covariance of the camera's extrinsics: ``{"parameters": ["tx_m", "ty_m", "tz_m", "rx_rad", "ry_rad",
+"rz_rad"], "frame": ..., "matrix": [[6 x 6]], "source": "frames" | "paper default"}``. The parameters
+are a small pose change in the camera frame composed on the right (``R' = R Rodrigues(r)``,
+``t' = R t_delta + t``: :data:`bsv.uncertainty.FRAME`). With at least :data:`MIN_COVARIANCE_FRAMES`
+frames it is the sample covariance of the per-frame poses about the result (the repeatability of one
+frame: an upper bound for the frames' noise, a lower bound for a new session's board placement); with
+fewer, the paper's standard deviations (:data:`bsv.uncertainty.PAPER_STD`).
 """
 
 from __future__ import annotations
@@ -295,10 +304,16 @@ class CameraCalibration:
     reprojection_rms_px: float = 0.0
     spread_mm: float = 0.0
     spread_deg: float = 0.0
+    #: 6 x 6 covariance of the extrinsics (module doc); None when the file had none.
+    covariance: np.ndarray | None = None
+    #: Where the covariance comes from: "frames" or "paper default".
+    covariance_source: str = ""
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready entry of calibration.json."""
-        return {
+        cov = {} if self.covariance is None else {"extrinsics_covariance": covariance_json(
+            self.covariance, self.covariance_source)}
+        return {**cov,
             "intrinsics": self.intrinsics.to_json(),
             "camera_to_world": {"rotation": np.asarray(self.rotation).tolist(),
                                 "translation": np.asarray(self.translation).tolist()},
@@ -330,6 +345,49 @@ class Calibration:
         return p
 
 
+#: Fewest frames whose per-frame poses give the covariance; fewer frames get the paper's repeatability.
+MIN_COVARIANCE_FRAMES = 3
+
+
+def covariance_json(cov: np.ndarray, source: str) -> dict[str, Any]:
+    """The ``extrinsics_covariance`` entry of calibration.json (module doc)."""
+    from ..uncertainty import FRAME, PARAMETERS
+
+    return {"parameters": list(PARAMETERS), "frame": FRAME, "matrix": np.asarray(cov, dtype=np.float64).tolist(),
+            "source": source}
+
+
+def _read_covariance(doc: Any, where: str) -> tuple[np.ndarray | None, str]:
+    """(covariance, source) of an ``extrinsics_covariance`` entry; (None, "") when absent (older files)."""
+    from ..errors import UncertaintyError
+    from ..uncertainty import PARAMETERS, check_covariance
+
+    if doc is None:
+        return None, ""
+    if not isinstance(doc, dict) or list(doc.get("parameters", PARAMETERS)) != list(PARAMETERS):
+        raise CalibrationFileError(f"{where}: extrinsics_covariance must be {{'parameters': {list(PARAMETERS)}, "
+                                   "'matrix': 6 x 6}; recalibrate with `bsv calibrate` or delete the entry")
+    try:
+        return check_covariance(doc.get("matrix"), f"{where} extrinsics_covariance"), str(doc.get("source", ""))
+    except UncertaintyError as exc:
+        raise CalibrationFileError(f"{exc}; recalibrate with `bsv calibrate` or delete the entry") from exc
+
+
+def frames_covariance(side: str, rotations: Sequence[np.ndarray], translations: Sequence[np.ndarray],
+                      r_ref: np.ndarray, t_ref: np.ndarray) -> tuple[np.ndarray, str]:
+    """(covariance, source) of a camera's extrinsics: the sample covariance of the per-frame camera-to-world
+    poses about the result (r_ref, t_ref) with at least :data:`MIN_COVARIANCE_FRAMES` frames, else the
+    paper's repeatability for ``side``."""
+    from ..uncertainty import paper_covariance, pose_delta
+
+    if len(rotations) < MIN_COVARIANCE_FRAMES:
+        return paper_covariance(side), "paper default"
+    d = np.array([pose_delta(r_ref, t_ref, r, t) for r, t in zip(rotations, translations, strict=True)])
+    d = d - d.mean(axis=0)
+    cov = d.T @ d / (len(d) - 1)
+    return (cov + cov.T) / 2.0, "frames"
+
+
 def read_calibration(path: PathLike) -> Calibration:
     """Reads calibration.json (as written by :meth:`Calibration.write` or the virtual scanner)."""
     p = Path(path)
@@ -350,8 +408,10 @@ def read_calibration(path: PathLike) -> Calibration:
             raise CalibrationFileError(f"{p}: camera {name!r} lacks a valid camera_to_world rotation/translation") from e
         if not np.isfinite(r).all() or abs(np.linalg.det(r) - 1.0) > 1e-3:
             raise CalibrationFileError(f"{p}: camera {name!r} rotation is not a rotation matrix")
+        cov, source = _read_covariance(c.get("extrinsics_covariance"), f"{p} camera {name!r}")
         cams[name] = CameraCalibration(name, Intrinsics.from_json(c.get("intrinsics"), f"{p} camera {name!r}"), r, t,
-                                       serial=c.get("serial"), frames=int(c.get("frames", 0)))
+                                       serial=c.get("serial"), frames=int(c.get("frames", 0)), covariance=cov,
+                                       covariance_source=source)
     m = doc.get("marker") or {}
     board = Board(MarkerSpec(m.get("dictionary", "DICT_ARUCO_ORIGINAL"), int(m.get("id", 336)), float(m.get("size_m", 0.16))),
                   float(m.get("centre_height_m", 1.0)), float(m.get("board_thickness_m", 0.005)),
@@ -436,13 +496,15 @@ def calibrate_camera(
         r_cm, t_cm = average_poses(rs, ts)
     r_wm, t_wm = board.marker_to_world(side)
     r_wc, t_wc = camera_to_world(r_cm, t_cm, r_wm, t_wm)
-    centres = [camera_to_world(r, t, r_wm, t_wm)[1] for r, t in zip(rs, ts, strict=True)]
+    poses = [camera_to_world(r, t, r_wm, t_wm) for r, t in zip(rs, ts, strict=True)]
+    centres = [p[1] for p in poses]
     _check_frames_agree(side, centres, rs, max_frame_mm, max_frame_deg)
+    cov, cov_source = frames_covariance(side, [p[0] for p in poses], centres, r_wc, t_wc)
     spread_mm = float(np.sqrt(np.mean(np.sum((np.asarray(centres) - t_wc) ** 2, axis=1)))) * 1000.0
     spread_deg = float(np.sqrt(np.mean([rotation_angle_deg(r, r_cm) ** 2 for r in rs])))
     return CameraCalibration(side, intrinsics, r_wc, t_wc, serial=serial, frames=len(rs),
                              reprojection_rms_px=float(np.sqrt(np.mean(np.square(errs)))),
-                             spread_mm=spread_mm, spread_deg=spread_deg)
+                             spread_mm=spread_mm, spread_deg=spread_deg, covariance=cov, covariance_source=cov_source)
 
 
 def calibrate(
@@ -630,6 +692,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     for k, c in cal.cameras.items():
         print(f"{k}: centre {np.round(c.translation, 4).tolist()} m, {c.frames} frames, reprojection "
               f"{c.reprojection_rms_px:.3f} px, spread {c.spread_mm:.2f} mm / {c.spread_deg:.3f} deg")
+        if c.covariance is not None:
+            sd = np.sqrt(np.diag(c.covariance))
+            print(f"{k}: extrinsics covariance ({c.covariance_source}): 1 sd translation "
+                  f"{np.round(sd[:3] * 1000, 3).tolist()} mm, rotation {np.round(np.degrees(sd[3:]), 3).tolist()} deg")
     print(f"wrote {a.out}")
     return 0
 

@@ -1,0 +1,397 @@
+"""95 % intervals of every volume, aggregate, ratio and asymmetry of a fitted mesh.
+
+Two independent sources are combined:
+
+1. **Calibration** (Monte Carlo). Each camera's extrinsics carry a 6 x 6 covariance (``calibration.json``,
+   or the paper's repeatability, :data:`PAPER_STD`). Parameterisation, shared with
+   :mod:`bsv.frontend.calibrate`: ``delta = (tx, ty, tz, rx, ry, rz)`` in metres and radians, in the
+   camera frame of OpenCV (+X right = transversal, +Y down = vertical, +Z optical axis = longitudinal),
+   composed on the right: ``E_alt = E o delta``, i.e. ``R_alt = R Rodrigues(r)``, ``t_alt = R t_delta + t``
+   (the Cali model of DESIGN.md; its "x vertical, y transversal" axes of the portrait sensor are our Y and
+   X). Each draw moves every camera's part of the fitted surface rigidly by ``E_alt o E^-1`` with the
+   blending weights of the calibration floor (:func:`bsv.bench.floor.camera_weights`) and re-measures it
+   with :func:`bsv.volumes`: no new registration. A fixed seed makes it reproducible.
+2. **Depth noise and registration** (an error model): per quantity, the bias and the prediction standard
+   deviation of the registration error measured on a synthetic cohort (``bsv/data/noise_model.json``,
+   derived by :mod:`bsv.bench.noisemodel`; its ``derivation`` says from which runs). The table has one
+   model per depth sensor and segmentation (:func:`model_for`): ``l515`` (the L515's depth noise and
+   flying pixels: what every real capture gets, :data:`DEFAULT_DEPTH`) and ``exact`` (noise-free depth,
+   for the benchmark's noer and cali), each also as ``<depth>_camera`` for the MediaPipe segmentation.
+
+Quantities are compared in a transformed space where errors are close to additive and normal: the
+natural log of volumes, masses and ratios, the asymmetry itself (percentage points). With ``est`` the
+measured value, the truth lies in ``T^-1(T(est) - bias +- 1.96 sqrt(sd_model^2 + sd_calibration^2))``.
+An asymmetry whose interval contains 0 is "not distinguishable from symmetric" (:func:`asymmetry_text`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from functools import lru_cache
+from importlib import resources
+from typing import Any
+
+import numpy as np
+
+from .errors import UncertaintyError
+from .types import Mesh
+
+#: Confidence level of every interval and its two-sided normal quantile.
+LEVEL: float = 0.95
+Z95: float = 1.959963984540054
+
+#: Names of the 6 extrinsic parameters of a covariance (order of its rows and columns).
+PARAMETERS: tuple[str, ...] = ("tx_m", "ty_m", "tz_m", "rx_rad", "ry_rad", "rz_rad")
+#: The parameterisation, written next to every covariance in calibration.json.
+FRAME: str = ("delta in the camera frame (OpenCV: +X right, +Y down, +Z optical axis), composed on the right: "
+              "R' = R Rodrigues(r), t' = R t_delta + t (camera_to_world)")
+
+#: The paper's calibration repeatability (DESIGN.md "Cali"), one standard deviation per parameter of
+#: :data:`PARAMETERS` in our camera frame (paper x vertical -> our Y, paper y transversal -> our X).
+PAPER_STD: dict[str, tuple[float, ...]] = {
+    "front": (0.0003, 0.0011, 0.0006, math.radians(0.01), math.radians(0.03), math.radians(0.21)),
+    "back": (0.0002, 0.0015, 0.0034, math.radians(0.11), math.radians(0.28), math.radians(0.10)),
+}
+
+#: The error model of real captures (an L515's depth noise).
+DEFAULT_DEPTH: str = "l515"
+
+#: Monte Carlo draws of the calibration part and their seed (fixed: the same input gives the same interval).
+DEFAULT_SAMPLES: int = 200
+DEFAULT_SEED: int = 20_260_613
+
+
+def paper_covariance(camera: str) -> np.ndarray:
+    """Diagonal 6 x 6 covariance of the paper's repeatability for ``camera`` ("front"/"back"; any other
+    name gets the larger of the two per parameter)."""
+    std = PAPER_STD.get(camera) or tuple(max(a, b) for a, b in zip(PAPER_STD["front"], PAPER_STD["back"], strict=True))
+    return np.diag(np.square(np.asarray(std, dtype=np.float64)))
+
+
+def check_covariance(cov: Any, where: str) -> np.ndarray:
+    """The covariance as a symmetric positive semi-definite 6 x 6 float array, or UncertaintyError naming ``where``."""
+    try:
+        c = np.asarray(cov, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise UncertaintyError(f"{where}: covariance is not a 6 x 6 array of numbers ({exc})") from exc
+    if c.shape != (6, 6) or not np.isfinite(c).all():
+        raise UncertaintyError(f"{where}: covariance must be a finite 6 x 6 matrix, got shape {c.shape}")
+    if not np.allclose(c, c.T, rtol=1e-6, atol=1e-15):
+        raise UncertaintyError(f"{where}: covariance is not symmetric")
+    if np.linalg.eigvalsh(c).min() < -1e-12 * max(float(np.abs(c).max()), 1e-300):
+        raise UncertaintyError(f"{where}: covariance is not positive semi-definite")
+    return c
+
+
+def rodrigues(r: np.ndarray) -> np.ndarray:
+    """Rotation matrix of the rotation vector ``r`` (axis times angle, radians)."""
+    r = np.asarray(r, dtype=np.float64)
+    th = float(np.linalg.norm(r))
+    k = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+    if th < 1e-12:
+        return np.eye(3) + k
+    k /= th
+    return np.eye(3) + math.sin(th) * k + (1.0 - math.cos(th)) * (k @ k)
+
+
+def rotation_vector(rot: np.ndarray) -> np.ndarray:
+    """Rotation vector (radians) of a rotation matrix (the inverse of :func:`rodrigues` for angles < pi)."""
+    c = float(np.clip((np.trace(rot) - 1.0) / 2.0, -1.0, 1.0))
+    th = math.acos(c)
+    w = np.array([rot[2, 1] - rot[1, 2], rot[0, 2] - rot[2, 0], rot[1, 0] - rot[0, 1]])
+    if th < 1e-9:
+        return w / 2.0
+    return w * (th / (2.0 * math.sin(th)))
+
+
+def pose_delta(r_ref: np.ndarray, t_ref: np.ndarray, r: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The 6 parameters (:data:`PARAMETERS`) of pose (r, t) relative to (r_ref, t_ref): ``E = E_ref o delta``."""
+    rd = np.asarray(r_ref).T @ np.asarray(r)
+    td = np.asarray(r_ref).T @ (np.asarray(t) - np.asarray(t_ref))
+    return np.concatenate([td, rotation_vector(rd)])
+
+
+def perturb(r: np.ndarray, t: np.ndarray, delta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The pose ``E o delta`` (see :data:`FRAME`)."""
+    return np.asarray(r) @ rodrigues(delta[3:]), np.asarray(r) @ np.asarray(delta[:3]) + np.asarray(t)
+
+
+#: Precision of a floor-plane refinement (:mod:`bsv.frontend.floorplane`): height (m), tilts (rad); a
+#: conservative allowance for real floors (the virtual rig's floor gives ~0.05 mm / 0.005 deg).
+FLOOR_STD: tuple[float, float, float] = (0.001, math.radians(0.05), math.radians(0.05))
+
+
+def condition_on_floor(cov: np.ndarray, rotation: np.ndarray, std: Sequence[float] = FLOOR_STD) -> np.ndarray:
+    """The covariance after the floor has measured the camera's height and its tilts about the world's
+    horizontal x and z axes with standard deviations ``std``: Gaussian conditioning
+    ``S - S A^T (A S A^T + N)^-1 A S``, ``A`` the rows of those three world quantities in :data:`PARAMETERS`."""
+    r = np.asarray(rotation, dtype=np.float64)
+    a = np.zeros((3, 6))
+    a[0, :3] = r.T @ np.array([0.0, 1.0, 0.0])  # world height of the translation
+    a[1, 3:] = r.T @ np.array([1.0, 0.0, 0.0])  # rotation about the world x axis
+    a[2, 3:] = r.T @ np.array([0.0, 0.0, 1.0])  # rotation about the world z axis
+    s = np.asarray(cov, dtype=np.float64)
+    k = s @ a.T @ np.linalg.inv(a @ s @ a.T + np.diag(np.square(np.asarray(std, dtype=np.float64))))
+    out = s - k @ a @ s
+    return (out + out.T) / 2.0
+
+
+@dataclass(frozen=True)
+class CameraSpread:
+    """One camera's camera-to-world extrinsics and their 6 x 6 covariance (:data:`FRAME`)."""
+
+    name: str
+    rotation: np.ndarray
+    translation: np.ndarray
+    covariance: np.ndarray
+    #: Where the covariance comes from ("frames", "paper default", ...).
+    source: str = "paper default"
+
+
+# ----------------------------------------------------------------------------------------------------
+# Quantities and their transformed space
+
+
+def is_additive(name: str) -> bool:
+    """Whether quantity ``name`` is compared additively (asymmetries, in points) rather than in log."""
+    return name.startswith("asymmetry_")
+
+
+def quantities(volumes: Mapping[str, Any]) -> dict[str, float]:
+    """The flat {name: value} of a volumes report's ``volumes_l`` and ``ratios`` (finite values only)."""
+    out: dict[str, float] = {}
+    for key in ("volumes_l", "ratios"):
+        for k, v in (volumes.get(key) or {}).items():
+            if v is not None and math.isfinite(float(v)):
+                out[k] = float(v)
+    return out
+
+
+def transform(name: str, value: float) -> float:
+    """The quantity in its comparison space: the value for asymmetries, its natural log otherwise."""
+    if is_additive(name):
+        return float(value)
+    return math.log(value) if value > 0 else float("nan")
+
+
+def untransform(name: str, value: float) -> float:
+    """The inverse of :func:`transform`."""
+    return float(value) if is_additive(name) else math.exp(value)
+
+
+# ----------------------------------------------------------------------------------------------------
+# Calibration part
+
+
+def calibration_spread(mesh: Mesh, cameras: Sequence[CameraSpread], *, samples: int = DEFAULT_SAMPLES,
+                       seed: int = DEFAULT_SEED, density: float = 1000.0) -> dict[str, float]:
+    """Per quantity, the standard deviation (in the comparison space) of the re-measured fitted mesh over
+    ``samples`` calibration draws: each camera's extrinsics perturbed within its covariance, its part of
+    the surface moved rigidly (floor weights), :func:`bsv.volumes` with the fitted mesh's settings."""
+    from . import volumes
+    from .bench.floor import CameraPose, camera_weights, vertex_normals
+
+    if samples < 2:
+        raise UncertaintyError(f"samples={samples}: the calibration Monte Carlo needs at least 2 draws")
+    if not cameras:
+        return {}
+    covs = [check_covariance(c.covariance, f"camera {c.name!r}") for c in cameras]
+    nominal = quantities(volumes(mesh, islands=True, density=density))
+    w = camera_weights(vertex_normals(mesh.vertices, mesh.faces),
+                       [CameraPose(c.name, c.rotation, c.translation, c.rotation, c.translation) for c in cameras])
+    rng = np.random.default_rng(seed)
+    names = sorted(nominal)
+    dev = np.full((samples, len(names)), np.nan)
+    for s in range(samples):
+        moved = np.zeros_like(mesh.vertices)
+        for k, (c, cov) in enumerate(zip(cameras, covs, strict=True)):
+            delta = rng.multivariate_normal(np.zeros(6), cov, method="eigh")
+            r_alt, t_alt = perturb(c.rotation, c.translation, delta)
+            moved += w[:, [k]] * CameraPose(c.name, c.rotation, c.translation, r_alt, t_alt).apply_error(mesh.vertices)
+        q = quantities(volumes(Mesh(moved, mesh.faces, mesh.vertex_labels, mesh.face_labels), islands=True,
+                               density=density))
+        for j, n in enumerate(names):
+            if n in q:
+                dev[s, j] = transform(n, q[n]) - transform(n, nominal[n])
+    return {n: float(np.nanstd(dev[:, j], ddof=1)) for j, n in enumerate(names) if np.isfinite(dev[:, j]).sum() > 1}
+
+
+# ----------------------------------------------------------------------------------------------------
+# Depth-noise / registration error model
+
+
+@dataclass(frozen=True)
+class ErrorModel:
+    """Per quantity ``bias`` and prediction ``sd`` of ``T(estimate) - T(truth)`` (comparison space)."""
+
+    entries: dict[str, tuple[float, float]]
+    description: str = ""
+    derivation: dict[str, Any] = field(default_factory=dict)
+
+    @staticmethod
+    def from_json(doc: Mapping[str, Any], where: str = "error model") -> ErrorModel:
+        """The model from its JSON form ``{"quantities": {name: {"bias": b, "sd": s, ...}}, ...}``."""
+        try:
+            entries = {str(k): (float(v["bias"]), float(v["sd"])) for k, v in doc["quantities"].items()}
+        except (KeyError, TypeError, ValueError, AttributeError) as exc:
+            raise UncertaintyError(f"{where}: expected {{'quantities': {{name: {{'bias', 'sd'}}}}}} ({exc})") from exc
+        bad = [k for k, (b, s) in entries.items() if not (math.isfinite(b) and math.isfinite(s) and s >= 0)]
+        if bad:
+            raise UncertaintyError(f"{where}: non-finite bias or negative sd for {', '.join(bad)}")
+        return ErrorModel(entries, str(doc.get("description", "")), dict(doc.get("derivation", {})))
+
+
+@lru_cache(maxsize=1)
+def error_models() -> dict[str, ErrorModel]:
+    """The packaged models by depth sensor (``bsv/data/noise_model.json``, see :mod:`bsv.bench.noisemodel`)."""
+    path = resources.files("bsv") / "data" / "noise_model.json"
+    try:
+        doc = json.loads(path.read_text())
+        models = doc["depth_models"]
+        return {str(k): ErrorModel.from_json({**v, "derivation": doc.get("derivation", {})}, f"{path} [{k}]")
+                for k, v in models.items()}
+    except (OSError, json.JSONDecodeError, KeyError, TypeError, AttributeError) as exc:
+        raise UncertaintyError(f"{path}: cannot read the packaged error model ({exc}); reinstall bsv") from exc
+
+
+def model_for(depth: str = DEFAULT_DEPTH, segmentation: str = "oracle") -> str:
+    """The name of the error model for a depth sensor and a segmentation: ``depth``, or ``depth_camera``
+    for the camera (MediaPipe) segmentation, whose cut lines add their own error."""
+    return f"{depth}_camera" if segmentation == "camera" else depth
+
+
+def default_error_model(depth: str = DEFAULT_DEPTH) -> ErrorModel:
+    """The packaged model of depth sensor ``depth`` ("l515" for real captures, "exact" for noise-free depth)."""
+    models = error_models()
+    if depth not in models:
+        raise UncertaintyError(f"no error model for depth {depth!r}; the packaged ones: {sorted(models)}")
+    return models[depth]
+
+
+# ----------------------------------------------------------------------------------------------------
+# Intervals
+
+
+@dataclass(frozen=True)
+class Intervals:
+    """95 % intervals of a volumes report: ``volumes_l`` and ``ratios`` map names to (lo, hi)."""
+
+    level: float
+    method: str
+    volumes_l: dict[str, tuple[float, float]]
+    ratios: dict[str, tuple[float, float]]
+    #: Seconds spent computing them.
+    seconds: float = 0.0
+    #: Mass intervals (kg): ``mass_trunk_limbs_kg`` = the trunk_limbs interval x density.
+    mass_kg: dict[str, tuple[float, float]] = field(default_factory=dict)
+
+    def get(self, name: str) -> tuple[float, float] | None:
+        """The interval of a volume or ratio by name (None when it has none)."""
+        return self.volumes_l.get(name) or self.ratios.get(name) or self.mass_kg.get(name)
+
+    def distinguishable(self, name: str) -> bool | None:
+        """For an asymmetry: whether its interval excludes 0 (None without an interval)."""
+        iv = self.ratios.get(name)
+        return None if iv is None else not (iv[0] <= 0.0 <= iv[1])
+
+    def to_json(self) -> dict[str, Any]:
+        """The ``"intervals"`` section of volumes.json."""
+        return {"level": self.level, "method": self.method, "seconds": self.seconds,
+                "volumes_l": {k: [lo, hi] for k, (lo, hi) in self.volumes_l.items()},
+                "ratios": {k: [lo, hi] for k, (lo, hi) in self.ratios.items()},
+                "mass_kg": {k: [lo, hi] for k, (lo, hi) in self.mass_kg.items()}}
+
+    @staticmethod
+    def from_json(doc: Mapping[str, Any]) -> Intervals:
+        """The inverse of :meth:`to_json`."""
+        def pairs(d: Mapping[str, Any] | None) -> dict[str, tuple[float, float]]:
+            return {str(k): (float(v[0]), float(v[1])) for k, v in (d or {}).items()}
+
+        return Intervals(float(doc.get("level", LEVEL)), str(doc.get("method", "")), pairs(doc.get("volumes_l")),
+                         pairs(doc.get("ratios")), float(doc.get("seconds", 0.0)), pairs(doc.get("mass_kg")))
+
+
+def combine(estimate: Mapping[str, float], model: ErrorModel, calibration_sd: Mapping[str, float] | None = None
+            ) -> dict[str, tuple[float, float]]:
+    """Per quantity of ``estimate`` that the model covers: the 95 % interval of the truth (see module doc)."""
+    cal = calibration_sd or {}
+    out: dict[str, tuple[float, float]] = {}
+    for name, value in estimate.items():
+        if name not in model.entries:
+            continue
+        bias, sd = model.entries[name]
+        centre = transform(name, value) - bias
+        if not math.isfinite(centre):
+            continue
+        half = Z95 * math.hypot(sd, float(cal.get(name, 0.0)))
+        out[name] = (untransform(name, centre - half), untransform(name, centre + half))
+    return out
+
+
+def intervals(mesh: Mesh, volumes: Mapping[str, Any], cameras: Sequence[CameraSpread], *,
+              model: ErrorModel | None = None, samples: int = DEFAULT_SAMPLES, seed: int = DEFAULT_SEED,
+              density: float = 1000.0, note: str = "") -> Intervals:
+    """The 95 % intervals of the fitted ``mesh``'s ``volumes`` report (as :func:`bsv.register` returns it),
+    combining the calibration Monte Carlo over ``cameras`` and the error ``model`` (default: packaged).
+    ``note`` is appended to the method text (what the intervals do not cover)."""
+    t0 = time.perf_counter()
+    m = model or default_error_model()
+    cal = calibration_spread(mesh, cameras, samples=samples, seed=seed, density=density)
+    est = quantities(volumes)
+    both = combine(est, m, cal)
+    vol_keys = set((volumes.get("volumes_l") or {}).keys())
+    sources = sorted({c.source for c in cameras})
+    method = (f"calibration Monte Carlo ({samples} draws, seed {seed}, covariance: {', '.join(sources) or 'none'}) "
+              f"+ depth-noise/registration error model ({m.description or 'bsv/data/noise_model.json'}), "
+              "combined in quadrature, normal" + (f"; {note}" if note else ""))
+    tl = both.get("trunk_limbs")
+    mass = {} if tl is None else {"mass_trunk_limbs_kg": (tl[0] * density / 1000.0, tl[1] * density / 1000.0)}
+    return Intervals(LEVEL, method, {k: v for k, v in both.items() if k in vol_keys},
+                     {k: v for k, v in both.items() if k not in vol_keys}, time.perf_counter() - t0, mass)
+
+
+def asymmetry_text(value: float, interval: tuple[float, float] | None) -> str:
+    """How the report prints an asymmetry: with its interval, or "not distinguishable from symmetric"."""
+    if interval is None:
+        return f"{value:+.1f} % (no interval)"
+    lo, hi = interval
+    if lo <= 0.0 <= hi:
+        return f"not distinguishable from symmetric ({value:+.1f} %, 95 % interval {lo:+.1f} to {hi:+.1f})"
+    return f"{value:+.1f} % (95 % interval {lo:+.1f} to {hi:+.1f})"
+
+
+__all__ = [
+    "DEFAULT_DEPTH",
+    "DEFAULT_SAMPLES",
+    "DEFAULT_SEED",
+    "FLOOR_STD",
+    "FRAME",
+    "LEVEL",
+    "PAPER_STD",
+    "PARAMETERS",
+    "CameraSpread",
+    "ErrorModel",
+    "Intervals",
+    "asymmetry_text",
+    "calibration_spread",
+    "check_covariance",
+    "combine",
+    "condition_on_floor",
+    "default_error_model",
+    "error_models",
+    "intervals",
+    "is_additive",
+    "model_for",
+    "paper_covariance",
+    "perturb",
+    "pose_delta",
+    "quantities",
+    "rodrigues",
+    "rotation_vector",
+    "transform",
+    "untransform",
+]

@@ -8,13 +8,21 @@ if [ ! -x .venv/bin/python ]; then
     "$PY" -m venv .venv
 fi
 .venv/bin/python -m pip install -q --upgrade pip
-.venv/bin/python -m pip install -q -r requirements-dev.txt -r requirements-frontend.txt
+.venv/bin/python -m pip install -q -r requirements-dev.txt -r requirements-frontend.txt -r requirements-station.txt
 # pyrealsense2 loads Debian's libusb at import time.
 if ! ldconfig -p 2>/dev/null | grep -q libusb-1.0.so.0; then
     if [ "$(id -u)" = 0 ]; then
         (apt-get update -qq && apt-get install -y -qq libusb-1.0-0) >/dev/null
     else
         echo "note: install libusb-1.0-0 (sudo apt-get install libusb-1.0-0) for RealSense capture" >&2
+    fi
+fi
+# BSV Station's end-to-end test drives Debian's headless chromium through chromium-driver (Selenium).
+if ! command -v chromedriver >/dev/null 2>&1; then
+    if [ "$(id -u)" = 0 ]; then
+        (apt-get update -qq && apt-get install -y -qq chromium chromium-driver) >/dev/null
+    else
+        echo "note: install chromium and chromium-driver (sudo apt-get install chromium chromium-driver) for the station's browser test" >&2
     fi
 fi
 # The extension (bsv._bsv) in the shared, optimised dev profile, installed editable into .venv.

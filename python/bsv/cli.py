@@ -21,6 +21,7 @@ commands:
   capture     record both RealSense cameras (or replay recordings with --from-recording)
   bench       synth | boxes | faust: the validation benchmark tables and figures
   cohort      OUT N [SEED]: write a synthetic MakeHuman cohort (labelled PLY + ground truth)
+  station     the operator's web app: subjects, captures, follow-up comparison (--demo: virtual rig)
 
 Run `bsv <command> --help` for the options of a command. Lengths are metres, volumes litres.
 """
@@ -76,6 +77,10 @@ def _route(name: str) -> Callable[[list[str]], int | None] | None:
         return bench_main
     if name == "cohort":
         return _cohort_main
+    if name == "station":
+        from .station.cli import main as station_main
+
+        return station_main
     return None
 
 

@@ -14,8 +14,10 @@ import contextlib
 import io
 import logging
 import multiprocessing
+import os
 import shutil
 import threading
+import time
 import uuid
 from collections.abc import Callable
 from pathlib import Path
@@ -65,10 +67,26 @@ class _StepWriter(io.TextIOBase):
         return len(s)
 
 
+def _exit_with_parent() -> None:
+    """End this worker as soon as the station that spawned it is gone (killed with -9): its job is marked
+    interrupted by the next start, and no orphan keeps writing."""
+    parent = os.getppid()
+
+    def watch() -> None:
+        while True:
+            time.sleep(0.2)
+            if os.getppid() != parent:
+                os._exit(3)
+
+    threading.Thread(target=watch, name="bsv-station-parent-watch", daemon=True).start()
+
+
 def run_job(db_url: str, data_dir: str, job_id: int) -> None:
     """The worker process's entry point: run job ``job_id`` to its end (done or failed)."""
     from ..errors import BsvError
     from .db import make_engine, session_factory
+
+    _exit_with_parent()
 
     data = Path(data_dir)
     engine = make_engine(db_url)

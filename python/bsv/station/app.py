@@ -470,15 +470,15 @@ _chart_lock = threading.Lock()
 
 
 def _chart(session_ids: list[int], result_ids: list[int], volumes: list[dict[str, Any]]) -> str:
-    """The subject's history chart, cached by the results it shows (they never change)."""
+    """The subject's history chart, cached by the results it shows (they never change). Drawn once per
+    key: concurrent requests for the same chart wait for the first drawing instead of repeating it."""
     from .charts import history_png
 
     key = (tuple(session_ids), tuple(result_ids))
     with _chart_lock:
         hit = _chart_cache.get(key)
-    if hit is None:
-        hit = history_png([f"#{i}" for i in session_ids], volumes)
-        with _chart_lock:
+        if hit is None:
+            hit = history_png([f"#{i}" for i in session_ids], volumes)
             if len(_chart_cache) > 256:
                 _chart_cache.clear()
             _chart_cache[key] = hit

@@ -346,3 +346,30 @@ def test_virtual_rig_job_then_a_failing_job_keeps_the_history(tmp_path: Path) ->
         sessions = db.scalars(select(Session)).all()
         assert len(sessions) == 1 and len(sessions[0].results) == 1
     assert not any((tmp_path / "data" / "tmp").iterdir()) if (tmp_path / "data" / "tmp").exists() else True
+
+
+def test_demo_seeds_a_sample_subject_and_a_virtual_session_once(tmp_path: Path) -> None:
+    config = StationConfig(data=tmp_path / "demo", demo=True, run_jobs=False)
+    for _ in range(2):  # a second start adds nothing
+        app = create_app(config)
+        with TestClient(app) as c:
+            assert "DEMO-001" in c.get("/").text
+    assert _count(app, Subject) == 1 and _count(app, Job) == 1
+    with app.state.factory() as db:
+        job = db.scalars(select(Job)).one()
+    assert job.kind == "capture" and job.params["source"] == "virtual" and job.state == "queued"
+
+
+def test_cli_routes_station(capsys: pytest.CaptureFixture[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from bsv.cli import main
+
+    with pytest.raises(SystemExit) as e:
+        main(["station", "--help"])
+    assert e.value.code == 0 and "--demo" in capsys.readouterr().out
+    assert main(["station", "--host", "0.0.0.0", "--data", str(tmp_path / "d")]) == 2
+    assert "adduser" in capsys.readouterr().err
+    monkeypatch.setenv("BSV_STATION_PASSWORD", "a long enough password")
+    assert main(["station", "adduser", "olga", "--role", "operator", "--data", str(tmp_path / "d")]) == 0
+    assert main(["station", "adduser", "olga", "--role", "operator", "--data", str(tmp_path / "d")]) == 2
+    out = tmp_path / "backup.tar.gz"
+    assert main(["station", "backup", str(out), "--data", str(tmp_path / "d")]) == 0 and out.is_file()

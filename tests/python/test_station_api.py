@@ -237,6 +237,8 @@ def test_compare_export_session_and_result_files(station: tuple[TestClient, Any,
     csv_text = c.get(f"/subjects/{sid}/export.csv").text.splitlines()
     assert csv_text[0].startswith("subject_code,session_id") and len(csv_text) == 3
     assert csv_text[2].split(",")[0] == "P-001" and "1.2800" in csv_text[2]
+    pdf = c.get(f"/subjects/{sid}/export.pdf")
+    assert pdf.status_code == 200 and pdf.content.startswith(b"%PDF")
     ses = c.get(f"/sessions/{s1}")
     assert ses.status_code == 200 and "forearm_l" in ses.text and "repeatability table" in ses.text
     for name, code in (("..%2Fstation.sqlite3", 404), ("report.exe", 400), ("report.html", 404)):
@@ -246,7 +248,7 @@ def test_compare_export_session_and_result_files(station: tuple[TestClient, Any,
     assert c.post(f"/sessions/{s1}/process", data={"csrf_token": tok, "segmentation": "x"}).status_code == 400
     with app.state.factory() as db:
         actions = [e.action for e in db.scalars(select(AuditEvent))]
-    assert {"view_compare", "export_csv", "view_session", "queue_process"} <= set(actions)
+    assert {"view_compare", "export_csv", "export_pdf", "view_session", "queue_process"} <= set(actions)
 
 
 def test_login_roles_and_csrf_off_localhost(tmp_path: Path) -> None:

@@ -276,6 +276,28 @@ def create_app(config: StationConfig) -> FastAPI:
         return Response(buf.getvalue(), media_type="text/csv",
                         headers={"Content-Disposition": f'attachment; filename="subject-{subj.id}-history.csv"'})
 
+    @app.get("/subjects/{subject_id}/export.pdf")
+    def export_pdf(db: Db, who: Who, subject_id: int) -> Response:
+        subj: Subject = get_or_404(db, Subject, subject_id, "subject")
+        try:
+            import weasyprint
+        except ImportError as e:
+            raise HTTPException(501, "PDF export needs weasyprint (pip install -r requirements-station.txt)") from e
+        done = [s for s in subj.sessions if s.latest is not None]
+        cells = {s.id: {n: uncertainty.volume_interval(s.latest.volumes, n) for n in uncertainty.SEGMENTS}
+                 for s in done if s.latest is not None}
+        sources = {iv.source for row in cells.values() for iv in row.values() if iv is not None}
+        chart = _chart([s.id for s in done], [s.latest.id for s in done if s.latest is not None],
+                       [s.latest.volumes for s in done if s.latest is not None]) if done else ""
+        html = templates.get_template("history_pdf.html").render(
+            subject=subj, done=done, cells=cells, segments=uncertainty.SEGMENTS, chart=chart, now=utcnow(),
+            interval_label=uncertainty.source_label(sources) if sources else "no result yet")
+        pdf = weasyprint.HTML(string=html).write_pdf()
+        security.audit(db, who, "export_pdf", f"subject:{subj.id}")
+        db.commit()
+        return Response(pdf, media_type="application/pdf",
+                        headers={"Content-Disposition": f'attachment; filename="subject-{subj.id}-history.pdf"'})
+
     # ---------------------------------------------------------------- captures and jobs
 
     def queue(db: DbSession, job: Job) -> Job:

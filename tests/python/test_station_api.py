@@ -5,6 +5,7 @@ and one real virtual-rig job (oracle segmentation) plus one failing job through 
 from __future__ import annotations
 
 import io
+import math
 import re
 import tarfile
 import time
@@ -337,6 +338,13 @@ def test_virtual_rig_job_then_a_failing_job_keeps_the_history(tmp_path: Path) ->
         truth = rig.virtual_body(0, 0, None)[1]
         assert abs(vols["volumes_l"]["trunk_limbs"] / truth["trunk_limbs"] - 1) < 0.05
         assert c.get(f"/results/{job['result_id']}/files/report.html").status_code == 200
+        ses_page = c.get(f"/sessions/{job['session_id']}")
+        assert ses_page.status_code == 200 and "front colour" in ses_page.text
+        png = c.get(f"/sessions/{job['session_id']}/capture/front/color.png")
+        assert png.status_code == 200 and png.content.startswith(b"\x89PNG")
+        assert c.get(f"/sessions/{job['session_id']}/capture/side/color.png").status_code == 400
+        # oracle segmentation writes no MediaPipe overlay
+        assert c.get(f"/results/{job['result_id']}/segmentation/front/segmentation.png").status_code == 404
         # a replay without a station calibration fails in the worker: the page shows the pipeline's message
         r = c.post(f"/subjects/{sid}/captures", data={"csrf_token": tok, "source": "replay", "recording_dir": "/nowhere"},
                    follow_redirects=False)
@@ -375,3 +383,23 @@ def test_cli_routes_station(capsys: pytest.CaptureFixture[str], tmp_path: Path, 
     assert main(["station", "adduser", "olga", "--role", "operator", "--data", str(tmp_path / "d")]) == 2
     out = tmp_path / "backup.tar.gz"
     assert main(["station", "backup", str(out), "--data", str(tmp_path / "d")]) == 0 and out.is_file()
+
+
+def test_pose_check_reads_the_landmarks(tmp_path: Path) -> None:
+    import json
+
+    from bsv.frontend.segment import REQUIRED_LANDMARKS
+    from bsv.station.posecheck import pose_check
+
+    assert pose_check(tmp_path) is None
+    lm = {n: [0.0, 0.0, 0.99] for n in REQUIRED_LANDMARKS}
+    # front view, image y down: shoulders at y=100, hips at y=300; left wrist 40 deg out, right wrist 80 deg out
+    lm.update(left_shoulder=[120, 100, 0.99], right_shoulder=[80, 100, 0.99], left_hip=[110, 300, 0.99],
+              right_hip=[90, 300, 0.99], left_wrist=[120 + 100 * math.sin(math.radians(40)), 100 + 100 * math.cos(math.radians(40)), 0.99],
+              right_wrist=[80 - 100 * math.sin(math.radians(80)), 100 + 100 * math.cos(math.radians(80)), 0.5])
+    (tmp_path / "segmentation" / "front").mkdir(parents=True)
+    (tmp_path / "segmentation" / "front" / "landmarks.json").write_text(json.dumps({"landmarks_px": lm}))
+    front = pose_check(tmp_path)["cameras"]["front"]  # type: ignore[index]
+    assert front["abduction_deg"]["left"] == pytest.approx(40.0, abs=0.01)
+    assert front["abduction_deg"]["right"] == pytest.approx(80.0, abs=0.01)
+    assert front["a_pose"] is False and front["low"] == ["right_wrist"]

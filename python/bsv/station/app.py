@@ -33,6 +33,7 @@ from . import jobs as jobq
 from . import rig, security, uncertainty
 from .db import default_url, make_engine, migrate, session_factory
 from .models import AuditEvent, Job, Result, Session, Subject, utcnow
+from .posecheck import A_POSE_DEG, pose_check
 from .security import Principal
 
 HERE = Path(__file__).parent
@@ -377,9 +378,10 @@ def create_app(config: StationConfig) -> FastAPI:
                 if iv is not None:
                     rows.append((name, iv))
         truth = (ses.source_info or {}).get("true_volumes_l", {})
+        pose = None if ses.latest is None else pose_check(config.data / ses.latest.report_dir)
         security.audit(db, who, "view_session", f"session:{ses.id}")
         db.commit()
-        return page(request, "session.html", who, ses=ses, rows=rows, truth=truth)
+        return page(request, "session.html", who, ses=ses, rows=rows, truth=truth, pose=pose, a_pose=A_POSE_DEG)
 
     @app.post("/sessions/{session_id}/process", dependencies=[Csrf])
     def reprocess(db: Db, who: Op, session_id: int, segmentation: Annotated[str, Form()] = "camera") -> Response:
@@ -401,6 +403,26 @@ def create_app(config: StationConfig) -> FastAPI:
         if name == "report.html":
             security.audit(db, who, "view_report", f"result:{res.id}")
             db.commit()
+        return FileResponse(path)
+
+    @app.get("/sessions/{session_id}/capture/{camera}/color.png")
+    def capture_colour(db: Db, who: Who, session_id: int, camera: str) -> Response:
+        ses: Session = get_or_404(db, Session, session_id, "session")
+        if camera not in ("front", "back"):
+            raise HTTPException(400, "camera must be front or back")
+        path = config.data / ses.capture_dir / camera / "color.png"
+        if not path.is_file():
+            raise HTTPException(404, f"session {session_id} has no {camera} colour image")
+        return FileResponse(path)
+
+    @app.get("/results/{result_id}/segmentation/{camera}/segmentation.png")
+    def result_segmentation(db: Db, who: Who, result_id: int, camera: str) -> Response:
+        res: Result = get_or_404(db, Result, result_id, "result")
+        if camera not in ("front", "back"):
+            raise HTTPException(400, "camera must be front or back")
+        path = config.data / res.report_dir / "segmentation" / camera / "segmentation.png"
+        if not path.is_file():
+            raise HTTPException(404, f"result {result_id} has no {camera} segmentation image")
         return FileResponse(path)
 
     @app.get("/jobs/{job_id}", response_class=HTMLResponse)

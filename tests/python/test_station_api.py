@@ -188,6 +188,7 @@ def test_second_capture_while_one_runs_is_refused(station: tuple[TestClient, Any
         r = c.post(f"/subjects/{sid}/captures", data={"csrf_token": tok, **bad})
         assert r.status_code in (400, 422) and needle in r.text, bad
     assert c.post("/subjects/999/captures", data={"csrf_token": tok}).status_code == 404
+    assert c.post(f"/subjects/{sid}/previews", data={"csrf_token": tok}).status_code == 409  # the rig is busy
     assert _count(app, Job) == 1 and _count(app, Session) == 0
 
 
@@ -330,6 +331,15 @@ def test_virtual_rig_job_then_a_failing_job_keeps_the_history(tmp_path: Path) ->
     with TestClient(app) as c:
         tok = _token(c)
         sid = _subject(c, tok)
+        # preview and pose check (MediaPipe) first: no session is made
+        r = c.post(f"/subjects/{sid}/previews", data={"csrf_token": tok, "source": "virtual"}, follow_redirects=False)
+        preview = _wait(c, r.headers["location"].rsplit("/", 1)[1])
+        assert preview["state"] == "done" and preview["message"] == "", preview
+        page = c.get(r.headers["location"]).text
+        assert 'id="a-pose">A-pose<' in page and "capture-now" in page
+        for name in ("color.png", "segmentation.png"):
+            assert c.get(f"{r.headers['location']}/preview/back/{name}").content.startswith(b"\x89PNG")
+        assert _count(app, Session) == 0
         r = c.post(f"/subjects/{sid}/captures", data={"csrf_token": tok, "source": "virtual", "segmentation": "oracle"},
                    follow_redirects=False)
         job = _wait(c, r.headers["location"].rsplit("/", 1)[1])

@@ -309,13 +309,8 @@ def create_app(config: StationConfig) -> FastAPI:
         runner.kick()
         return job
 
-    @app.post("/subjects/{subject_id}/captures", dependencies=[Csrf])
-    def start_capture(db: Db, who: Op, subject_id: int, source: Annotated[str, Form()] = "virtual",
-                      swollen: Annotated[str, Form()] = "", index: Annotated[int, Form(ge=0, le=10_000)] = 0,
-                      seed: Annotated[int, Form(ge=0, le=2**31)] = 0,
-                      rig_seed: Annotated[int, Form(ge=0, le=2**31)] = 0,
-                      segmentation: Annotated[str, Form()] = "camera",
-                      recording_dir: Annotated[str, Form()] = "") -> Response:
+    def rig_job(db: DbSession, who: Principal, subject_id: int, kind: str, source: str, swollen: str, index: int,
+                seed: int, rig_seed: int, segmentation: str, recording_dir: str) -> Response:
         subj: Subject = get_or_404(db, Subject, subject_id, "subject")
         if source not in rig.SOURCES:
             raise HTTPException(400, f"source must be one of {', '.join(rig.SOURCES)}")
@@ -333,11 +328,43 @@ def create_app(config: StationConfig) -> FastAPI:
         if source == "replay":
             params["recording_dir"] = recording_dir
         with submit_lock:
-            busy = db.scalars(select(Job).where(Job.kind == "capture", Job.state.in_(jobq.CAPTURE_BUSY))).first()
+            busy = db.scalars(select(Job).where(Job.kind.in_(jobq.RIG_KINDS), Job.state.in_(jobq.CAPTURE_BUSY))).first()
             if busy is not None:
                 raise HTTPException(409, f"a capture is already running (job {busy.id}); wait until it is processed")
-            job = queue(db, Job(kind="capture", subject_id=subj.id, params=params, operator=who.name))
+            job = queue(db, Job(kind=kind, subject_id=subj.id, params=params, operator=who.name))
         return RedirectResponse(f"/jobs/{job.id}", status_code=303)
+
+    @app.post("/subjects/{subject_id}/captures", dependencies=[Csrf])
+    def start_capture(db: Db, who: Op, subject_id: int, source: Annotated[str, Form()] = "virtual",
+                      swollen: Annotated[str, Form()] = "", index: Annotated[int, Form(ge=0, le=10_000)] = 0,
+                      seed: Annotated[int, Form(ge=0, le=2**31)] = 0,
+                      rig_seed: Annotated[int, Form(ge=0, le=2**31)] = 0,
+                      segmentation: Annotated[str, Form()] = "camera",
+                      recording_dir: Annotated[str, Form()] = "") -> Response:
+        return rig_job(db, who, subject_id, "capture", source, swollen, index, seed, rig_seed, segmentation,
+                       recording_dir)
+
+    @app.post("/subjects/{subject_id}/previews", dependencies=[Csrf])
+    def start_preview(db: Db, who: Op, subject_id: int, source: Annotated[str, Form()] = "virtual",
+                      swollen: Annotated[str, Form()] = "", index: Annotated[int, Form(ge=0, le=10_000)] = 0,
+                      seed: Annotated[int, Form(ge=0, le=2**31)] = 0,
+                      rig_seed: Annotated[int, Form(ge=0, le=2**31)] = 0,
+                      segmentation: Annotated[str, Form()] = "camera",
+                      recording_dir: Annotated[str, Form()] = "") -> Response:
+        return rig_job(db, who, subject_id, "preview", source, swollen, index, seed, rig_seed, segmentation,
+                       recording_dir)
+
+    @app.get("/jobs/{job_id}/preview/{camera}/{name}")
+    def preview_file(db: Db, who: Who, job_id: int, camera: str, name: str) -> Response:
+        job: Job = get_or_404(db, Job, job_id, "job")
+        if camera not in ("front", "back") or name not in ("color.png", "segmentation.png"):
+            raise HTTPException(400, "camera must be front or back, the file color.png or segmentation.png")
+        folder = job.params.get("preview_dir")
+        sub = "capture" if name == "color.png" else "segmentation"
+        path = config.data / str(folder) / sub / camera / name if folder else None
+        if path is None or not path.is_file():
+            raise HTTPException(404, f"job {job_id} has no preview {camera}/{name} (previews are replaced by newer ones)")
+        return FileResponse(path)
 
     @app.post("/subjects/{subject_id}/uploads", dependencies=[Csrf])
     def upload_capture(db: Db, who: Op, subject_id: int, file: Annotated[UploadFile, File()],
@@ -428,7 +455,12 @@ def create_app(config: StationConfig) -> FastAPI:
     @app.get("/jobs/{job_id}", response_class=HTMLResponse)
     def job_page(request: Request, db: Db, who: Who, job_id: int) -> HTMLResponse:
         job: Job = get_or_404(db, Job, job_id, "job")
-        return page(request, "job.html", who, job=job)
+        folder = job.params.get("preview_dir") if job.kind == "preview" else None
+        pose = pose_check(config.data / str(folder)) if folder and (config.data / str(folder)).is_dir() else None
+        rig_params = {k: v for k, v in job.params.items() if k in ("source", "index", "seed", "rig_seed", "swollen",
+                                                                    "segmentation", "recording_dir") and v is not None}
+        return page(request, "job.html", who, job=job, pose=pose, a_pose=A_POSE_DEG, preview=bool(pose or folder),
+                    rig_params=rig_params)
 
     @app.get("/api/jobs/{job_id}")
     def job_json(db: Db, who: Who, job_id: int) -> dict[str, Any]:

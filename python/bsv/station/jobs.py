@@ -29,8 +29,11 @@ from .models import Job, Result, Session, utcnow
 
 log = logging.getLogger("bsv.station")
 
-#: Job kinds: a capture then its processing, or a new processing of an existing session's capture.
-KINDS = ("capture", "process")
+#: Job kinds: a capture then its processing, a new processing of an existing session's capture, or a
+#: preview (a short capture and the MediaPipe pose check, kept apart from the sessions).
+KINDS = ("capture", "process", "preview")
+#: Kinds that use the rig (one at a time).
+RIG_KINDS = ("capture", "preview")
 #: States in which a job still holds the rig (a second capture is refused meanwhile).
 CAPTURE_BUSY = ("queued", "capturing")
 #: States of a job not finished yet.
@@ -38,7 +41,7 @@ ACTIVE = ("queued", "capturing", "processing")
 #: Steps of :func:`bsv.pipeline.process` (keys of its timings), for the progress fraction.
 PROCESS_STEPS = 8
 #: Sub-folders of the data folder.
-CAPTURES, RESULTS, TMP = "captures", "results", "tmp"
+CAPTURES, RESULTS, TMP, PREVIEWS = "captures", "results", "tmp", "previews"
 
 
 def new_dir(data: Path, kind: str) -> tuple[Path, Path]:
@@ -108,6 +111,9 @@ def run_job(db_url: str, data_dir: str, job_id: int) -> None:
                 return
             kind, params, operator, session_id = job.kind, dict(job.params), job.operator, job.session_id
             subject_id = job.subject_id
+        if kind == "preview":
+            _preview(data, params, update, tmp_dirs)
+            return
         if kind == "capture":
             update(state="capturing", step="capturing", progress=0.0)
             tmp, final = new_dir(data, CAPTURES)
@@ -165,6 +171,31 @@ def _capture(tmp: Path, data: Path, source: str, params: dict[str, Any],
     info = rig.record(tmp, source, params)
     shutil.copyfile(station_cal, tmp / "calibration.json")
     return info
+
+
+def _preview(data: Path, params: dict[str, Any], update: Callable[..., None], tmp_dirs: list[Path]) -> None:
+    """A capture into ``data/previews/<id>/capture`` (older previews are deleted: they show the subject)
+    and the pose check: MediaPipe's segmentation of both colour images into ``.../segmentation``."""
+    from ..errors import LandmarkMissingError, PersonNotFoundError
+    from ..frontend.segment import segment_capture
+
+    tmp, final = new_dir(data, PREVIEWS)
+    tmp_dirs.append(tmp)
+    tmp.mkdir()
+    update(state="capturing", step="preview: capturing", progress=0.1)
+    _capture(tmp / "capture", data, str(params.get("source", "virtual")), {**params, "seconds": 1.0}, update)
+    update(step="pose check (MediaPipe landmarks on both colour images)", progress=0.6)
+    note = ""
+    try:
+        segment_capture(tmp / "capture", out_dir=tmp / "segmentation")
+    except (LandmarkMissingError, PersonNotFoundError) as e:
+        note = f"pose check failed: {e}"
+    for old in (data / PREVIEWS).iterdir():
+        shutil.rmtree(old, ignore_errors=True)
+    tmp.rename(final)
+    tmp_dirs.remove(tmp)
+    update(state="done", step="preview ready", progress=1.0, message=note, finished_at=utcnow(),
+           params={**params, "preview_dir": str(final.relative_to(data))})
 
 
 def _process(data: Path, cap: Path, calib: Path, session_id: int, params: dict[str, Any], operator: str,
@@ -259,4 +290,4 @@ class JobRunner:
                     db.commit()
 
 
-__all__ = ["ACTIVE", "CAPTURE_BUSY", "KINDS", "JobRunner", "new_dir", "run_job"]
+__all__ = ["ACTIVE", "CAPTURE_BUSY", "KINDS", "RIG_KINDS", "JobRunner", "new_dir", "run_job"]

@@ -19,7 +19,12 @@
   function poll() {
     fetch("/api/jobs/" + id, { credentials: "same-origin" })
       .then((r) => r.json())
-      .then((j) => { show(j); if (j.state !== "done" && j.state !== "failed") setTimeout(poll, 1000); })
+      .then((j) => {
+        show(j);
+        const over = j.state === "done" || j.state === "failed";
+        if (!over) setTimeout(poll, 1000);
+        else if (box.dataset.kind === "preview" && box.dataset.finished === "no") location.reload();
+      })
       .catch(() => setTimeout(poll, 3000));
   }
   poll();

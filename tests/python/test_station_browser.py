@@ -47,10 +47,11 @@ def _shot(drv: Any, name: str) -> None:
     drv.save_screenshot(str(ARTIFACTS / f"{name}.png"))
 
 
-def _capture(drv: Any, swollen: str, shot: str, timeout: float = 300.0) -> float:
-    Select(drv.find_element(By.ID, "swollen")).select_by_value(swollen)
+def _capture(drv: Any, swollen: str | None, shot: str, timeout: float = 300.0, button: str = "capture") -> float:
+    if swollen is not None:
+        Select(drv.find_element(By.ID, "swollen")).select_by_value(swollen)
     t0 = time.monotonic()
-    drv.find_element(By.ID, "capture").click()
+    drv.find_element(By.ID, button).click()
     WebDriverWait(drv, 10).until(lambda d: d.find_elements(By.ID, "bar"))
     WebDriverWait(drv, timeout, poll_frequency=1).until(
         lambda d: d.find_element(By.ID, "state").text in ("done", "failed"))
@@ -77,7 +78,12 @@ def test_two_virtual_sessions_and_the_comparison_flag_the_swollen_forearm(browse
         assert drv.find_element(By.ID, "subject-code").text == "LYM-0001"
         assert "LYM" not in drv.current_url
         _shot(drv, "02-subject-new")
-        first = _capture(drv, "", "03-job-baseline")
+        # preview and pose check before the capture: the job page reloads with both images and the check
+        drv.find_element(By.ID, "preview").click()
+        WebDriverWait(drv, 300, poll_frequency=1).until(lambda d: d.find_elements(By.ID, "a-pose"))
+        assert drv.find_element(By.ID, "a-pose").text == "A-pose"
+        _shot(drv, "03-preview-pose-check")
+        first = _capture(drv, None, "03-job-baseline", button="capture-now")
         second = _capture(drv, "forearm_l", "04-job-swollen")
         print(f"\nvirtual-rig session (MediaPipe camera path) seen from the browser: {first:.1f} s, {second:.1f} s")
         assert drv.find_element(By.ID, "history-chart").is_displayed()

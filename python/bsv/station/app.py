@@ -364,7 +364,7 @@ def create_app(config: StationConfig) -> FastAPI:
         path = config.data / str(folder) / sub / camera / name if folder else None
         if path is None or not path.is_file():
             raise HTTPException(404, f"job {job_id} has no preview {camera}/{name} (previews are replaced by newer ones)")
-        return FileResponse(path)
+        return _label_png(path) if name == "segmentation.png" else FileResponse(path)
 
     @app.post("/subjects/{subject_id}/uploads", dependencies=[Csrf])
     def upload_capture(db: Db, who: Op, subject_id: int, file: Annotated[UploadFile, File()],
@@ -450,7 +450,7 @@ def create_app(config: StationConfig) -> FastAPI:
         path = config.data / res.report_dir / "segmentation" / camera / "segmentation.png"
         if not path.is_file():
             raise HTTPException(404, f"result {result_id} has no {camera} segmentation image")
-        return FileResponse(path)
+        return _label_png(path)
 
     @app.get("/jobs/{job_id}", response_class=HTMLResponse)
     def job_page(request: Request, db: Db, who: Who, job_id: int) -> HTMLResponse:
@@ -509,6 +509,25 @@ def create_app(config: StationConfig) -> FastAPI:
         return page(request, "audit.html", who, events=events)
 
     return app
+
+
+def _label_png(path: Path) -> Response:
+    """A segment-id image (uint8) painted with the segment palette of :mod:`bsv.bodies` (0: black)."""
+    import cv2
+    import numpy as np
+
+    from ..bodies import PALETTE
+
+    ids = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    if ids is None or ids.ndim != 2:
+        raise HTTPException(404, "the segmentation image cannot be read")
+    lut = np.asarray(PALETTE, dtype=np.uint8).copy()
+    lut[0] = 0
+    rgb = lut[np.clip(ids, 0, len(lut) - 1)]
+    ok, png = cv2.imencode(".png", cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
+    if not ok:
+        raise HTTPException(500, "the segmentation image could not be encoded")
+    return Response(png.tobytes(), media_type="image/png")
 
 
 def _subject_fields(code: str, sex: str, birth_year: str, height_m: str, mass_kg: str, notes: str) -> dict[str, Any]:

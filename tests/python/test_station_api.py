@@ -127,6 +127,10 @@ def test_pages_and_subject_creation(station: tuple[TestClient, Any, str]) -> Non
     assert r.status_code == 303 and r.headers["location"] == f"/subjects/{sid}"
     rig_page = c.get("/rig")
     assert rig_page.status_code == 200 and ("none found" in rig_page.text or "serial" in rig_page.text)
+    if "none found" in rig_page.text:  # no RealSense here: the live view says so
+        r = c.get("/rig/alignment/front.jpg")
+        assert r.status_code == 503 and "camera" in r.text
+    assert c.get("/rig/alignment/side.jpg").status_code == 400
     assert "audit" in c.get("/audit").text.lower()
     assert c.get("/static/station.js").status_code == 200
     with app.state.factory() as db:

@@ -481,6 +481,25 @@ def create_app(config: StationConfig) -> FastAPI:
         calibrated = (config.data / "calibration.json").is_file()
         return page(request, "rig.html", who, cams=status_cache, calibrated=calibrated, data=str(config.data))
 
+    camera_lock = threading.Lock()
+
+    @app.get("/rig/alignment/{camera}.jpg")
+    def alignment_image(db: Db, who: Who, camera: str) -> Response:
+        if camera not in ("front", "back"):
+            raise HTTPException(400, "camera must be front or back")
+        from ..errors import BsvError
+
+        busy = db.scalars(select(Job).where(Job.kind.in_(jobq.RIG_KINDS), Job.state.in_(("capturing",)))).first()
+        if busy is not None or not camera_lock.acquire(timeout=5):
+            raise HTTPException(409, "the cameras are busy (a capture or another view); try again in a moment")
+        try:
+            jpg = rig.alignment_frame(camera)
+        except BsvError as e:
+            raise HTTPException(503, str(e)) from e
+        finally:
+            camera_lock.release()
+        return Response(jpg, media_type="image/jpeg", headers={"Cache-Control": "no-store"})
+
     @app.get("/login", response_class=HTMLResponse)
     def login_page(request: Request) -> HTMLResponse:
         return page(request, "login.html", None)

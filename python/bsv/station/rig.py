@@ -90,6 +90,48 @@ def camera_status() -> dict[str, Any]:
     return {"serials": serials, "error": ""}
 
 
+def alignment_frame(camera: str, width: int = 1280, height: int = 720) -> bytes:
+    """One colour frame of the ``camera`` RealSense ("front": the lowest serial, "back": the next, as
+    :func:`bsv.frontend.capture.capture` assigns them) with the calibration marker outlined and the
+    rotation and translation still to correct ("ALIGNED" within tolerance), as JPEG: the browser's live
+    alignment guidance (:func:`bsv.frontend.calibrate.alignment`). Raises NoCameraError without cameras."""
+    import cv2
+    import numpy as np
+
+    from ..errors import CalibrationError, NoCameraError
+    from ..frontend.calibrate import alignment, detect_marker, draw_alignment, marker_pose
+    from ..frontend.capture import connected_serials, import_realsense, open_colour_stream
+    from ..frontend.marker import Board
+
+    rs = import_realsense()
+    serials = sorted(connected_serials())
+    index = ("front", "back").index(camera)
+    if len(serials) <= index:
+        raise NoCameraError(f"no {camera} RealSense camera: {len(serials)} connected")
+    pipe, intr = open_colour_stream(rs, serials[index], width, height, 30)
+    try:
+        frame = None
+        for _ in range(10):  # let the auto-exposure settle
+            frame = pipe.wait_for_frames().get_color_frame()
+        colour = np.asanyarray(frame.get_data()) if frame is not None else None
+    finally:
+        pipe.stop()
+    if colour is None:
+        raise NoCameraError(f"the {camera} camera delivered no colour frame")
+    bgr = cv2.cvtColor(colour, cv2.COLOR_RGB2BGR)
+    marker = Board().marker
+    try:
+        corners = detect_marker(bgr, marker)
+        r, t, _ = marker_pose(corners, intr, marker)
+        info = alignment(r, t)
+    except CalibrationError:
+        corners, info = None, None
+    ok, jpg = cv2.imencode(".jpg", draw_alignment(bgr, corners, info, marker))
+    if not ok:
+        raise CaptureError("the alignment frame could not be encoded")
+    return bytes(jpg.tobytes())
+
+
 def check_capture_zip(data: bytes, out: Path) -> None:
     """Unpack an uploaded capture (a zip of front/ and back/ color.png, depth.png, camera.json and
     calibration.json) into ``out`` after checking it; raises :class:`bsv.errors.CaptureError` naming what
@@ -132,5 +174,5 @@ def check_capture_zip(data: bytes, out: Path) -> None:
         raise CaptureError(f"the upload's {CALIBRATION} has no \"cameras\" section; write it with bsv calibrate")
 
 
-__all__ = ["CALIBRATION", "CAPTURE_FILES", "SOURCES", "SWELLINGS", "camera_status", "check_capture_zip", "record",
+__all__ = ["CALIBRATION", "CAPTURE_FILES", "SOURCES", "SWELLINGS", "alignment_frame", "camera_status", "check_capture_zip", "record",
            "render_virtual", "virtual_body"]

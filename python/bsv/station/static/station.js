@@ -1,4 +1,11 @@
-// BSV Station: polls the job's progress (GET /api/jobs/ID) on the job page; no build step.
+// BSV Station: polls the job's progress (GET /api/jobs/ID) on the job page and refreshes the rig page's
+// live camera frames; no build step.
+(function () {
+  // rig page: refresh the live alignment frames
+  document.querySelectorAll("img.live").forEach((img) => {
+    setInterval(() => { img.src = img.dataset.src + "?t=" + Date.now(); }, 2000);
+  });
+})();
 (function () {
   const box = document.getElementById("job");
   if (!box) return;

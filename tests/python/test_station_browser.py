@@ -102,3 +102,4 @@ def test_two_virtual_sessions_and_the_comparison_flag_the_swollen_forearm(browse
         assert drv.find_element(By.ID, "cameras").text
     finally:
         server.stop()
+    assert "LYM-0001" not in server.log.read_text()  # no subject code in the server's log

@@ -99,3 +99,4 @@ def test_twenty_clients_browse_while_three_jobs_run(tmp_path: Path) -> None:
         assert stats["p95_ms"] < 5000
     finally:
         server.stop()
+    assert "LOAD-1" not in server.log.read_text()  # no subject code in the server's log

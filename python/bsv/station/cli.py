@@ -86,6 +86,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``bsv station``."""
     args = list(sys.argv[1:] if argv is None else argv)
     logging.basicConfig(level=logging.INFO)
+    logging.getLogger("alembic").setLevel(logging.WARNING)
     if args and args[0] == "backup":
         return _backup(args[1:])
     if args and args[0] == "adduser":

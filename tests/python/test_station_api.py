@@ -352,6 +352,7 @@ def test_virtual_rig_job_then_a_failing_job_keeps_the_history(tmp_path: Path) ->
         truth = rig.virtual_body(0, 0, None)[1]
         assert abs(vols["volumes_l"]["trunk_limbs"] / truth["trunk_limbs"] - 1) < 0.05
         assert c.get(f"/results/{job['result_id']}/files/report.html").status_code == 200
+        assert len(list((tmp_path / "data" / "charts").iterdir())) == 1  # drawn by the worker
         ses_page = c.get(f"/sessions/{job['session_id']}")
         assert ses_page.status_code == 200 and "front colour" in ses_page.text
         png = c.get(f"/sessions/{job['session_id']}/capture/front/color.png")

@@ -31,6 +31,7 @@ from starlette.middleware.sessions import SessionMiddleware
 
 from . import jobs as jobq
 from . import rig, security, uncertainty
+from .charts import subject_chart
 from .db import default_url, make_engine, migrate, session_factory
 from .models import AuditEvent, Job, Result, Session, Subject, utcnow
 from .posecheck import A_POSE_DEG, pose_check
@@ -216,7 +217,7 @@ def create_app(config: StationConfig) -> FastAPI:
         sources: set[str] = set()
         if done:
             vols = [s.latest.volumes for s in done if s.latest is not None]
-            chart = _chart([s.id for s in done], [s.latest.id for s in done if s.latest is not None], vols)
+            chart = subject_chart(config.data, done)
             for v in vols:
                 for name in uncertainty.SEGMENTS:
                     iv = uncertainty.volume_interval(v, name)
@@ -288,8 +289,7 @@ def create_app(config: StationConfig) -> FastAPI:
         cells = {s.id: {n: uncertainty.volume_interval(s.latest.volumes, n) for n in uncertainty.SEGMENTS}
                  for s in done if s.latest is not None}
         sources = {iv.source for row in cells.values() for iv in row.values() if iv is not None}
-        chart = _chart([s.id for s in done], [s.latest.id for s in done if s.latest is not None],
-                       [s.latest.volumes for s in done if s.latest is not None]) if done else ""
+        chart = subject_chart(config.data, done)
         html = templates.get_template("history_pdf.html").render(
             subject=subj, done=done, cells=cells, segments=uncertainty.SEGMENTS, chart=chart, now=utcnow(),
             interval_label=uncertainty.source_label(sources) if sources else "no result yet")
@@ -577,26 +577,6 @@ def _subject_fields(code: str, sex: str, birth_year: str, height_m: str, mass_kg
     return {"code": code, "sex": sex, "birth_year": None if year is None else int(year),
             "height_m": num(height_m, "height", 0.5, 2.6, "m"), "mass_kg": num(mass_kg, "scale mass", 2, 400, "kg"),
             "notes": notes}
-
-
-_chart_cache: dict[tuple[tuple[int, ...], tuple[int, ...]], str] = {}
-_chart_lock = threading.Lock()
-
-
-def _chart(session_ids: list[int], result_ids: list[int], volumes: list[dict[str, Any]]) -> str:
-    """The subject's history chart, cached by the results it shows (they never change). Drawn once per
-    key: concurrent requests for the same chart wait for the first drawing instead of repeating it."""
-    from .charts import history_png
-
-    key = (tuple(session_ids), tuple(result_ids))
-    with _chart_lock:
-        hit = _chart_cache.get(key)
-        if hit is None:
-            hit = history_png([f"#{i}" for i in session_ids], volumes)
-            if len(_chart_cache) > 256:
-                _chart_cache.clear()
-            _chart_cache[key] = hit
-    return hit
 
 
 def _seed_demo(factory: Any) -> None:

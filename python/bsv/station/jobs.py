@@ -142,6 +142,17 @@ def run_job(db_url: str, data_dir: str, job_id: int) -> None:
             cap, calib = data / ses_row.capture_dir, data / ses_row.calibration
         result_id = _process(data, cap, calib, session_id, params, operator, factory, tmp_dirs,
                              lambda step, p: update(step=step, progress=0.5 + 0.5 * p if kind == "capture" else p))
+        update(step="drawing the subject's history chart", progress=0.99)
+        try:
+            with factory() as db:
+                from .charts import subject_chart
+                from .models import Subject
+
+                subj = db.get(Subject, subject_id)
+                if subj is not None:
+                    subject_chart(data, subj.sessions)
+        except Exception:  # the chart is a cache: the subject page draws it if this failed
+            log.warning("job %d: the history chart could not be drawn in the worker", job_id, exc_info=True)
         update(state="done", step="done", progress=1.0, result_id=result_id, finished_at=utcnow())
     except BsvError as e:
         update(state="failed", step="failed", message=str(e) or type(e).__name__, finished_at=utcnow())
@@ -168,7 +179,22 @@ def _capture(tmp: Path, data: Path, source: str, params: dict[str, Any],
         raise CaptureError(f"no station calibration: run `bsv calibrate` and copy its calibration.json to "
                            f"{station_cal}")
     update(step=f"{'replaying the recording' if source == 'replay' else 'capturing both cameras'}", progress=0.05)
-    info = rig.record(tmp, source, params)
+    stop = threading.Event()
+    if source == "realsense":  # the acquisition's progress bar: elapsed time of the still capture
+        seconds = float(params.get("seconds", 5.0))
+
+        def tick() -> None:
+            t0 = time.monotonic()
+            while not stop.wait(0.5):
+                done = min((time.monotonic() - t0) / seconds, 1.0)
+                update(step=f"capturing both cameras: {min(time.monotonic() - t0, seconds):.1f} / {seconds:.0f} s",
+                       progress=0.05 + 0.4 * done)
+
+        threading.Thread(target=tick, daemon=True).start()
+    try:
+        info = rig.record(tmp, source, params)
+    finally:
+        stop.set()
     shutil.copyfile(station_cal, tmp / "calibration.json")
     return info
 

@@ -25,6 +25,25 @@ from bsv.station import StationConfig, create_app, rig, uncertainty
 from bsv.station.models import AuditEvent, Job, Result, Session, Subject
 
 TOKEN = re.compile(r'name="csrf_token" value="([^"]+)"')
+#: Set to a PostgreSQL URL (postgresql+psycopg://user@host:port/db, an empty database the tests may wipe)
+#: to run these tests on PostgreSQL instead of the embedded SQLite.
+DB_ENV = "BSV_STATION_TEST_DB"
+
+
+def _config(data: Path, **kw: Any) -> StationConfig:
+    """A station config on the embedded SQLite, or on the (wiped) database of $BSV_STATION_TEST_DB."""
+    import os
+
+    url = os.environ.get(DB_ENV)
+    if url:
+        from sqlalchemy import create_engine, text
+
+        engine = create_engine(url)
+        with engine.begin() as conn:
+            conn.execute(text("DROP SCHEMA public CASCADE"))
+            conn.execute(text("CREATE SCHEMA public"))
+        engine.dispose()
+    return StationConfig(data=data, db_url=url or None, **kw)
 
 
 def _token(c: TestClient) -> str:
@@ -41,7 +60,7 @@ def _count(app: Any, model: Any) -> int:
 @pytest.fixture
 def station(tmp_path: Path) -> Iterator[tuple[TestClient, Any, str]]:
     """A station on localhost with the job runner off (jobs stay queued)."""
-    app = create_app(StationConfig(data=tmp_path / "data", run_jobs=False))
+    app = create_app(_config(tmp_path / "data", run_jobs=False))
     with TestClient(app) as c:
         yield c, app, _token(c)
 
@@ -260,7 +279,7 @@ def test_compare_export_session_and_result_files(station: tuple[TestClient, Any,
 def test_login_roles_and_csrf_off_localhost(tmp_path: Path) -> None:
     from bsv.station.security import add_user
 
-    app = create_app(StationConfig(data=tmp_path / "d", host="0.0.0.0", run_jobs=False))
+    app = create_app(_config(tmp_path / "d", host="0.0.0.0", run_jobs=False))
     with app.state.factory() as db:
         add_user(db, "olga", "correct horse battery", "operator")
         add_user(db, "vic", "viewer password 1", "viewer")
@@ -304,16 +323,22 @@ def test_login_roles_and_csrf_off_localhost(tmp_path: Path) -> None:
 
 
 def test_backup_archives_database_and_refuses_to_overwrite(station: tuple[TestClient, Any, str], tmp_path: Path) -> None:
+    import json
+
     from bsv.errors import OutputExistsError
     from bsv.station.backup import backup
 
     c, app, tok = station
     _subject(c, tok)
-    out = backup(app.state.config.data, tmp_path / "b" / "station.tar.gz")
+    config = app.state.config
+    out = backup(config.data, tmp_path / "b" / "station.tar.gz", config.db_url)
     with tarfile.open(out) as tar:
-        assert "station.sqlite3" in tar.getnames()
+        assert ("station.sqlite3" in tar.getnames()) == (config.db_url is None)
+        tables = json.load(tar.extractfile("tables.json"))  # type: ignore[arg-type]
+    assert [s["code"] for s in tables["subjects"]] == ["P-001"]
+    assert {e["action"] for e in tables["audit"]} == {"create_subject"}
     with pytest.raises(OutputExistsError):
-        backup(app.state.config.data, out)
+        backup(config.data, out, config.db_url)
 
 
 # ------------------------------------------------------------------------------------------------ jobs
@@ -331,7 +356,7 @@ def _wait(c: TestClient, job: str, timeout: float = 240.0) -> dict[str, Any]:
 
 @pytest.mark.slow
 def test_virtual_rig_job_then_a_failing_job_keeps_the_history(tmp_path: Path) -> None:
-    app = create_app(StationConfig(data=tmp_path / "data"))
+    app = create_app(_config(tmp_path / "data"))
     with TestClient(app) as c:
         tok = _token(c)
         sid = _subject(c, tok)
@@ -374,7 +399,7 @@ def test_virtual_rig_job_then_a_failing_job_keeps_the_history(tmp_path: Path) ->
 
 
 def test_demo_seeds_a_sample_subject_and_a_virtual_session_once(tmp_path: Path) -> None:
-    config = StationConfig(data=tmp_path / "demo", demo=True, run_jobs=False)
+    config = _config(tmp_path / "demo", demo=True, run_jobs=False)
     for _ in range(2):  # a second start adds nothing
         app = create_app(config)
         with TestClient(app) as c:

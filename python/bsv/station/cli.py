@@ -49,10 +49,11 @@ def _backup(argv: Sequence[str]) -> int:
     ap = argparse.ArgumentParser(prog="bsv station backup", description="Archive the station's data.")
     ap.add_argument("out", help="archive to write (.tar.gz; never replaced)")
     ap.add_argument("--data", default="bsv-station", help="data folder (default ./bsv-station)")
+    ap.add_argument("--db", default=None, help="SQLAlchemy database URL (default: SQLite in DATA)")
     a = ap.parse_args(list(argv))
     from .backup import backup
 
-    print(backup(Path(a.data), Path(a.out)))
+    print(backup(Path(a.data), Path(a.out), a.db))
     return 0
 
 

@@ -36,6 +36,7 @@ def browser() -> Iterator[Any]:
     for arg in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage", "--window-size=1400,1100"):
         opts.add_argument(arg)
     drv = webdriver.Chrome(service=Service(DRIVER), options=opts)
+    drv.implicitly_wait(20)  # find_element waits for the next page after a click
     try:
         yield drv
     finally:
@@ -51,8 +52,10 @@ def _capture(drv: Any, swollen: str | None, shot: str, timeout: float = 300.0, b
     if swollen is not None:
         Select(drv.find_element(By.ID, "swollen")).select_by_value(swollen)
     t0 = time.monotonic()
+    before = drv.current_url
     drv.find_element(By.ID, button).click()
-    WebDriverWait(drv, 10).until(lambda d: d.find_elements(By.ID, "bar"))
+    WebDriverWait(drv, 20).until(lambda d: d.current_url != before and "/jobs/" in d.current_url)
+    assert drv.find_element(By.ID, "job").get_attribute("data-kind") == "capture"
     WebDriverWait(drv, timeout, poll_frequency=1).until(
         lambda d: d.find_element(By.ID, "state").text in ("done", "failed"))
     elapsed = time.monotonic() - t0
@@ -89,7 +92,8 @@ def test_two_virtual_sessions_and_the_comparison_flag_the_swollen_forearm(browse
         assert drv.find_element(By.ID, "history-chart").is_displayed()
         _shot(drv, "05-subject-history")
         drv.find_element(By.ID, "compare").click()
-        rows = drv.find_elements(By.CSS_SELECTOR, "#changes tbody tr")
+        WebDriverWait(drv, 30).until(lambda d: d.find_elements(By.CSS_SELECTOR, "#changes tbody tr[data-segment]"))
+        rows = drv.find_elements(By.CSS_SELECTOR, "#changes tbody tr[data-segment]")
         flags = {r.get_attribute("data-segment"): r.get_attribute("data-significant") for r in rows}
         _shot(drv, "06-compare")
         assert flags["forearm_l"] == "yes", flags

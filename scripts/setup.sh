@@ -8,13 +8,23 @@ if [ ! -x .venv/bin/python ]; then
     "$PY" -m venv .venv
 fi
 .venv/bin/python -m pip install -q --upgrade pip
-.venv/bin/python -m pip install -q -r requirements-dev.txt -r requirements-frontend.txt -r requirements-batch.txt
+.venv/bin/python -m pip install -q -r requirements-dev.txt -r requirements-frontend.txt -r requirements-batch.txt \
+    -r requirements-station.txt
 # pyrealsense2 loads Debian's libusb at import time.
 if ! ldconfig -p 2>/dev/null | grep -q libusb-1.0.so.0; then
     if [ "$(id -u)" = 0 ]; then
         (apt-get update -qq && apt-get install -y -qq libusb-1.0-0) >/dev/null
     else
         echo "note: install libusb-1.0-0 (sudo apt-get install libusb-1.0-0) for RealSense capture" >&2
+    fi
+fi
+# BSV Station: its end-to-end test drives Debian's headless chromium through chromium-driver (Selenium);
+# its PDF export (weasyprint) loads Debian's pango.
+if ! command -v chromedriver >/dev/null 2>&1 || ! ldconfig -p 2>/dev/null | grep -q libpangoft2-1.0.so.0; then
+    if [ "$(id -u)" = 0 ]; then
+        (apt-get update -qq && apt-get install -y -qq chromium chromium-driver libpango-1.0-0 libpangoft2-1.0-0) >/dev/null
+    else
+        echo "note: install chromium, chromium-driver, libpango-1.0-0 and libpangoft2-1.0-0 (sudo apt-get install ...) for the station's browser test and PDF export" >&2
     fi
 fi
 # The extension (bsv._bsv) in the shared, optimised dev profile, installed editable into .venv.

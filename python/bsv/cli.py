@@ -22,6 +22,7 @@ commands:
   bench       synth | boxes | faust: the validation benchmark tables and figures
   cohort      OUT N [SEED]: write a synthetic MakeHuman cohort (labelled PLY + ground truth)
   batch       INPUTS... --out DIR: many captures / cloud files on Dask, resumable, one results table
+  station     the operator's web app: subjects, captures, follow-up comparison (--demo: virtual rig)
 
 Run `bsv <command> --help` for the options of a command. Lengths are metres, volumes litres.
 """
@@ -81,6 +82,10 @@ def _route(name: str) -> Callable[[list[str]], int | None] | None:
         from .batch.main import main as batch_main
 
         return batch_main
+    if name == "station":
+        from .station.cli import main as station_main
+
+        return station_main
     return None
 
 

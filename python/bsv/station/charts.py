@@ -1,0 +1,87 @@
+"""The follow-up charts of a subject page: every segment's volume and the left/right asymmetries over
+the sessions, each point with its 95 % interval (matplotlib, PNG inlined as base64).
+
+:func:`subject_chart` caches each chart in ``DATA/charts/`` under a name made of the results it shows
+(results never change, so neither does the chart). The worker process draws the chart right after it
+stores a result, so that the web process, whose threads share one interpreter lock, rarely draws."""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import io
+import threading
+import uuid
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from .uncertainty import ASYMMETRIES, SEGMENTS, Interval, ratio_interval, volume_interval
+
+_lock = threading.Lock()  # pyplot's state is global: one figure at a time
+
+
+def _png(fig: Any) -> str:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=80)
+    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode()
+
+
+def subject_chart(data: Path, sessions: Sequence[Any]) -> str:
+    """The history chart (a data: URL) of ``sessions`` (ORM sessions, oldest first; those without a result
+    are left out), from ``data/charts/`` when drawn before, else drawn and stored there; "" without results."""
+    done = [(s.id, s.latest) for s in sessions if s.latest is not None]
+    if not done:
+        return ""
+    key = ",".join(f"{sid}:{res.id}" for sid, res in done)
+    path = data / "charts" / (hashlib.sha256(key.encode()).hexdigest()[:32] + ".txt")
+    with _file_lock:
+        if path.is_file():
+            return path.read_text()
+        url = history_png([f"#{sid}" for sid, _ in done], [res.volumes for _, res in done])
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f".{uuid.uuid4().hex}.tmp")
+        tmp.write_text(url)
+        tmp.replace(path)
+        return url
+
+
+_file_lock = threading.Lock()  # one drawing at a time; concurrent requests for the same chart wait for it
+
+
+def history_png(labels: Sequence[str], volumes: Sequence[dict[str, Any]]) -> str:
+    """Small multiples (one panel per segment and asymmetry) of ``volumes`` (one volumes JSON per session,
+    oldest first, x labels ``labels``) with error bars; a data: URL."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    panels: list[tuple[str, str, list[Interval | None]]] = []
+    panels += [(s, "L", [volume_interval(v, s) for v in volumes]) for s in SEGMENTS]
+    panels += [(a.replace("asymmetry_", "asym. ").replace("_pct", ""), "% (L-R)/mean",
+                [ratio_interval(v, a) for v in volumes]) for a in ASYMMETRIES]
+    with _lock:
+        fig, axes = plt.subplots(2, 7, figsize=(15, 4.4), constrained_layout=True)
+        try:
+            x = list(range(len(labels)))
+            for ax, (title, unit, ivs) in zip(axes.flat, panels, strict=False):
+                pts = [(i, iv) for i, iv in zip(x, ivs, strict=True) if iv is not None]
+                if pts:
+                    xs = [i for i, _ in pts]
+                    ys = [iv.value for _, iv in pts]
+                    err = [[iv.value - iv.lo for _, iv in pts], [iv.hi - iv.value for _, iv in pts]]
+                    ax.errorbar(xs, ys, yerr=err, fmt="o-", capsize=3, ms=4, lw=1)
+                ax.set_title(title, fontsize=9)
+                ax.set_ylabel(unit, fontsize=7)
+                ax.set_xticks(x, [str(s) for s in labels], fontsize=7)
+                ax.tick_params(axis="y", labelsize=7)
+                ax.set_xlim(-0.5, max(len(labels) - 0.5, 0.5))
+            for ax in list(axes.flat)[len(panels):]:
+                ax.axis("off")
+            return _png(fig)
+        finally:
+            plt.close(fig)
+
+
+__all__ = ["history_png", "subject_chart"]

@@ -21,10 +21,7 @@ VOLUME_ROWS: tuple[str, ...] = ("trunk_limbs", *TRUNK_LIMBS)
 
 def thumbnail_png(mesh: Mesh, height_px: int = 220, view: str = "front") -> bytes:
     """A small PNG of the labelled mesh (palette colours, flat shading; ``bsv.report.render_mesh``)."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    from matplotlib.figure import Figure
+    from matplotlib.figure import Figure  # no pyplot: the notebook's backend is left alone
 
     from .report import face_labels, render_mesh
 

@@ -155,15 +155,15 @@ def test_trimesh_objects_are_not_mistaken_for_open3d(template: bsv.Mesh, cloud: 
 
 
 def test_bad_dicts_and_objects_are_typed_errors(template: bsv.Mesh) -> None:
-    with pytest.raises(bsv.InputError, match="unknown key.*'triangles'"):
+    with pytest.raises(bsv.InputError, match=r"unknown key.*'triangles'"):
         as_mesh({"vertices": template.vertices, "triangles": template.faces})
     with pytest.raises(bsv.InputError, match="'faces'"):
         as_mesh({"vertices": template.vertices})
-    with pytest.raises(bsv.InputError, match="unknown key.*'label'"):
+    with pytest.raises(bsv.InputError, match=r"unknown key.*'label'"):
         as_cloud({"points": template.vertices, "label": template.vertex_labels})
     with pytest.raises(TypeError, match="cannot read a mesh from int"):
         as_mesh(3)
-    with pytest.raises(bsv.InputError, match="0..1"):
+    with pytest.raises(bsv.InputError, match=r"0\.\.1"):
         o = o3d.t.geometry.PointCloud(o3d.core.Tensor(template.vertices))
         o.point.colors = o3d.core.Tensor(np.full((len(template.vertices), 3), 2.0))
         as_cloud(o)

@@ -99,9 +99,14 @@ def test_mesh_round_trip_keeps_labels_and_volumes(case: str, template: bsv.Mesh,
 
 
 def test_numpy_mesh_arrays_with_labels(template: bsv.Mesh) -> None:
+    # Per-face labels beside the arrays: the same volumes, exactly.
+    assert bsv.volumes(template.vertices, template.faces, template.face_labels) == bsv.volumes(template)
+    # Per-vertex labels: faces take the label of two corners (DESIGN.md label rules), close to the template's.
     got = bsv.volumes(template.vertices, template.faces, template.vertex_labels)["volumes_l"]
     assert got["thigh_l"] == pytest.approx(bsv.volumes(template)["volumes_l"]["thigh_l"], rel=0.02)
     assert set(got) >= set(bsv.TRUNK_LIMBS)
+    back = as_mesh(template.vertices, template.faces, template.vertex_labels, template.face_labels)
+    assert np.array_equal(back.vertex_labels, template.vertex_labels)
 
 
 def test_exported_meshes_carry_palette_colours(template: bsv.Mesh) -> None:

@@ -68,6 +68,13 @@ for _side in ("l", "r"):
     for _part in ("upperleg", "lowerleg"):
         for _kind in ("fat", "muscle"):
             LOCAL_TARGETS += [f"legs/{_side}-{_part}-{_kind}-decr", f"legs/{_side}-{_part}-{_kind}-incr"]
+# Segment shape modifiers at the extremes of MakeHuman's range: the hard-shape classes of the cohort
+# (`bsv.bodies.hard`): a limb segment much deeper or narrower than the template's.
+for _side in ("l", "r"):
+    for _group, _parts in (("arms", ("upperarm", "lowerarm")), ("legs", ("upperleg", "lowerleg"))):
+        for _part in _parts:
+            for _kind in ("scale-depth", "scale-horiz"):
+                LOCAL_TARGETS += [f"{_group}/{_side}-{_part}-{_kind}-decr", f"{_group}/{_side}-{_part}-{_kind}-incr"]
 
 
 def macro_target_names() -> list[str]:

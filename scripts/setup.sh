@@ -8,7 +8,7 @@ if [ ! -x .venv/bin/python ]; then
     "$PY" -m venv .venv
 fi
 .venv/bin/python -m pip install -q --upgrade pip
-.venv/bin/python -m pip install -q -r requirements-dev.txt -r requirements-frontend.txt -r requirements-interop.txt
+.venv/bin/python -m pip install -q -r requirements-dev.txt -r requirements-frontend.txt -r requirements-batch.txt -r requirements-interop.txt
 # pyrealsense2 loads Debian's libusb at import time.
 if ! ldconfig -p 2>/dev/null | grep -q libusb-1.0.so.0; then
     if [ "$(id -u)" = 0 ]; then

@@ -54,7 +54,7 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module 'bsv' has no attribute {name!r}")
 
 
-_LAZY_SUBMODULES = ("bodies", "frontend", "bench", "report", "cli")
+_LAZY_SUBMODULES = ("bodies", "frontend", "bench", "report", "cli", "biomech")
 
 
 def _out_path(path: PathLike, overwrite: bool) -> str:
@@ -278,6 +278,32 @@ def surface_distances(points: Any, mesh: Any) -> npt.NDArray[np.float64]:
     return _bsv.surface_distances(np.ascontiguousarray(pts, dtype=np.float64).reshape(-1, 3), m.vertices, m.faces)
 
 
+def bsip(
+    mesh: Any,
+    density: float | Mapping[str, float] | None = None,
+    *,
+    sex: str = "male",
+    out_dir: PathLike | None = None,
+    overwrite: bool = False,
+) -> Any:
+    """Body-segment inertial parameters of a labelled closed mesh (a :class:`Mesh`, a :class:`Registration`
+    or ``bsv process`` result, a synthetic ``bsv.bodies.Body``, a trimesh/Open3D mesh with labels): per
+    segment the mass (segment densities, default Dempster 1955 via Winter 2009 Table 4.1; ``density`` one
+    number in kg/m^3, or a mapping by segment name or kind over the table), centre of mass, inertia tensor
+    about it, the joint centres (centroids of the boundaries segments share) and the segment lengths,
+    beside de Leva's (1996) regression values for ``sex``. Returns a :class:`bsv.biomech.BSIP` (``.table()``
+    prints a readable table); with ``out_dir`` also writes bsip.json, bsip.csv and model.osim (OpenSim)."""
+    from .biomech import FILES, check_output, compute, write_all
+
+    if out_dir is not None:  # the outputs are checked before the work
+        for name in FILES:
+            check_output(Path(out_dir) / name, overwrite)
+    result = compute(mesh, density, sex=sex)
+    if out_dir is not None:
+        write_all(result, Path(out_dir), overwrite=overwrite)
+    return result
+
+
 __all__ = [
     "SEGMENT_IDS",
     "SEGMENT_NAMES",
@@ -304,6 +330,7 @@ __all__ = [
     "VolumeError",
     "VolumeReport",
     "WriteError",
+    "bsip",
     "check_mesh",
     "default_template",
     "read_mesh",

@@ -102,6 +102,14 @@ def volumes(
     close_holes: bool = False,
     islands: bool = False,
 ) -> VolumeReport: ...
+def mass_properties(
+    vertices: ArrayLike,
+    faces: ArrayLike,
+    vertex_labels: ArrayLike | None = None,
+    face_labels: ArrayLike | None = None,
+    close_holes: bool = False,
+    islands: bool = False,
+) -> dict[str, Any]: ...
 def default_template(full: bool = False) -> MeshTuple: ...
 def register(
     template_vertices: ArrayLike,

@@ -21,6 +21,7 @@ commands:
   capture     record both RealSense cameras (or replay recordings with --from-recording)
   bench       synth | boxes | faust: the validation benchmark tables and figures
   cohort      OUT N [SEED]: write a synthetic MakeHuman cohort (labelled PLY + ground truth)
+  batch       INPUTS... --out DIR: many captures / cloud files on Dask, resumable, one results table
 
 Run `bsv <command> --help` for the options of a command. Lengths are metres, volumes litres.
 """
@@ -76,6 +77,10 @@ def _route(name: str) -> Callable[[list[str]], int | None] | None:
         return bench_main
     if name == "cohort":
         return _cohort_main
+    if name == "batch":
+        from .batch.main import main as batch_main
+
+        return batch_main
     return None
 
 

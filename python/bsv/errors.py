@@ -239,8 +239,24 @@ class FloorError(BsvError, ValueError):
     """A capture folder lacks the per-camera extrinsics the floor needs."""
 
 
+# --- biomechanics outputs (bsv.bsip) ---------------------------------------------------------------
+
+
+class BsipError(BsvError, ValueError):
+    """Body-segment inertial parameters cannot be computed or exported as asked (a bad density, a segment
+    without volume, a missing package); the message names the parameter or segment and what to do."""
+
+
+# --- batch processing (bsv.batch) ----------------------------------------------------------------
+
+
+class BatchInputError(InputError):
+    """An input, manifest or option of ``bsv batch`` is not usable (names the file, column or option and
+    what to do); the batch does not start."""
+
+
 __all__ = [
-    "AssetError", "BenchError", "BlurredImageError", "BsvError", "BsvWarning", "CalibrationError", "CalibrationFileError",
+    "AssetError", "BatchInputError", "BenchError", "BlurredImageError", "BsipError", "BsvError", "BsvWarning", "CalibrationError", "CalibrationFileError",
     "CaptureError", "FloorError", "FormatError", "FrontendError", "ImplausibleCaptureError", "InputError", "LabelError",
     "LandmarkMissingError", "MarkerNotFoundError", "MeshError", "MissingExtraError", "NoCameraError", "OutputExistsError",
     "PersonIsolationError", "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",

@@ -28,10 +28,10 @@ from typing import Any
 import numpy as np
 
 from . import _bsv
-from .errors import OutputExistsError, PersonIsolationError
+from .errors import BsipError, OutputExistsError, PersonIsolationError
 from .extras import require
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
-from .types import TRUNK_LIMBS, Mesh, PointCloud, Registration
+from .types import SEGMENT_IDS, TRUNK_LIMBS, Mesh, PointCloud, Registration
 
 PathLike = str | Path
 
@@ -62,6 +62,8 @@ class ProcessResult:
     #: Ground truth and comparison rows, filled by :func:`demo`.
     truth: dict[str, float] | None = None
     comparison: list[dict[str, Any]] = field(default_factory=list)
+    #: Body-segment inertial parameters (:class:`bsv.biomech.BSIP`), with ``bsip=True``.
+    bsip: Any = None
 
     @property
     def mesh(self) -> Mesh:
@@ -240,19 +242,21 @@ def _print_cloud(points: int, report: dict[str, Any]) -> None:
         print(f"[bsv]   warning: {w}", flush=True)
 
 
-def output_files(cameras: Sequence[str] = ("front", "back"), demo: bool = False) -> list[str]:
-    """Paths (relative to OUT) that process (and demo, with ``demo``) may write."""
+def output_files(cameras: Sequence[str] = ("front", "back"), demo: bool = False, bsip: bool = False) -> list[str]:
+    """Paths (relative to OUT) that process (and demo, with ``demo``; the BSIP files with ``bsip``) may write."""
+    from .biomech import FILES as BSIP_FILES
     from .frontend.segment import SEGMENTATION_FILES
     from .report import FIGURES
 
     seg = [f"{SEGMENTATION_DIR}/{cam}/{n}" for cam in cameras for n in SEGMENTATION_FILES]
-    return [*OUTPUTS, *FIGURES, *seg, *((DEMO_OUTPUT,) if demo else ())]
+    return [*OUTPUTS, *FIGURES, *seg, *((DEMO_OUTPUT,) if demo else ()), *(BSIP_FILES if bsip else ())]
 
 
-def _check_outputs(out: Path, overwrite: bool, cameras: Sequence[str] = ("front", "back"), demo: bool = False) -> None:
+def _check_outputs(out: Path, overwrite: bool, cameras: Sequence[str] = ("front", "back"), demo: bool = False,
+                   bsip: bool = False) -> None:
     if out.exists() and not out.is_dir():
         raise OutputExistsError(f"{out} exists and is not a folder; choose another output folder")
-    existing = [n for n in output_files(cameras, demo) if (out / n).exists()]
+    existing = [n for n in output_files(cameras, demo, bsip) if (out / n).exists()]
     if existing and not overwrite:
         raise OutputExistsError(
             f"{out} already holds {', '.join(existing)}; pass overwrite=True (--overwrite) to replace them")
@@ -283,6 +287,9 @@ def process(
     segment_params: dict[str, Any] | None = None,
     title: str = "BSV report",
     truth: dict[str, float] | None = None,
+    bsip: bool = False,
+    bsip_density: float | dict[str, float] | None = None,
+    bsip_sex: str = "male",
     **register_params: Any,
 ) -> ProcessResult:
     """Segmentation, cloud, registration and volumes of a capture folder (``CAPTURE_DIR/<camera>/`` with
@@ -298,7 +305,10 @@ def process(
 
     ``remove_floor`` / ``isolate_person`` (on by default; ``--keep-floor`` / ``--no-isolate`` for diagnosis)
     and ``cloud_params`` (more ``FuseParams`` thresholds): only the person reaches the registration, see
-    :func:`build_cloud`. The floor check's warnings are printed and shown in the report."""
+    :func:`build_cloud`. The floor check's warnings are printed and shown in the report.
+
+    ``bsip``: also the body-segment inertial parameters of the fitted mesh (:func:`bsv.bsip`; densities
+    ``bsip_density``, de Leva's values for ``bsip_sex``): bsip.json, bsip.csv and model.osim (OpenSim)."""
     from . import register as bsv_register
     from . import write_mesh, write_point_cloud
     from .frontend.capture import read_capture
@@ -308,7 +318,13 @@ def process(
         raise SegmentationError(f"segmentation must be one of {SEGMENTATIONS}, got {segmentation!r}")
     cap = Path(capture_dir)
     out = Path(out_dir)
-    _check_outputs(out, overwrite, cameras)
+    _check_outputs(out, overwrite, cameras, bsip=bsip)
+    if bsip:
+        from .biomech import SEXES, densities
+
+        if bsip_sex not in SEXES:
+            raise BsipError(f"bsip_sex must be one of {SEXES}, got {bsip_sex!r}")
+        densities(bsip_density, [n for n in SEGMENT_IDS if n != "unlabelled"])  # a bad density fails before the work
     dirs = _camera_dirs(cap, cameras)
     steps = _Steps(progress)
 
@@ -346,6 +362,12 @@ def process(
         "register", "registering the template (ARAP)",
         lambda: bsv_register(cloud, template=template, progress=False, density=density, **register_params))
 
+    inertial = None
+    if bsip:
+        from .biomech import compute as compute_bsip
+
+        inertial = steps.run("bsip", "segment masses, centres of mass, inertia (bsip)",
+                             lambda: compute_bsip(reg, bsip_density, sex=bsip_sex))
     vols = dict(reg.volumes)
     vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report}
     out.mkdir(parents=True, exist_ok=True)
@@ -362,9 +384,15 @@ def process(
         write_point_cloud(files["cloud"], cloud, overwrite=overwrite)
         write_mesh(files["fitted"], reg.mesh, overwrite=overwrite)
         files["volumes"].write_text(json.dumps(vols, indent=2) + "\n")
+        if inertial is not None:
+            from .biomech import write_all as write_bsip
+
+            files.update({Path(n).stem + "_" + Path(n).suffix[1:]: p
+                          for n, p in write_bsip(inertial, out, overwrite=overwrite).items()})
 
     steps.run("write", "writing the segmentation, cloud.ply, fitted.ply, volumes.json", write_all)
-    result = ProcessResult(out, cloud, reg, vols, cloud_report, seg_summary, steps.timings, files, truth=truth)
+    result = ProcessResult(out, cloud, reg, vols, cloud_report, seg_summary, steps.timings, files, truth=truth,
+                           bsip=inertial)
     if truth is not None:
         result.comparison = compare(vols, truth)
     figs = steps.run("report", "drawing the report", lambda: write_report(result, out, title=title, overwrite=overwrite))
@@ -418,7 +446,8 @@ def demo(
     from . import bodies, scan
 
     out = Path(out_dir)
-    _check_outputs(out, overwrite, process_params.get("cameras", ("front", "back")), demo=True)
+    _check_outputs(out, overwrite, process_params.get("cameras", ("front", "back")), demo=True,
+                   bsip=bool(process_params.get("bsip", False)))
     cap = out / "capture"
     steps = _Steps(progress)
     subj = steps.run("subject", f"synthetic subject {subject} (cohort seed {seed})", lambda: bodies.subject(subject, seed))
@@ -484,6 +513,14 @@ def main_process(argv: Sequence[str] | None = None) -> int:
                     help="cloud-building parameter, e.g. floor_margin_m=0.03, link_m=0.03 (repeatable)")
     ap.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="registration parameter (repeatable)")
     ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT")
+    ap.add_argument("--bsip", action="store_true",
+                    help="also segment masses, centres of mass, inertia, joint centres and lengths: bsip.json, "
+                         "bsip.csv (de Leva layout) and model.osim (OpenSim)")
+    ap.add_argument("--bsip-density", metavar="KG_M3|JSON",
+                    help="with --bsip: one density in kg/m^3, or a JSON mapping by segment or kind, e.g. "
+                         "'{\"thigh\": 1060}' (default: Dempster 1955 via Winter 2009 Table 4.1)")
+    ap.add_argument("--bsip-sex", choices=("male", "female"), default="male",
+                    help="with --bsip: the column of de Leva's (1996) table to compare with (default male)")
     ap.add_argument("--quiet", action="store_true", help="no progress output")
     a = ap.parse_args(list(argv) if argv is not None else None)
     from . import read_mesh
@@ -503,11 +540,28 @@ def main_process(argv: Sequence[str] | None = None) -> int:
                       overwrite=a.overwrite, keep_extremities=a.keep_extremities, sor=a.sor, sor_k=a.sor_k,
                       sor_std_ratio=a.sor_std, remove_floor=not a.keep_floor, isolate_person=not a.no_isolate,
                       cloud_params=_register_args(a.cloud_param, "--cloud-param"),
-                      **_register_args(a.param))
+                      **_bsip_args(a), **_register_args(a.param))
         _print_process(res)
         return 0
 
     return run_command("bsv process", run)
+
+
+def _bsip_args(a: argparse.Namespace) -> dict[str, Any]:
+    """The keywords of process for ``--bsip``, ``--bsip-density`` and ``--bsip-sex`` (none without --bsip)."""
+    if not a.bsip:
+        if a.bsip_density is not None:
+            raise SystemExit("--bsip-density needs --bsip")
+        return {}
+    density = None
+    if a.bsip_density is not None:
+        try:
+            density = json.loads(a.bsip_density)
+        except json.JSONDecodeError:
+            raise SystemExit(f"--bsip-density expects a number or a JSON mapping, got {a.bsip_density!r}") from None
+        if not isinstance(density, (int, float, dict)) or isinstance(density, bool):
+            raise SystemExit(f"--bsip-density expects a number or a JSON mapping, got {a.bsip_density!r}")
+    return {"bsip": True, "bsip_density": density, "bsip_sex": a.bsip_sex}
 
 
 def _print_process(res: Any) -> None:
@@ -515,6 +569,8 @@ def _print_process(res: Any) -> None:
     for name in (*TRUNK_LIMBS, "trunk_limbs"):
         if name in v:
             print(f"{name:<14}{v[name]:>9.3f} L")
+    if res.bsip is not None:
+        print(res.bsip.table())
     print(f"report: {res.files['report']}")
 
 
@@ -543,15 +599,26 @@ def main_demo(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--no-room", action="store_true",
                     help="render the subject alone on grey instead of in a clinic room (floor, walls)")
     ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT")
+    ap.add_argument("--bsip", action="store_true",
+                    help="also segment masses, centres of mass, inertia, joint centres and lengths: bsip.json, "
+                         "bsip.csv (de Leva layout) and model.osim (OpenSim)")
+    ap.add_argument("--bsip-density", metavar="KG_M3|JSON",
+                    help="with --bsip: one density in kg/m^3, or a JSON mapping by segment or kind, e.g. "
+                         "'{\"thigh\": 1060}' (default: Dempster 1955 via Winter 2009 Table 4.1)")
+    ap.add_argument("--bsip-sex", choices=("male", "female"), default="male",
+                    help="with --bsip: the column of de Leva's (1996) table to compare with (default male)")
     ap.add_argument("--quiet", action="store_true", help="only the final table")
     a = ap.parse_args(list(argv) if argv is not None else None)
     from .exitcodes import run_command
 
     def run() -> int:
         res = demo(a.out, seed=a.seed, subject=a.subject, condition=a.condition, segmentation=a.segmentation,
-                   progress=not a.quiet, overwrite=a.overwrite, room=not a.no_room, **_register_args(a.param))
+                   progress=not a.quiet, overwrite=a.overwrite, room=not a.no_room, **_bsip_args(a),
+                   **_register_args(a.param))
         if a.quiet:
             print(comparison_table(res.comparison))
+        if res.bsip is not None:
+            print(res.bsip.table())
         return 0
 
     return run_command("bsv demo", run)

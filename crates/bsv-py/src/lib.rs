@@ -7,6 +7,7 @@ mod convert;
 mod errors;
 mod functions;
 mod fuse;
+mod mass;
 mod register;
 mod segments;
 
@@ -23,5 +24,6 @@ fn _bsv(m: &Bound<'_, PyModule>) -> PyResult<()> {
     functions::register(m)?;
     fuse::register(m)?;
     segments::register(m)?;
+    mass::register(m)?;
     Ok(())
 }

@@ -9,6 +9,7 @@ mod edges;
 pub mod error;
 pub mod indices;
 pub mod labels;
+pub mod mass;
 pub mod report;
 pub mod segments;
 
@@ -19,8 +20,9 @@ pub use labels::{
     face_label_from_corners, face_labels_from_vertices, merge_small_islands, vertex_labels_from_faces, IslandOptions,
     IslandReport,
 };
+pub use mass::{mass_properties, segment_mass_with, MassProperties, SegmentMass};
 pub use report::{report, report_with, NamedValues, Units, VolumeReport};
 pub use segments::{
-    segment_volumes, segment_volumes_with, volumes_by_label, CapStats, LabelSource, LabelVolumes, SegmentOptions,
-    SegmentVolumes,
+    segment_volumes, segment_volumes_with, volumes_by_label, CapStats, Interface, LabelSource, LabelVolumes,
+    SegmentOptions, SegmentVolumes,
 };

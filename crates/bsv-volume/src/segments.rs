@@ -28,10 +28,12 @@
 use crate::closed::{open_error, prepare, Hole};
 use crate::edges::{det6, used_centroid, validate, EdgeTable};
 use crate::labels::{face_labels_from_vertices, merge_small_islands, IslandOptions, IslandReport};
+use crate::mass::Moments;
 use crate::VolumeError;
 use bsv_core::geometry::{add, scale};
 use bsv_core::{Segment, TriMesh};
 use std::collections::BTreeMap;
+use std::ops::{AddAssign, Mul, SubAssign};
 
 /// Where the face labels used for segment volumes came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -126,10 +128,26 @@ pub fn segment_volumes(mesh: &TriMesh) -> Result<SegmentVolumes, VolumeError> {
     segment_volumes_with(mesh, &SegmentOptions::default())
 }
 
-/// Segment volumes with options (hole closing, island merging).
-pub fn segment_volumes_with(mesh: &TriMesh, opts: &SegmentOptions) -> Result<SegmentVolumes, VolumeError> {
+/// A closed mesh with its edge table and one label per face, as every per-segment measure uses it.
+pub(crate) struct Labelled<'a> {
+    /// The mesh, holes closed when asked.
+    pub closed: std::borrow::Cow<'a, TriMesh>,
+    /// Holes closed.
+    pub holes: Vec<Hole>,
+    /// Edge table of `closed`.
+    pub table: EdgeTable,
+    /// One label per face of `closed` (islands merged when asked).
+    pub labels: Vec<u8>,
+    /// Where the labels came from.
+    pub source: LabelSource,
+    /// What island merging changed.
+    pub islands: Option<IslandReport>,
+}
+
+/// Validates, closes holes when asked, and picks the face labels (faces, else vertices, else none)
+/// with small islands merged when asked: the one labelling rule of volumes and mass properties.
+pub(crate) fn labelled<'a>(mesh: &'a TriMesh, opts: &SegmentOptions) -> Result<Labelled<'a>, VolumeError> {
     let (closed, holes, table) = prepare(mesh, opts.close_holes)?;
-    let mut notes = Vec::new();
     let (mut labels, source) = match (&closed.face_labels, &closed.vertex_labels) {
         (Some(f), _) => (f.clone(), LabelSource::Faces),
         (None, Some(v)) => (face_labels_from_vertices(&closed.triangles, v), LabelSource::Vertices),
@@ -139,6 +157,13 @@ pub fn segment_volumes_with(mesh: &TriMesh, opts: &SegmentOptions) -> Result<Seg
         (Some(o), LabelSource::Faces | LabelSource::Vertices) => Some(merge_small_islands(&closed, &mut labels, &o)),
         _ => None,
     };
+    Ok(Labelled { closed, holes, table, labels, source, islands })
+}
+
+/// Segment volumes with options (hole closing, island merging).
+pub fn segment_volumes_with(mesh: &TriMesh, opts: &SegmentOptions) -> Result<SegmentVolumes, VolumeError> {
+    let Labelled { closed, holes, table, labels, source, islands } = labelled(mesh, opts)?;
+    let mut notes = Vec::new();
     let lv = label_volumes(&closed.vertices, &closed.triangles, &table, &labels);
     let inverted = lv.whole_m3 < 0.0;
     let sign = if inverted { -1.0 } else { 1.0 };
@@ -196,6 +221,55 @@ pub fn segment_volumes_with(mesh: &TriMesh, opts: &SegmentOptions) -> Result<Seg
     })
 }
 
+/// A six-fold tetrahedron integral summed per label: the volume (`f64`, `det6`) or the volume
+/// moments of `mass` (`Moments`). The caps are built once and add the same integrand to both sides.
+pub(crate) trait Integrand: Copy + Default + AddAssign + SubAssign + Mul<f64, Output = Self> {
+    /// The six-fold integral over the signed tetrahedron (r, a, b, c).
+    fn tetra(r: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> Self;
+}
+
+impl Integrand for f64 {
+    fn tetra(r: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
+        det6(r, a, b, c)
+    }
+}
+
+impl Integrand for Moments {
+    fn tetra(r: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> Moments {
+        Moments::tetra(r, a, b, c)
+    }
+}
+
+/// An interface between two segments: one piece of the caps (a closed loop, e.g. the elbow's, or a
+/// path between junctions) and its apex, the centroid of its vertices.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Interface {
+    /// The smaller label of the two sides.
+    pub lo: u8,
+    /// The larger label of the two sides.
+    pub hi: u8,
+    /// Centroid of the piece's distinct vertices (the cap apex), metres.
+    pub centroid: [f64; 3],
+    /// Number of distinct vertices of the piece.
+    pub vertices: usize,
+    /// True for a closed loop, false for a path between junctions.
+    pub closed: bool,
+}
+
+/// Six-fold integrals of the whole and of every label, from reference point `reference`.
+pub(crate) struct LabelIntegrals<I> {
+    /// The reference point of the tetrahedra.
+    pub reference: [f64; 3],
+    /// Whole mesh.
+    pub whole: I,
+    /// `(label, integral, face count)` for every label that has faces, by label.
+    pub by_label: Vec<(u8, I, usize)>,
+    /// Cap statistics.
+    pub caps: CapStats,
+    /// The cap pieces (interfaces).
+    pub interfaces: Vec<Interface>,
+}
+
 /// Volumes (m^3, signed) of every label of a closed mesh, `face_labels` one per triangle. The caller
 /// guarantees a validated mesh and its edge table (closed, manifold, consistently oriented).
 pub(crate) fn label_volumes(
@@ -207,6 +281,16 @@ pub(crate) fn label_volumes(
     label_volumes_at(used_centroid(vertices, triangles), vertices, triangles, table, face_labels)
 }
 
+/// Six-fold integrals of every label of a closed mesh from the centroid of its used vertices.
+pub(crate) fn label_integrals<I: Integrand>(
+    vertices: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    table: &EdgeTable,
+    face_labels: &[u8],
+) -> LabelIntegrals<I> {
+    label_integrals_at(used_centroid(vertices, triangles), vertices, triangles, table, face_labels)
+}
+
 /// `label_volumes` with tetrahedra taken from the reference point `r` (any point gives the same
 /// volumes for closed surfaces; the unit tests use this to prove every segment surface is closed).
 fn label_volumes_at(
@@ -216,12 +300,25 @@ fn label_volumes_at(
     table: &EdgeTable,
     face_labels: &[u8],
 ) -> LabelVolumes {
-    let (mut acc, count, whole) = face_volumes(r, vertices, triangles, face_labels);
+    let li = label_integrals_at::<f64>(r, vertices, triangles, table, face_labels);
+    let by_label = li.by_label.iter().map(|&(l, v, n)| (l, v / 6.0, n)).collect();
+    LabelVolumes { whole_m3: li.whole / 6.0, by_label, caps: li.caps }
+}
+
+/// The integrals of every label with the caps of the module docs, tetrahedra from `r`.
+fn label_integrals_at<I: Integrand>(
+    r: [f64; 3],
+    vertices: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    table: &EdgeTable,
+    face_labels: &[u8],
+) -> LabelIntegrals<I> {
+    let (mut acc, count, whole) = face_integrals::<I>(r, vertices, triangles, face_labels);
     // 1. Interface edges, chained into pieces.
     let iface = interface_edges(table, face_labels);
     let mut caps = CapStats { interface_edges: iface.len(), ..CapStats::default() };
     if iface.is_empty() {
-        return finish(acc, count, whole, caps);
+        return finish(r, acc, count, whole, caps, Vec::new());
     }
     let (piece, n_pieces) = chain_pieces(vertices.len(), &iface);
     // 2. One apex per piece, and the piece fans.
@@ -229,23 +326,24 @@ fn label_volumes_at(
     pieces.add_fans(r, vertices, &iface, &mut acc);
     // 3. Junction clusters close the spokes of the open pieces.
     pieces.close_spokes(r, vertices, &mut acc, &mut caps);
-    finish(acc, count, whole, caps)
+    let interfaces = pieces.interfaces();
+    finish(r, acc, count, whole, caps, interfaces)
 }
 
-/// Sums the six-fold tetrahedron volumes of the faces from `r`: per label, the face count per
+/// Sums the six-fold tetrahedron integrals of the faces from `r`: per label, the face count per
 /// label, and the whole.
-fn face_volumes(
+fn face_integrals<I: Integrand>(
     r: [f64; 3],
     vertices: &[[f64; 3]],
     triangles: &[[u32; 3]],
     face_labels: &[u8],
-) -> ([f64; 256], [usize; 256], f64) {
+) -> (Vec<I>, [usize; 256], I) {
     let pos = |v: u32| vertices[v as usize];
-    let mut acc = [0.0f64; 256];
+    let mut acc = vec![I::default(); 256];
     let mut count = [0usize; 256];
-    let mut whole = 0.0;
+    let mut whole = I::default();
     for (t, &l) in triangles.iter().zip(face_labels) {
-        let d = det6(r, pos(t[0]), pos(t[1]), pos(t[2]));
+        let d = I::tetra(r, pos(t[0]), pos(t[1]), pos(t[2]));
         acc[usize::from(l)] += d;
         count[usize::from(l)] += 1;
         whole += d;
@@ -338,6 +436,8 @@ struct Pieces {
     pair: Vec<(u8, u8)>,
     /// `(piece, vertex, out - in)` on the smaller label's side, where non-zero: the ends of open pieces.
     spokes: Vec<(u32, u32, i32)>,
+    /// Number of distinct vertices of each piece.
+    size: Vec<usize>,
 }
 
 impl Pieces {
@@ -372,14 +472,31 @@ impl Pieces {
         for (k, e) in iface.iter().enumerate() {
             pair[of_edge[k] as usize] = (e.lo, e.hi);
         }
-        Pieces { of_edge, count: np, apex, pair, spokes }
+        Pieces { of_edge, count: np, apex, pair, spokes, size: apex_n }
+    }
+
+    /// The pieces as interfaces (label pair, apex, size, closed loop or not).
+    fn interfaces(&self) -> Vec<Interface> {
+        let mut open = vec![false; self.count];
+        for &(p, _, _) in &self.spokes {
+            open[p as usize] = true;
+        }
+        (0..self.count)
+            .map(|p| Interface {
+                lo: self.pair[p].0,
+                hi: self.pair[p].1,
+                centroid: self.apex[p],
+                vertices: self.size[p],
+                closed: !open[p],
+            })
+            .collect()
     }
 
     /// Piece fans: the smaller label gets (apex, b, a), the larger the same triangle reversed.
-    fn add_fans(&self, r: [f64; 3], vertices: &[[f64; 3]], iface: &[IEdge], acc: &mut [f64; 256]) {
+    fn add_fans<I: Integrand>(&self, r: [f64; 3], vertices: &[[f64; 3]], iface: &[IEdge], acc: &mut [I]) {
         let pos = |v: u32| vertices[v as usize];
         for (k, e) in iface.iter().enumerate() {
-            let d = det6(r, self.apex[self.of_edge[k] as usize], pos(e.b), pos(e.a));
+            let d = I::tetra(r, self.apex[self.of_edge[k] as usize], pos(e.b), pos(e.a));
             acc[usize::from(e.lo)] += d;
             acc[usize::from(e.hi)] -= d;
         }
@@ -387,7 +504,7 @@ impl Pieces {
 
     /// Junction clusters: pieces and junction vertices linked by spokes, one hub per cluster; each
     /// spoke is closed by (apex, junction, hub) on both sides. Fills the piece and junction counts.
-    fn close_spokes(&self, r: [f64; 3], vertices: &[[f64; 3]], acc: &mut [f64; 256], caps: &mut CapStats) {
+    fn close_spokes<I: Integrand>(&self, r: [f64; 3], vertices: &[[f64; 3]], acc: &mut [I], caps: &mut CapStats) {
         let pos = |v: u32| vertices[v as usize];
         let np = self.count;
         let mut open = vec![false; np];
@@ -414,7 +531,7 @@ impl Pieces {
         for &(p, v, d) in &self.spokes {
             let root = cuf.find(p as usize);
             let hub = scale(hub_sum[root], 1.0 / hub_n[root].max(1) as f64);
-            let w = f64::from(d) * det6(r, self.apex[p as usize], pos(v), hub);
+            let w = I::tetra(r, self.apex[p as usize], pos(v), hub) * f64::from(d);
             let (lo, hi) = self.pair[p as usize];
             acc[usize::from(lo)] += w;
             acc[usize::from(hi)] -= w;
@@ -426,9 +543,16 @@ impl Pieces {
     }
 }
 
-fn finish(acc: [f64; 256], count: [usize; 256], whole: f64, caps: CapStats) -> LabelVolumes {
-    let by_label = (0..256usize).filter(|&l| count[l] > 0).map(|l| (l as u8, acc[l] / 6.0, count[l])).collect();
-    LabelVolumes { whole_m3: whole / 6.0, by_label, caps }
+fn finish<I: Integrand>(
+    reference: [f64; 3],
+    acc: Vec<I>,
+    count: [usize; 256],
+    whole: I,
+    caps: CapStats,
+    interfaces: Vec<Interface>,
+) -> LabelIntegrals<I> {
+    let by_label = (0..256usize).filter(|&l| count[l] > 0).map(|l| (l as u8, acc[l], count[l])).collect();
+    LabelIntegrals { reference, whole, by_label, caps, interfaces }
 }
 
 /// Volumes of every label of a mesh, m^3, signed: the whole and `(label, volume, faces)` per label.

@@ -96,7 +96,10 @@ def register_bsv(cloud: PointCloud, template: Mesh, params: Mapping[str, Any] | 
     from .. import register
 
     t0 = time.perf_counter()
-    reg = register(cloud.points, cloud.labels, template, **dict(params or {}))
+    kw = dict(params or {})
+    # `--param labels:template` is the registration's label source, not the cloud's per-point labels
+    label_source = kw.pop("labels", None)
+    reg = register(cloud.points, cloud.labels, template, label_source=label_source, **kw)
     wall = time.perf_counter() - t0
     summary = dict(reg.volumes.get("registration", {}) or {})
     info = {k: summary[k] for k in ("rms_mesh_to_points_mm", "rms_points_to_mesh_mm", "iterations", "prealign")

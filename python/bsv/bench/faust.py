@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import re
 import time
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -169,18 +169,53 @@ def place(reg: Mesh, scan: Mesh, facing: str = "+z") -> tuple[Mesh, Mesh]:
             Mesh((scan.vertices + shift) @ flip.T, scan.faces, scan.vertex_labels, scan.face_labels))
 
 
+def faust_item(args: tuple[FaustItem, Sequence[str], int, Mesh, Sequence[str], dict[str, Any] | None, str]
+               ) -> tuple[dict, list[Run]]:
+    """One FAUST scan in every condition: (info, runs); failures are recorded in them, never raised.
+    ``args``: (item, conditions, seed, template, methods, params, facing), one tuple so that it is one
+    task on the ``bsv batch`` cluster."""
+    from .. import read_mesh, volumes
+    from .synth import measure_condition
+
+    it, conditions, seed, tmpl, methods, params, facing = args
+    try:
+        reg_mesh, scan_mesh = place(read_mesh(it.registration), read_mesh(it.scan), facing)
+        gt_mesh, info = label_registration(reg_mesh)
+        truth = {k: float(v) for k, v in volumes(gt_mesh)["volumes_l"].items()}
+        near = nearest_index(gt_mesh.vertices, scan_mesh.vertices)
+        assert gt_mesh.vertex_labels is not None
+        svl = gt_mesh.vertex_labels[near]
+        centroids = scan_mesh.vertices[scan_mesh.faces].mean(axis=1)
+        sfl = gt_mesh.vertex_labels[nearest_index(gt_mesh.vertices, centroids)]
+        labelled_scan = Mesh(scan_mesh.vertices, scan_mesh.faces, svl, sfl)
+    except Exception as exc:  # reported, the rest goes on
+        err = f"{type(exc).__name__}: {exc}"
+        return {"subject": it.name, "error": err}, [Run(it.name, c, m, False, error=err) for c in conditions
+                                                    for m in methods]
+    runs: list[Run] = []
+    for c in conditions:
+        try:
+            runs += measure_condition(it.name, labelled_scan, truth, c, seed, tmpl, methods, "oracle",
+                                      params, truth_mesh=gt_mesh)
+        except Exception as exc:
+            runs += [Run(it.name, c, m, False, truth_l=truth, error=f"{type(exc).__name__}: {exc}")
+                     for m in methods]
+    return {"subject": it.name, "faust_subject": it.subject, "pose": it.pose, "scan": str(it.scan),
+            "registration": str(it.registration), **info}, runs
+
+
 def run_faust(root: str | Path, out: str | Path, scans: Sequence[int] | None = None,
               conditions: Sequence[str] = CONDITIONS, seed: int = 0, methods: Sequence[str] = ("bsv",),
               params: dict[str, Any] | None = None, progress: bool = True, facing: str = "+z",
-              template: str = "default", overwrite: bool = False) -> tuple[list[Run], dict]:
+              template: str = "default", overwrite: bool = False, jobs: int = 1,
+              scheduler: str | None = None) -> tuple[list[Run], dict]:
     """The FAUST benchmark; writes the same outputs as ``bench synth`` into ``out`` (existing outputs are
-    refused before any work, :class:`bsv.errors.OutputExistsError`, unless ``overwrite``)."""
+    refused before any work, :class:`bsv.errors.OutputExistsError`, unless ``overwrite``). ``jobs`` > 1 or
+    a ``scheduler`` runs one scan per task on the ``bsv batch`` cluster (as ``bench synth``)."""
     from tqdm import tqdm
 
-    from .. import read_mesh, volumes
     from .common import load_template
     from .output import check_outputs, write_outputs
-    from .synth import measure_condition
 
     if facing not in ("+z", "-z"):
         raise BenchError(f"--facing {facing}: use +z or -z")
@@ -190,38 +225,29 @@ def run_faust(root: str | Path, out: str | Path, scans: Sequence[int] | None = N
     t0 = time.perf_counter()
     infos: list[dict] = []
     runs: list[Run] = []
+    tasks = [(it, tuple(conditions), seed, tmpl, tuple(methods), params, facing) for it in items]
     with tqdm(total=len(items) * len(conditions), desc="bench faust", unit="scan", disable=not progress) as bar:
-        for it in items:
-            try:
-                reg_mesh, scan_mesh = place(read_mesh(it.registration), read_mesh(it.scan), facing)
-                gt_mesh, info = label_registration(reg_mesh)
-                truth = {k: float(v) for k, v in volumes(gt_mesh)["volumes_l"].items()}
-                near = nearest_index(gt_mesh.vertices, scan_mesh.vertices)
-                assert gt_mesh.vertex_labels is not None
-                svl = gt_mesh.vertex_labels[near]
-                centroids = scan_mesh.vertices[scan_mesh.faces].mean(axis=1)
-                sfl = gt_mesh.vertex_labels[nearest_index(gt_mesh.vertices, centroids)]
-                labelled_scan = Mesh(scan_mesh.vertices, scan_mesh.faces, svl, sfl)
-            except Exception as exc:  # reported, the rest goes on
-                err = f"{type(exc).__name__}: {exc}"
-                runs += [Run(it.name, c, m, False, error=err) for c in conditions for m in methods]
-                bar.write(f"FAILED {it.name}: {err}")
-                bar.update(len(conditions))
-                infos.append({"subject": it.name, "error": err})
-                continue
-            infos.append({"subject": it.name, "faust_subject": it.subject, "pose": it.pose,
-                          "scan": str(it.scan), "registration": str(it.registration), **info})
-            for c in conditions:
-                try:
-                    runs += measure_condition(it.name, labelled_scan, truth, c, seed, tmpl, methods, "oracle",
-                                              params, truth_mesh=gt_mesh)
-                except Exception as exc:
-                    runs += [Run(it.name, c, m, False, truth_l=truth, error=f"{type(exc).__name__}: {exc}")
-                             for m in methods]
-                for r in runs[-len(methods):]:
-                    if not r.ok:
-                        bar.write(f"FAILED {r.subject} {c} {r.method}: {r.error}")
-                bar.update(1)
+        if jobs <= 1 and scheduler is None:
+            results: Iterable[tuple[int, Any]] = ((i, faust_item(t)) for i, t in enumerate(tasks))
+        else:
+            from ..batch.mapping import map_unordered
+
+            results = map_unordered(faust_item, tasks, scheduler=scheduler, workers=max(1, jobs), announce=progress)
+        for i, res in results:
+            if isinstance(res, BaseException):  # the task itself failed (its workers died): recorded
+                err = f"task failed: {type(res).__name__}: {res}"
+                res = ({"subject": items[i].name, "error": err},
+                       [Run(items[i].name, c, m, False, error=err) for c in conditions for m in methods])
+            info, item_runs = res
+            infos.append(info)
+            runs += item_runs
+            for r in item_runs:
+                if not r.ok:
+                    bar.write(f"FAILED {r.subject} {r.condition} {r.method}: {r.error}")
+            bar.update(len(conditions))
+    order = {it.name: k for k, it in enumerate(items)}  # the items' order, whatever order the tasks ended in
+    infos.sort(key=lambda d: order.get(d["subject"], len(order)))
+    runs.sort(key=lambda r: order.get(r.subject, len(order)))
     wall = time.perf_counter() - t0
     config = {"root": str(root), "scans": ",".join(str(i.number) for i in items), "conditions": ",".join(conditions),
               "seed": seed, "methods": ",".join(methods), "params": dict(params or {}), "facing": facing,

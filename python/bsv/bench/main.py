@@ -9,6 +9,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from .reference import CONDITIONS
+from .synth import COHORTS
 
 
 def _conditions(text: str) -> tuple[str, ...]:
@@ -36,6 +37,15 @@ def _param(text: str) -> tuple[str, Any]:
         return k.strip(), v
 
 
+def dask_options(p: argparse.ArgumentParser, what: str) -> None:
+    """``--scheduler`` and ``--jobs``: run the benchmark's items (``what``) as tasks on the ``bsv batch`` Dask cluster."""
+    p.add_argument("--scheduler", default=None, help=f"run the {what} as Dask tasks: 'local' (a LocalCluster of "
+                   "--jobs one-thread workers) or a running scheduler's address, e.g. tcp://head:8786 "
+                   "(default: in this process, or a LocalCluster when --jobs > 1)")
+    p.add_argument("--jobs", type=int, default=1, help=f"workers of the local Dask cluster over {what} (default 1: "
+                   "no cluster unless --scheduler)")
+
+
 def parser() -> argparse.ArgumentParser:
     """The argument parser of ``bsv bench``."""
     ap = argparse.ArgumentParser(prog="bsv bench", description=(
@@ -57,7 +67,7 @@ def parser() -> argparse.ArgumentParser:
     s.add_argument("--n", type=int, default=10, help="cohort size (half female; default 10)")
     s.add_argument("--seed", type=int, default=0, help="cohort seed (default 0)")
     s.add_argument("--conditions", type=_conditions, default=CONDITIONS, help="comma list of noer,l515,cali,l5ca")
-    s.add_argument("--jobs", type=int, default=1, help="worker processes over subjects (default 1)")
+    dask_options(s, "subjects")
     s.add_argument("--segmentation", choices=["oracle", "camera"], default="oracle",
                    help="oracle: scanner's true labels; camera: MediaPipe on the colour renders (needs bsv.frontend.segment)")
     s.add_argument("--cloud", choices=["raw", "lab"], default="raw",
@@ -73,6 +83,10 @@ def parser() -> argparse.ArgumentParser:
                    "(compare with the room to see what the floor and walls do)")
     s.add_argument("--template", default="default", help="default, fine or a labelled mesh path")
     s.add_argument("--no-local", action="store_true", help="cohort without MakeHuman local modifiers")
+    s.add_argument("--cohort", choices=COHORTS, default="standard",
+                   help="standard: bsv.bodies.cohort; hard: the same subjects reshaped into the registration's "
+                   "hard classes (deep upper arms, bumps, a swollen segment, extreme segment modifiers; "
+                   "bsv.bodies.variants.hard_subject)")
     common(s, "bench_synth")
 
     b = sub.add_parser("boxes", help="the paper's two boxes at 45 deg, noer and l5ca")
@@ -85,6 +99,7 @@ def parser() -> argparse.ArgumentParser:
     f.add_argument("--scans", type=_ints, default=None, help="scan numbers (default: one A-pose-like scan per subject)")
     f.add_argument("--conditions", type=_conditions, default=CONDITIONS, help="comma list of noer,l515,cali,l5ca")
     f.add_argument("--seed", type=int, default=0, help="scan seed (default 0)")
+    dask_options(f, "scans")
     common(f, "bench_faust")
     return ap
 
@@ -107,13 +122,15 @@ def main(argv: Sequence[str] | None = None) -> int:
             cfg = SynthConfig(n=args.n, seed=args.seed, conditions=args.conditions, segmentation=args.segmentation,
                               template=args.template, methods=methods, params=params, local=not args.no_local,
                               cloud=args.cloud, room=args.room, studio=args.studio,
-                              cloud_params=dict(args.cloud_param))
+                              cloud_params=dict(args.cloud_param), cohort=args.cohort)
             cfg.validate()
-            infos, runs, wall = run_synth(cfg, jobs=max(1, args.jobs), progress=not args.quiet)
+            infos, runs, wall = run_synth(cfg, jobs=max(1, args.jobs), progress=not args.quiet,
+                                          scheduler=args.scheduler)
             config = {"n": cfg.n, "seed": cfg.seed, "conditions": ",".join(cfg.conditions),
                       "segmentation": cfg.segmentation, "cloud": cfg.cloud, "room": ("studio" if cfg.studio else "clinic") if cfg.uses_room() else False,
                       "cloud_params": cfg.cloud_params, "template": cfg.template, "methods": ",".join(methods),
-                      "params": params, "local_modifiers": cfg.local, "jobs": args.jobs}
+                      "params": params, "local_modifiers": cfg.local, "jobs": args.jobs,
+                      "cohort": cfg.cohort, "scheduler": args.scheduler}
             summary = write_outputs(args.out, "BSV synthetic benchmark", config, infos, runs, wall,
                                     overwrite=args.overwrite)
         elif args.command == "boxes":
@@ -126,7 +143,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
             runs, summary = run_faust(args.root, args.out, scans=args.scans, conditions=args.conditions,
                                       seed=args.seed, methods=methods, params=params, progress=not args.quiet,
-                                      overwrite=args.overwrite)
+                                      overwrite=args.overwrite, jobs=max(1, args.jobs), scheduler=args.scheduler)
         _print_summary(summary)
         print(f"wrote {args.out}/report.md, results.json, results.csv")
         return 0 if all(r.ok for r in runs) else 1

@@ -17,10 +17,12 @@ from .tables import (
     p2pv_table,
     paper_table,
     rows,
+    signed_table,
     summarise,
     target_check,
     targets_md,
     timing_table,
+    worst_table,
     write_csv,
     write_json,
 )
@@ -96,7 +98,11 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
            "## Point2PartVolume-style accuracy (100 - mean RVE, %)", "",
            "✓ = better than both P2PV numbers (BUFF, PDT13).", "", p2pv_table(summary), "",
            "## Signed error of trunk_limbs (%, mean ± std; negative = the fit shrinks the body)", "",
-           bias_table(summary), "", "## Registration time per subject (s)", "", timing_table(runs), ""]
+           bias_table(summary), ""]
+    if "bsv" in summary:
+        md += ["## Signed error per segment (%, mean over subjects; bsv)", "", signed_table(summary), "",
+               "## Worst subject per segment (signed error %, subject index; bsv)", "", worst_table(table), ""]
+    md += ["## Registration time per subject (s)", "", timing_table(runs), ""]
     far = cloud_table(runs)
     if far:
         md += ["## Cloud points off the body (% of the registered cloud)", "",

@@ -37,6 +37,9 @@ from .outliers import inject, split_request
 from .reference import CALIBRATED, CONDITIONS
 
 SEGMENTATIONS: tuple[str, ...] = ("oracle", "camera")
+#: The cohorts of ``--cohort``: the plain synthetic adults, or the same reshaped into the registration's
+#: hard classes (:func:`bsv.bodies.variants.hard_subject`).
+COHORTS: tuple[str, ...] = ("standard", "hard")
 
 #: The room of ``--studio``: the subject dressed and lit as in the clinic room (skin tone, underwear, hair,
 #: two lights) but nothing else returns depth. Against the clinic room it isolates what the floor and the
@@ -63,6 +66,8 @@ class SynthConfig:
     room: bool | None = None
     #: With a room: a studio (:data:`STUDIO`), the room's appearance without its floor, walls or ceiling.
     studio: bool = False
+    #: ``standard`` or ``hard`` (:data:`COHORTS`).
+    cohort: str = "standard"
 
     def room_arg(self) -> bool | dict[str, Any]:
         """The ``room`` argument of :func:`bsv.scan` for this configuration."""
@@ -83,6 +88,8 @@ class SynthConfig:
         bad = [c for c in self.conditions if c not in CONDITIONS]
         if bad or not self.conditions:
             raise BenchError(f"--conditions {','.join(self.conditions)}: use a comma list of {','.join(CONDITIONS)}")
+        if self.cohort not in COHORTS:
+            raise BenchError(f"--cohort {self.cohort}: use one of {', '.join(COHORTS)}")
         if self.segmentation not in SEGMENTATIONS:
             raise BenchError(f"--segmentation {self.segmentation}: use oracle or camera")
         if self.cloud not in ("raw", "lab"):
@@ -160,11 +167,13 @@ def subject_name(index: int) -> str:
 def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] | None = None) -> tuple[dict, list[Run]]:
     """Every condition and method for cohort subject ``index``; failures are recorded, never raised."""
     from ..bodies import subject
+    from ..bodies.variants import hard_subject
 
     name = subject_name(index)
     t0 = time.perf_counter()
     try:
-        s = subject(index, cfg.seed, local=cfg.local)
+        make = hard_subject if cfg.cohort == "hard" else subject
+        s = make(index, cfg.seed, local=cfg.local)
     except Exception as exc:
         err = f"subject generation failed: {type(exc).__name__}: {exc}"
         runs: list[Run] = [Run(name, c, m, False, error=err) for c in cfg.conditions for m in cfg.methods]
@@ -198,8 +207,11 @@ def _worker(args: tuple[SynthConfig, int]) -> tuple[dict, list[dict]]:
     return info, [r.to_json() for r in runs]
 
 
-def run_synth(cfg: SynthConfig, jobs: int = 1, progress: bool = True) -> tuple[list[dict], list[Run], float]:
-    """The whole cohort: (subject infos, runs, wall seconds). ``jobs`` > 1 uses worker processes."""
+def run_synth(cfg: SynthConfig, jobs: int = 1, progress: bool = True,
+              scheduler: str | None = None) -> tuple[list[dict], list[Run], float]:
+    """The whole cohort: (subject infos, runs, wall seconds). ``jobs`` > 1 or a ``scheduler`` ("local" or
+    a Dask scheduler address) runs one subject per task on the ``bsv batch`` cluster
+    (:func:`bsv.batch.mapping.map_unordered`; a LocalCluster of ``jobs`` workers for "local")."""
     from tqdm import tqdm
 
     cfg.validate()
@@ -208,23 +220,27 @@ def run_synth(cfg: SynthConfig, jobs: int = 1, progress: bool = True) -> tuple[l
     runs: list[Run] = []
     total = cfg.n * len(cfg.conditions)
     with tqdm(total=total, desc="bench synth", unit="scan", disable=not progress) as bar:
-        if jobs <= 1:
+        if jobs <= 1 and scheduler is None:
             for i in range(cfg.n):
                 info, rs = run_subject(cfg, i, on_condition=lambda: bar.update(1))
                 infos.append(info)
                 runs += rs
                 _report_failures(rs, bar)
         else:
-            import multiprocessing as mp
+            from ..batch.mapping import map_unordered
 
-            # spawn: the parent already runs rayon threads; forking them is unsafe
-            with mp.get_context("spawn").Pool(jobs) as pool:
-                for info, rs_json in pool.imap_unordered(_worker, [(cfg, i) for i in range(cfg.n)]):
-                    rs = [Run.from_json(r) for r in rs_json]
-                    infos.append(info)
-                    runs += rs
-                    bar.update(len(cfg.conditions))
-                    _report_failures(rs, bar)
+            for i, out in map_unordered(_worker, [(cfg, i) for i in range(cfg.n)], scheduler=scheduler,
+                                        workers=max(1, jobs), announce=progress):
+                if isinstance(out, BaseException):  # the task itself failed (its workers died): recorded
+                    err = f"task failed: {type(out).__name__}: {out}"
+                    info, rs = {"subject": subject_name(i), "index": i, "error": err}, [
+                        Run(subject_name(i), c, m, False, error=err) for c in cfg.conditions for m in cfg.methods]
+                else:
+                    info, rs = out[0], [Run.from_json(r) for r in out[1]]
+                infos.append(info)
+                runs += rs
+                bar.update(len(cfg.conditions))
+                _report_failures(rs, bar)
     infos.sort(key=lambda d: d["subject"])
     runs.sort(key=lambda r: (r.subject, CONDITIONS.index(r.condition), r.method))
     return infos, runs, time.perf_counter() - t0

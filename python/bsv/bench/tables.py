@@ -26,12 +26,15 @@ CSV_COLUMNS: tuple[str, ...] = (
 #: Marks a table cell without a value (an en dash).
 EMPTY_CELL = "\u2013"
 
-#: Targets of the benchmark issue (percent).
-TARGET_TRUNK_LIMBS = 0.6
-TARGET_SEGMENT = 3.0
-TARGET_EXCESS_TRUNK_LIMBS = 0.5
-TARGET_EXCESS_SEGMENT = 2.0
-TARGET_BIAS = 0.3
+#: Targets of the registration issue (percent; oracle labels): mean RVE of trunk_limbs and of every
+#: segment in noer and l515, no single subject's segment worse than TARGET_WORST, |mean signed
+#: trunk_limbs| in noer and l515, and the excess over the calibration floor in cali and l5ca.
+TARGET_TRUNK_LIMBS = 0.5
+TARGET_SEGMENT = 2.5
+TARGET_WORST = 6.0
+TARGET_EXCESS_TRUNK_LIMBS = 0.3
+TARGET_EXCESS_SEGMENT = 1.5
+TARGET_BIAS = 0.4
 
 
 def rows(runs: Iterable[Run], segments: Sequence[str] = MEASURED) -> list[dict[str, Any]]:
@@ -196,6 +199,38 @@ def bias_table(summary: Mapping[str, Any], segment: str = "trunk_limbs") -> str:
     return "\n".join(lines)
 
 
+def signed_table(summary: Mapping[str, Any], method: str = "bsv") -> str:
+    """Markdown: mean signed error (%) of every segment (rows) per condition (columns) for ``method``."""
+    s = summary.get(method, {})
+    conds = [c for c in _present(summary, "conditions") if c in s]
+    lines = ["| segment | " + " | ".join(conds) + " |", "|---|" + "---|" * len(conds)]
+    for seg in PAPER_ROWS:
+        cells = [f"{s[c][seg]['signed_mean']:+.2f}" if seg in s[c] else EMPTY_CELL for c in conds]
+        lines.append(f"| {seg} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def worst_table(table: Sequence[Mapping[str, Any]], method: str = "bsv") -> str:
+    """Markdown: per segment (rows) and condition (columns) the worst subject's signed error (%) and
+    who it is: what a mean hides."""
+    worst: dict[tuple[str, str], Mapping[str, Any]] = {}
+    for r in table:
+        if r["method"] != method:
+            continue
+        key = (r["segment"], r["condition"])
+        if key not in worst or r["rve_pct"] > worst[key]["rve_pct"]:
+            worst[key] = r
+    conds = [c for c in CONDITIONS if any(k[1] == c for k in worst)]
+    lines = ["| segment | " + " | ".join(conds) + " |", "|---|" + "---|" * len(conds)]
+    for seg in PAPER_ROWS:
+        cells = []
+        for c in conds:
+            w = worst.get((seg, c))
+            cells.append(EMPTY_CELL if w is None else f"{w['signed_pct']:+.2f} ({w['subject'].removeprefix('subject_')})")
+        lines.append(f"| {seg} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def timing_table(runs: Sequence[Run]) -> str:
     """Markdown: registration seconds per subject (rows) and condition x method, with the mean."""
     conds = [c for c in CONDITIONS if any(r.condition == c for r in runs)]
@@ -258,9 +293,14 @@ def target_check(summary: Mapping[str, Any], method: str = "bsv") -> list[tuple[
         wv = s[c].get(worst, {}).get("rve_mean", math.nan)
         out.append((f"{c}: every segment mean RVE <= {TARGET_SEGMENT} %", wv <= TARGET_SEGMENT,
                     f"worst {worst} {wv:.2f} %"))
-    if "noer" in s and "trunk_limbs" in s["noer"]:
-        b = s["noer"]["trunk_limbs"]["signed_mean"]
-        out.append((f"noer: trunk_limbs signed bias within ±{TARGET_BIAS} %", abs(b) <= TARGET_BIAS, f"{b:+.2f} %"))
+        one = max(segs, key=lambda g: s[c].get(g, {}).get("rve_max", -1.0))
+        ov = s[c].get(one, {}).get("rve_max", math.nan)
+        out.append((f"{c}: no subject's segment worse than {TARGET_WORST} %", ov <= TARGET_WORST,
+                    f"worst {one} {ov:.2f} %"))
+        if "trunk_limbs" in s[c]:
+            b = s[c]["trunk_limbs"]["signed_mean"]
+            out.append((f"{c}: trunk_limbs mean signed error within ±{TARGET_BIAS} %", abs(b) <= TARGET_BIAS,
+                        f"{b:+.2f} %"))
     for c in sorted(CALIBRATED):
         if c not in s or "excess_mean" not in s[c].get("trunk_limbs", {}):
             continue

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Iterator
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -49,6 +49,8 @@ class Subject:
     phenotype: Phenotype
     pose: Pose
     body: Body
+    #: What :mod:`bsv.bodies.variants` changed on the body (empty for a plain cohort member).
+    variant: dict = field(default_factory=dict)
 
     def volumes_l(self) -> dict[str, float]:
         """Ground-truth volumes (litres): 14 segments and aggregates."""
@@ -59,7 +61,8 @@ class Subject:
         return {"index": self.index, "seed": self.seed, "sex": self.sex,
                 "stature_target_m": self.stature_target, "bmi_target": self.bmi_target,
                 "stature_m": self.body.stature, "bmi": self.body.bmi, "volume_l": self.body.volume_l,
-                "phenotype": asdict(self.phenotype), "pose": asdict(self.pose)}
+                "phenotype": asdict(self.phenotype), "pose": asdict(self.pose),
+                **({"variant": self.variant} if self.variant else {})}
 
 
 def _draw_local(rng: np.random.Generator) -> dict[str, float]:

@@ -17,6 +17,9 @@ if ! ldconfig -p 2>/dev/null | grep -q libusb-1.0.so.0; then
         echo "note: install libusb-1.0-0 (sudo apt-get install libusb-1.0-0) for RealSense capture" >&2
     fi
 fi
+# The distribution was called "bsv" before issue 15 (now body-segment-volumes, same import name): drop an
+# old editable install of it so that one distribution owns the package and the `bsv` script.
+if .venv/bin/python -m pip show -q bsv >/dev/null 2>&1; then .venv/bin/python -m pip uninstall -q -y bsv; fi
 # The extension (bsv._bsv) in the release profile (the dev profile makes bsv.register ~1.5x slower),
 # installed editable into .venv.
 VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --release -q

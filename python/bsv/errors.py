@@ -268,6 +268,14 @@ class BatchInputError(InputError):
     what to do); the batch does not start."""
 
 
+# --- BSV Station (bsv.station) ---------------------------------------------------------------------
+
+
+class LoginRequired(BsvError):
+    """BSV Station: the request needs a login (the station listens on an address other than localhost and
+    the request carries no valid session); the app answers with the login page."""
+
+
 # --- uncertainty (bsv.uncertainty) ------------------------------------------------------------------
 
 
@@ -278,7 +286,7 @@ class UncertaintyError(BsvError, ValueError):
 __all__ = [
     "AssetError", "BatchInputError", "BenchError", "BlurredImageError", "BsipError", "BsvError", "BsvWarning", "CalibrationError", "CalibrationFileError",
     "CaptureError", "FloorError", "FormatError", "FrontendError", "ImplausibleCaptureError", "InputError", "LabelError",
-    "LandmarkMissingError", "MarkerNotFoundError", "MeshError", "MissingExtraError", "NoCameraError", "OutputExistsError",
+    "LandmarkMissingError", "LoginRequired", "MarkerNotFoundError", "MeshError", "MissingExtraError", "NoCameraError", "OutputExistsError",
     "PersonIsolationError", "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",
     "RegistrationInputError", "RegistrationNumericError", "RegistrationParameterError",
     "RegistrationResourceError", "RegistrationStopped", "ScanError", "SegmentationError", "SolveError",

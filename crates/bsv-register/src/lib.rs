@@ -37,6 +37,7 @@ mod prepare;
 mod registrar;
 mod result;
 mod schedule;
+mod section;
 mod solver;
 mod surface;
 

@@ -255,6 +255,10 @@ pub struct ArticulationParams {
     /// Scale each limb along its axis by the ratio of the segment lengths in the articulated
     /// initialisation (ends aligned). Default true.
     pub articulate_axial_scale: bool,
+    /// Scale each limb's cross-section (depth and width) to the cloud's in the articulated
+    /// initialisation (see `section.rs`), so that the fit need not stretch the cells that the
+    /// lateral gaps leave without data. Default true.
+    pub articulate_cross_section: bool,
     /// Jacobi smoothing steps of the articulation's displacement field (blends the joints).
     /// Default 10.
     pub articulate_smooth_iterations: usize,
@@ -262,7 +266,12 @@ pub struct ArticulationParams {
 
 impl Default for ArticulationParams {
     fn default() -> Self {
-        ArticulationParams { articulate: true, articulate_axial_scale: true, articulate_smooth_iterations: 10 }
+        ArticulationParams {
+            articulate: true,
+            articulate_axial_scale: true,
+            articulate_cross_section: true,
+            articulate_smooth_iterations: 10,
+        }
     }
 }
 
@@ -328,7 +337,7 @@ impl Default for RegisterParams {
 
 /// Every key of the serde form of [`RegisterParams`] (the flat parameter names), in the order of
 /// the serialised form. A unit test keeps it equal to the serialised keys.
-pub const PARAMETER_NAMES: [&str; 30] = [
+pub const PARAMETER_NAMES: [&str; 31] = [
     "alpha",
     "cell_weight",
     "data_weight",
@@ -358,6 +367,7 @@ pub const PARAMETER_NAMES: [&str; 30] = [
     "surface_correction",
     "articulate",
     "articulate_axial_scale",
+    "articulate_cross_section",
     "articulate_smooth_iterations",
 ];
 

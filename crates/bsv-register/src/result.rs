@@ -48,6 +48,10 @@ pub struct LimbAlignment {
     pub angle_deg: f64,
     /// Scale applied along the axis.
     pub axial_scale: f64,
+    /// Scale applied to the cross-section's depth (front-back), 1 = none (see `section.rs`).
+    pub depth_scale: f64,
+    /// Scale applied to the cross-section's width, 1 = none.
+    pub width_scale: f64,
     /// Distance between the template's and the cloud's segment centroids (after the global
     /// pre-alignment), mm.
     pub shift_mm: f64,

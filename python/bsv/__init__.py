@@ -20,6 +20,7 @@ from ._bsv import RegisterParams, VolumeReport
 from .errors import (
     BsvError,
     FormatError,
+    ImplausibleCloudError,
     InputError,
     MeshError,
     OutputExistsError,
@@ -278,6 +279,7 @@ __all__ = [
     "RegisterParams",
     "Registration",
     "RegistrationError",
+    "ImplausibleCloudError",
     "RegistrationInputError",
     "RegistrationNumericError",
     "RegistrationParameterError",

@@ -1,0 +1,98 @@
+//! Per-segment quality figures of a finished fit ([`SegmentQuality`], in
+//! `Registration::quality`): how closely the fitted segment lies on the cloud where the cameras
+//! see it, how much of it the cloud covers, how much lies in the lateral gaps, and a `doubtful`
+//! flag.
+//!
+//! For each fitted vertex, `d` is the distance to its nearest cloud point (the cloud the fit used)
+//! and `n` its area-weighted vertex normal. A vertex is
+//! - covered when `d <= COVER_M` (10 mm);
+//! - in a gap when it is not covered and its normal is lateral, `|n_x| >= GAP_NORMAL_X` (0.5, i.e.
+//!   within 60 degrees of +-x): the sides that neither the front nor the back camera sees;
+//! - exposed-uncovered otherwise: it faces a camera but no cloud point lies near it.
+//!
+//! Per segment (the fitted mesh's vertex labels; `whole` when it has none): `rms_mm` is the RMS of
+//! `d` over the vertices not in a gap, `coverage` the fraction covered, `gap_fraction` the fraction
+//! in gaps, `exposed_uncovered` the fraction exposed-uncovered. The fit of a segment is `doubtful`
+//! when `rms_mm > DOUBT_RMS_MM` (6 mm), or `exposed_uncovered > DOUBT_EXPOSED` (0.15), or
+//! `coverage < DOUBT_COVERAGE` (0.35): the segment left the data where the cameras saw it, or the
+//! cloud hardly holds it. (Measured on the synthetic cohort, good fits: rms 1-4 mm, exposed-uncovered
+//! below 0.08, coverage above 0.5; see BENCH.md.)
+
+use bsv_core::geometry::vertex_normals;
+use bsv_core::{Segment, TriMesh};
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// A vertex with a cloud point within this distance (metres) is covered.
+pub const COVER_M: f64 = 0.01;
+/// An uncovered vertex whose normal has `|n_x|` at least this lies in a lateral gap.
+pub const GAP_NORMAL_X: f64 = 0.5;
+/// A segment with an RMS (vertices not in gaps) above this (mm) is doubtful.
+pub const DOUBT_RMS_MM: f64 = 6.0;
+/// A segment with more than this fraction of exposed-uncovered vertices is doubtful.
+pub const DOUBT_EXPOSED: f64 = 0.15;
+/// A segment with less than this fraction of covered vertices is doubtful.
+pub const DOUBT_COVERAGE: f64 = 0.35;
+
+/// The quality figures of one fitted segment (see the module).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SegmentQuality {
+    /// Fitted vertices of the segment.
+    pub vertices: usize,
+    /// RMS distance (mm) from the segment's vertices not in a gap to their nearest cloud point.
+    pub rms_mm: f64,
+    /// Fraction of the vertices with a cloud point within [`COVER_M`].
+    pub coverage: f64,
+    /// Fraction of the vertices in the lateral gaps (uncovered, normal within 60 degrees of +-x).
+    pub gap_fraction: f64,
+    /// Fraction of the vertices facing a camera with no cloud point within [`COVER_M`].
+    pub exposed_uncovered: f64,
+    /// The fit of this segment is doubtful (see the module for the rule).
+    pub doubtful: bool,
+}
+
+/// The quality of every segment of the fitted `mesh`, keyed by segment name (`whole` for an
+/// unlabelled mesh); `nearest[i].1` is the squared distance of vertex `i` to its nearest cloud point.
+pub fn segment_quality(mesh: &TriMesh, nearest: &[(u32, f64)]) -> BTreeMap<String, SegmentQuality> {
+    let normals = vertex_normals(mesh);
+    // Per label: vertices, covered, gap, exposed-uncovered, sum of d^2 over the non-gap vertices.
+    let mut acc: BTreeMap<u8, (usize, usize, usize, usize, f64)> = BTreeMap::new();
+    for (i, &(_, d2)) in nearest.iter().enumerate() {
+        let label = mesh.vertex_labels.as_ref().map_or(0, |l| l.get(i).copied().unwrap_or(0));
+        let a = acc.entry(label).or_default();
+        a.0 += 1;
+        let covered = d2 <= COVER_M * COVER_M;
+        let lateral = normals.get(i).is_some_and(|n| n[0].abs() >= GAP_NORMAL_X);
+        if covered {
+            a.1 += 1;
+        } else if lateral {
+            a.2 += 1;
+            continue;
+        } else {
+            a.3 += 1;
+        }
+        a.4 += d2;
+    }
+    acc.into_iter()
+        .map(|(label, (n, covered, gap, exposed, sum))| {
+            let name = if mesh.vertex_labels.is_none() {
+                "whole".to_string()
+            } else {
+                Segment::from_id(label).map_or_else(|| format!("label_{label}"), |s| s.name().to_string())
+            };
+            let nf = n.max(1) as f64;
+            let rms_mm = if n > gap { (sum / (n - gap) as f64).sqrt() * 1e3 } else { 0.0 };
+            let (coverage, exposed_uncovered) = (covered as f64 / nf, exposed as f64 / nf);
+            let doubtful = rms_mm > DOUBT_RMS_MM || exposed_uncovered > DOUBT_EXPOSED || coverage < DOUBT_COVERAGE;
+            let q = SegmentQuality {
+                vertices: n,
+                rms_mm,
+                coverage,
+                gap_fraction: gap as f64 / nf,
+                exposed_uncovered,
+                doubtful,
+            };
+            (name, q)
+        })
+        .collect()
+}

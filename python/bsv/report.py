@@ -296,4 +296,4 @@ def write_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", o
     return {"report": report, **paths}
 
 
-__all__ = ["FIGURES", "VIEWS", "cleaning_html", "quality_html", "face_labels", "palette", "render_mesh", "write_report"]
+__all__ = ["FIGURES", "VIEWS", "cleaning_html", "face_labels", "palette", "quality_html", "render_mesh", "write_report"]

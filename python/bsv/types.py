@@ -80,7 +80,7 @@ class PointCloud:
 @dataclass(frozen=True)
 class SegmentQuality:
     """How well one segment was fitted (``bsv_register::SegmentQuality``, rule in ``quality.rs``):
-    ``rms_mm`` RMS distance to the cloud of the vertices not in a lateral gap, ``coverage`` fraction of
+    ``rms_mm`` RMS distance to the cloud of the vertices not in a lateral gap and within 30 mm of it, ``coverage`` fraction of
     vertices with a cloud point within 10 mm, ``gap_fraction`` fraction in the lateral gaps,
     ``exposed_uncovered`` fraction facing a camera yet far from the cloud, ``doubtful`` the flag."""
 

@@ -43,7 +43,7 @@ pub struct Args {
     units: String,
     /// The cloud's axis that points up (+x, -x, +y, -y, +z, -z): the cloud is rotated so that it
     /// becomes +y before the fit (the world frame: Y up, the subject facing +Z).
-    #[arg(long, default_value = "+y", value_parser = ["+x", "-x", "+y", "-y", "+z", "-z", "x", "y", "z"])]
+    #[arg(long, allow_hyphen_values = true, default_value = "+y", value_parser = ["+x", "-x", "+y", "-y", "+z", "-z", "x", "y", "z"])]
     up: String,
     /// Do not refuse a cloud that does not look like a standing person in the world frame (flat,
     /// compact, not upright, not facing +Z, not of a person's size in metres).

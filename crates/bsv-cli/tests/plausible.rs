@@ -79,7 +79,8 @@ fn a_sphere_and_a_plane_exit_non_zero_naming_the_shape() {
     let mut sphere = PointCloud::new(bsv_capture::sample::sample_surface(&icosphere(r, 4), 20_000, 1).0);
     sphere.points.iter_mut().for_each(|p| p[1] += 1.0);
     write_point_cloud(&d.join("sphere.ply"), &sphere).unwrap();
-    let plane = PointCloud::new((0..20_000).map(|i| [(i % 100) as f64 / 100.0, (i / 100) as f64 * 0.008, 2.0]).collect());
+    let plane =
+        PointCloud::new((0..20_000).map(|i| [(i % 100) as f64 / 100.0, (i / 100) as f64 * 0.008, 2.0]).collect());
     write_point_cloud(&d.join("plane.ply"), &plane).unwrap();
     for (file, what) in [("sphere.ply", "compact"), ("plane.ply", "flat")] {
         let o = bsv(&["register", file, "--quiet", "-o", "fit.ply"], &d);

@@ -64,47 +64,62 @@ pub struct SegmentQuality {
 /// unlabelled mesh); `nearest[i].1` is the squared distance of vertex `i` to its nearest cloud point.
 pub fn segment_quality(mesh: &TriMesh, nearest: &[(u32, f64)]) -> BTreeMap<String, SegmentQuality> {
     let normals = vertex_normals(mesh);
-    // Per label: vertices, covered, gap, exposed-uncovered, (count, sum of d^2) of the RMS.
-    let mut acc: BTreeMap<u8, (usize, usize, usize, usize, (usize, f64))> = BTreeMap::new();
+    let mut acc: BTreeMap<u8, Tally> = BTreeMap::new();
     for (i, &(_, d2)) in nearest.iter().enumerate() {
         let label = mesh.vertex_labels.as_ref().map_or(0, |l| l.get(i).copied().unwrap_or(0));
         let a = acc.entry(label).or_default();
-        a.0 += 1;
+        a.vertices += 1;
         let covered = d2 <= COVER_M * COVER_M;
         let lateral = normals.get(i).is_some_and(|n| n[0].abs() >= GAP_NORMAL_X);
         if covered {
-            a.1 += 1;
+            a.covered += 1;
         } else if lateral {
-            a.2 += 1;
+            a.gap += 1;
             continue;
         } else {
-            a.3 += 1;
+            a.exposed += 1;
         }
         if d2 <= RMS_CAP_M * RMS_CAP_M {
-            a.4 .0 += 1;
-            a.4 .1 += d2;
+            a.rms_count += 1;
+            a.rms_sum += d2;
         }
     }
     acc.into_iter()
-        .map(|(label, (n, covered, gap, exposed, (m, sum)))| {
+        .map(|(label, t)| {
             let name = if mesh.vertex_labels.is_none() {
                 "whole".to_string()
             } else {
                 Segment::from_id(label).map_or_else(|| format!("label_{label}"), |s| s.name().to_string())
             };
-            let nf = n.max(1) as f64;
-            let rms_mm = if m > 0 { (sum / m as f64).sqrt() * 1e3 } else { 0.0 };
-            let (coverage, exposed_uncovered) = (covered as f64 / nf, exposed as f64 / nf);
-            let doubtful = rms_mm > DOUBT_RMS_MM || exposed_uncovered > DOUBT_EXPOSED || coverage < DOUBT_COVERAGE;
-            let q = SegmentQuality {
-                vertices: n,
-                rms_mm,
-                coverage,
-                gap_fraction: gap as f64 / nf,
-                exposed_uncovered,
-                doubtful,
-            };
-            (name, q)
+            (name, t.quality())
         })
         .collect()
+}
+
+/// The counts of one segment.
+#[derive(Default)]
+struct Tally {
+    vertices: usize,
+    covered: usize,
+    gap: usize,
+    exposed: usize,
+    /// Vertices in the RMS and their sum of squared distances.
+    rms_count: usize,
+    rms_sum: f64,
+}
+
+impl Tally {
+    fn quality(&self) -> SegmentQuality {
+        let n = self.vertices.max(1) as f64;
+        let rms_mm = if self.rms_count > 0 { (self.rms_sum / self.rms_count as f64).sqrt() * 1e3 } else { 0.0 };
+        let (coverage, exposed_uncovered) = (self.covered as f64 / n, self.exposed as f64 / n);
+        SegmentQuality {
+            vertices: self.vertices,
+            rms_mm,
+            coverage,
+            gap_fraction: self.gap as f64 / n,
+            exposed_uncovered,
+            doubtful: rms_mm > DOUBT_RMS_MM || exposed_uncovered > DOUBT_EXPOSED || coverage < DOUBT_COVERAGE,
+        }
+    }
 }

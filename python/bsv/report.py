@@ -213,7 +213,7 @@ def quality_html(registration: dict[str, Any]) -> str:
              '<span class="warn">doubtful</span>' if q.get("doubtful") else "ok"] for name, q in quality.items()]
     return ("<h2>Fit quality</h2>" + _table(["segment", "RMS (mm)", "covered %", "in gaps %", "seen, uncovered %",
                                               "fit"], rows)
-            + '<p class="note">covered: a cloud point within 10 mm; doubtful: RMS &gt; 8 mm, seen-uncovered &gt; 20 % '
+            + '<p class="note">covered: a cloud point within 10 mm; doubtful: RMS &gt; 10 mm, seen-uncovered &gt; 20 % '
               "or covered &lt; 50 %: check the cloud of that segment before using its volume.</p>")
 
 

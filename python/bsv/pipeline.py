@@ -513,6 +513,9 @@ def _print_process(res: Any) -> None:
     for name in (*TRUNK_LIMBS, "trunk_limbs"):
         if name in v:
             print(f"{name:<14}{v[name]:>9.3f} L")
+    doubtful = [k for k, q in res.registration.quality.items() if q.doubtful]
+    if doubtful:
+        print(f"warning: doubtful fit of {', '.join(doubtful)} (see Fit quality in the report)")
     print(f"report: {res.files['report']}")
 
 

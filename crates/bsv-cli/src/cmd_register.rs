@@ -166,6 +166,14 @@ fn print_summary(reg: &Registration, timings: bool) {
         reg.rms_mesh_to_points_mm,
         reg.rms_points_to_mesh_mm
     );
+    for (name, q) in reg.quality.iter().filter(|(_, q)| q.doubtful) {
+        say!(
+            "warning: the fit of {name} is doubtful (RMS {:.1} mm, covered {:.0} %, seen but uncovered {:.0} %): check its cloud before using its volume",
+            q.rms_mm,
+            q.coverage * 100.0,
+            q.exposed_uncovered * 100.0
+        );
+    }
     if timings {
         let sum = |f: fn(&IterationLog) -> f64| reg.log.iter().map(f).sum::<f64>() * 1e3;
         say!(

@@ -69,6 +69,28 @@ fn turned_and_upside_down_clouds_exit_non_zero_naming_the_problem() {
     assert!(o.status.success(), "{}", text(&o));
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("v.json")).unwrap()).unwrap();
     assert!(v["registration"]["quality"]["torso"]["coverage"].as_f64().unwrap() > 0.5, "{v}");
+    assert!(!text(&o).contains("doubtful"), "{}", text(&o));
+    // The remedy for a cloud lying along z: --up +z; then the fit is good (no segment flagged).
+    let o = bsv(&["register", "x90-true.ply", "--up", "+z", "--quiet"], &d);
+    assert!(o.status.success() && !text(&o).contains("doubtful"), "{}", text(&o));
+    // A deliberately bad fit (the check switched off, a body facing +x) is flagged per segment.
+    let o = bsv(
+        &[
+            "register",
+            "y90-true.ply",
+            "--no-plausibility-check",
+            "--schedule",
+            "m2p:3",
+            "--quiet",
+            "--json",
+            "bad.json",
+        ],
+        &d,
+    );
+    assert!(o.status.success() && text(&o).contains("is doubtful"), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("bad.json")).unwrap()).unwrap();
+    let flagged = v["registration"]["quality"].as_object().unwrap().values().filter(|q| q["doubtful"] == true).count();
+    assert!(flagged >= 1, "{v}");
 }
 
 #[test]

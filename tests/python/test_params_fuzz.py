@@ -132,3 +132,9 @@ def test_bad_numeric_options_name_the_range(capsys: Any) -> None:
         assert "out of range" in err or "not a whole number" in err, err
     assert _exit(lambda: bench_main(["synth", "--n", "0"])) == 2
     assert "--n subjects: 1 .. 100000" in capsys.readouterr().err
+    from bsv.bodies.cohort import main as cohort_main
+    from bsv.cli import main as bsv_main
+
+    assert _exit(lambda: cohort_main(["unused", "-3"])) == 2
+    assert _exit(lambda: bsv_main(["capture", "unused", "--seconds", "nan"])) == 2
+    assert "out of range" in capsys.readouterr().err

@@ -209,6 +209,21 @@ th{background:#f0f0f0}td:first-child{text-align:left}.row{display:flex;gap:14px;
 img{max-height:420px}.note{color:#555}.warn{color:#a00000;font-weight:bold}"""
 
 
+def quality_html(registration: dict[str, Any]) -> str:
+    """The per-segment fit quality table (``registration["quality"]``, rule in bsv-register quality.rs);
+    a doubtful segment is marked in red. Empty when the summary has no quality figures."""
+    quality: dict[str, dict[str, Any]] = registration.get("quality") or {}
+    if not quality:
+        return ""
+    rows = [[html.escape(name), _fmt(q.get("rms_mm"), 1), _fmt(100 * q.get("coverage", math.nan), 0),
+             _fmt(100 * q.get("gap_fraction", math.nan), 0), _fmt(100 * q.get("exposed_uncovered", math.nan), 0),
+             '<span class="warn">doubtful</span>' if q.get("doubtful") else "ok"] for name, q in quality.items()]
+    return ("<h2>Fit quality</h2>" + _table(["segment", "RMS (mm)", "covered %", "in gaps %", "seen, uncovered %",
+                                              "fit"], rows)
+            + '<p class="note">covered: a cloud point within 10 mm; doubtful: RMS &gt; 10 mm, seen-uncovered &gt; 20 % '
+              "or covered &lt; 50 %: check the cloud of that segment before using its volume.</p>")
+
+
 def write_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", overwrite: bool = False) -> dict[str, Path]:
     """Draws the figures and writes ``report.html`` for a :class:`bsv.pipeline.ProcessResult`; returns the
     paths (keys: report and the figure stems). Refuses to replace existing files unless ``overwrite``."""
@@ -290,6 +305,7 @@ def write_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", o
 <div><h2>Cloud</h2>{_table(["camera", "mask px", "points", "SOR removed", "dropped", "kept"], cloud_rows)}
 <h2>Segmentation</h2>{_table(["camera", "source", "labelled px"], seg_rows)}{_landmark_warnings_html(vols)}
 <h2>Registration</h2>{_table(["", ""], reg_rows)}
+{quality_html(reg)}
 <h2>Timings (s)</h2>{_table(["step", "s"], timing_rows)}</div>
 </div>
 <div class="row"><div>{cleaning_html(cr)}</div></div>
@@ -300,4 +316,4 @@ def write_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", o
     return {"report": report, **paths}
 
 
-__all__ = ["FIGURES", "VIEWS", "cleaning_html", "face_labels", "palette", "render_mesh", "write_report"]
+__all__ = ["FIGURES", "VIEWS", "cleaning_html", "face_labels", "palette", "quality_html", "render_mesh", "write_report"]

@@ -102,6 +102,9 @@ pub fn prepare<'a>(
         (outliers_removed, detached_removed) = (cleaned.sparse, cleaned.detached);
         cloud = Cow::Owned(cleaned.cloud);
     }
+    if params.checks.check_plausible {
+        crate::plausible::check_person(&cloud, template)?;
+    }
     if params.labels == LabelSource::Template && template.vertex_labels.is_none() {
         return Err(InputError::TemplateWithoutLabels.into());
     }

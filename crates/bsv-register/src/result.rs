@@ -37,6 +37,8 @@ pub struct Registration {
     pub outliers_removed: usize,
     /// The limbs moved by the articulated initialisation (empty when it did not run).
     pub articulation: Vec<LimbAlignment>,
+    /// Per-segment quality figures of the fit, by segment name (`quality.rs`).
+    pub quality: std::collections::BTreeMap<String, crate::quality::SegmentQuality>,
 }
 
 /// One limb of the articulated initialisation ([`crate::ArticulationParams`]).

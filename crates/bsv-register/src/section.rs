@@ -40,8 +40,10 @@ const MIN_POINTS: usize = 30;
 /// Fewest usable slices.
 const MIN_SLICES: usize = 3;
 
-/// The cross-section change of one limb: `y -> y + shift + (map - I) (y - origin)` for positions
-/// `y` relative to the cloud limb's centroid (the axis component is unchanged).
+/// The cross-section change of one limb: `y -> y + shift + f(t) (map - I) (y - origin)` for positions
+/// `y` relative to the cloud limb's centroid (the axis component is unchanged), where `f` is 1 over the
+/// middle of the limb (where the scales were measured) and falls linearly to 0 at its ends, so that the
+/// joints and the torso next to them keep their shape.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Section {
     /// `I + (depth - 1) d d^T + (width - 1) w w^T`.
@@ -54,22 +56,46 @@ pub struct Section {
     pub depth_scale: f64,
     /// Width scale (cloud / template).
     pub width_scale: f64,
+    /// The limb axis (unit).
+    pub axis: [f64; 3],
+    /// Axial positions (along `axis`): the limb's ends `ends.0`, `ends.3` and the measured middle
+    /// `ends.1..ends.2`.
+    pub ends: (f64, f64, f64, f64),
 }
 
 impl Section {
     /// No change.
     pub fn identity() -> Section {
-        Section { map: Matrix3::identity(), origin: [0.0; 3], shift: [0.0; 3], depth_scale: 1.0, width_scale: 1.0 }
+        Section {
+            map: Matrix3::identity(),
+            origin: [0.0; 3],
+            shift: [0.0; 3],
+            depth_scale: 1.0,
+            width_scale: 1.0,
+            axis: [0.0, 1.0, 0.0],
+            ends: (0.0, 0.0, 0.0, 0.0),
+        }
     }
 
     /// Applies the change to `y` (relative to the cloud limb's centroid).
     pub fn apply(&self, y: [f64; 3]) -> [f64; 3] {
-        let r = self.map * Vector3::from(sub(y, self.origin));
-        [
-            self.origin[0] + self.shift[0] + r[0],
-            self.origin[1] + self.shift[1] + r[1],
-            self.origin[2] + self.shift[2] + r[2],
-        ]
+        let d = Vector3::from(sub(y, self.origin));
+        let r = (self.map - Matrix3::identity()) * d * self.taper(dot(y, self.axis));
+        [y[0] + self.shift[0] + r[0], y[1] + self.shift[1] + r[1], y[2] + self.shift[2] + r[2]]
+    }
+
+    /// 1 over the measured middle, linear to 0 at the ends, 0 beyond.
+    fn taper(&self, t: f64) -> f64 {
+        let (t0, a, b, t1) = self.ends;
+        if t <= t0 || t >= t1 {
+            0.0
+        } else if t < a {
+            (t - t0) / (a - t0).max(f64::MIN_POSITIVE)
+        } else if t > b {
+            (t1 - t) / (t1 - b).max(f64::MIN_POSITIVE)
+        } else {
+            1.0
+        }
     }
 }
 
@@ -160,7 +186,15 @@ pub fn fit_section(posed: &[[f64; 3]], cloud: &[[f64; 3]], axis: [f64; 3]) -> Op
     let map =
         Matrix3::identity() + dv * dv.transpose() * (depth_scale - 1.0) + wv * wv.transpose() * (width_scale - 1.0);
     let comb = |x: f64, y: f64| [d[0] * x + w[0] * y, d[1] * x + w[1] * y, d[2] * x + w[2] * y];
-    Some(Section { map, origin: comb(cd, cw), shift: comb(sd, sw), depth_scale, width_scale })
+    Some(Section {
+        map,
+        origin: comb(cd, cw),
+        shift: comb(sd, sw),
+        depth_scale,
+        width_scale,
+        axis,
+        ends: (t0, a, b, t1),
+    })
 }
 
 #[cfg(test)]
@@ -194,6 +228,8 @@ mod tests {
         assert!((s.width_scale - 0.9).abs() < 0.05, "width {}", s.width_scale);
         let moved = s.apply([0.0, 0.0, 0.04]);
         assert!((moved[2] - 0.06).abs() < 0.002, "{moved:?}");
+        let end = s.apply([0.0, 0.2, 0.04]);
+        assert!((end[2] - 0.04).abs() < 1e-12, "beyond the limb's end nothing is scaled: {end:?}");
     }
 
     #[test]

@@ -256,12 +256,20 @@ class UncertaintyError(BsvError, ValueError):
     """An interval cannot be computed: a bad covariance, error-model table or sample count; says which."""
 
 
+# --- report (bsv.report) ----------------------------------------------------------------------------
+
+
+class ReportError(BsvError, RuntimeError):
+    """The report cannot be made: its PDF renderer (WeasyPrint and Debian's pango) is missing or failed; says
+    what to install."""
+
+
 __all__ = [
     "AssetError", "BatchInputError", "BenchError", "BlurredImageError", "BsipError", "BsvError", "CalibrationError", "CalibrationFileError",
     "CaptureError", "FloorError", "FormatError", "FrontendError", "ImplausibleCaptureError", "InputError", "LabelError",
     "LandmarkMissingError", "MarkerNotFoundError", "MeshError", "NoCameraError", "OutputExistsError",
     "PersonIsolationError", "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",
     "RegistrationInputError", "RegistrationNumericError", "RegistrationParameterError",
-    "RegistrationResourceError", "RegistrationStopped", "ScanError", "SegmentationError", "SolveError",
+    "RegistrationResourceError", "RegistrationStopped", "ReportError", "ScanError", "SegmentationError", "SolveError",
     "TemplateError", "UncertaintyError", "VolumeError", "WriteError", "WrongMarkerError",
 ]

@@ -422,8 +422,8 @@ def create_app(config: StationConfig) -> FastAPI:
     @app.get("/results/{result_id}/files/{name}")
     def result_file(db: Db, who: Who, result_id: int, name: str) -> Response:
         res: Result = get_or_404(db, Result, result_id, "result")
-        if not re.fullmatch(r"[A-Za-z0-9_-]+\.(html|png|json|ply)", name):
-            raise HTTPException(400, "file name must be a plain report file name (report.html, *.png, volumes.json)")
+        if not re.fullmatch(r"[A-Za-z0-9_-]+\.(html|png|json|ply|pdf|csv)", name):
+            raise HTTPException(400, "file name must be a plain report file name (report.html, report.pdf, volumes.csv, *.png, volumes.json)")
         path = config.data / res.report_dir / name
         if not path.is_file():
             raise HTTPException(404, f"result {result_id} has no file {name}")

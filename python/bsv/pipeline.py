@@ -359,13 +359,14 @@ def process(
     from . import register as bsv_register
     from . import write_mesh, write_point_cloud
     from .frontend.capture import read_capture
-    from .report import render_report, write_rendered
+    from .report import render_report, require_pdf, write_rendered
 
     if segmentation not in SEGMENTATIONS:
         raise SegmentationError(f"segmentation must be one of {SEGMENTATIONS}, got {segmentation!r}")
     cap = Path(capture_dir)
     out = Path(out_dir)
     _check_outputs(out, overwrite, cameras, bsip=bsip)
+    require_pdf()  # report.pdf: WeasyPrint must be there before the work, not after it
     if bsip:
         from .biomech import SEXES, densities
 

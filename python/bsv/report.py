@@ -178,19 +178,20 @@ def _bar_chart(names: Sequence[str], volumes_l: dict[str, float], bands: dict[st
 def _segmentation_previews(out: Path, segmentations: Mapping[str, np.ndarray] | None) -> list[tuple[str, bytes]]:
     """Colourised previews (PNG bytes) of the camera segmentations (raw ids 0-14): the given label images by
     camera, else ``segmentation/<camera>/segmentation.png`` in OUT."""
-    import cv2
+    from PIL import Image
 
     if segmentations is None:
         segmentations = {}
         for path in sorted(out.glob("segmentation/*/segmentation.png")):
-            ids = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
-            if ids is not None and ids.ndim == 2:
+            with Image.open(path) as im:
+                ids = np.asarray(im)
+            if ids.ndim == 2:
                 segmentations[path.parent.name] = ids
     previews = []
     for cam, ids in segmentations.items():
-        ok, png = cv2.imencode(".png", cv2.cvtColor(colourise(ids), cv2.COLOR_RGB2BGR))
-        if ok:
-            previews.append((cam, png.tobytes()))
+        buf = io.BytesIO()
+        Image.fromarray(colourise(ids)).save(buf, format="PNG")
+        previews.append((cam, buf.getvalue()))
     return previews
 
 
@@ -537,13 +538,22 @@ def _technical_html(result: Any, vols: dict[str, Any]) -> str:
     return "<details><summary>Technical details</summary>" + "".join(parts) + "</details>"
 
 
-def render_pdf(doc: str) -> bytes:
-    """The PDF of a report's HTML (WeasyPrint; the data: URIs need no base URL)."""
+def require_pdf() -> None:
+    """Raises :class:`bsv.errors.ReportError` naming what to install when report.pdf cannot be made (no
+    WeasyPrint, or no pango for it): ``bsv process`` calls it before any work."""
     try:
-        import weasyprint
+        import weasyprint  # noqa: F401
     except (ImportError, OSError) as exc:
         raise ReportError(f"report.pdf needs WeasyPrint and Debian's pango ({exc}); install them with "
-                          "`pip install weasyprint` and `apt-get install libpango-1.0-0 libpangoft2-1.0-0`") from exc
+                          "`pip install weasyprint` (requirements-frontend.txt) and "
+                          "`apt-get install libpango-1.0-0 libpangoft2-1.0-0`") from exc
+
+
+def render_pdf(doc: str) -> bytes:
+    """The PDF of a report's HTML (WeasyPrint; the data: URIs need no base URL)."""
+    require_pdf()
+    import weasyprint
+
     try:
         pdf: bytes = weasyprint.HTML(string=doc).write_pdf()
     except Exception as exc:  # WeasyPrint raises many kinds; name the file
@@ -605,6 +615,8 @@ def write_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", o
     replace existing files unless ``overwrite`` (checked before the rendering)."""
     out = Path(out_dir)
     check_outputs([out / n for n in FILES if pdf or n != "report.pdf"], overwrite)
+    if pdf:
+        require_pdf()
     return write_rendered(render_report(result, out, title=title, pdf=pdf, segmentations=segmentations), overwrite)
 
 
@@ -623,6 +635,7 @@ __all__ = [
     "render_mesh",
     "render_pdf",
     "render_report",
+    "require_pdf",
     "segment_masses",
     "write_rendered",
     "write_report",

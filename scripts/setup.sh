@@ -9,7 +9,7 @@ if [ ! -x .venv/bin/python ]; then
 fi
 .venv/bin/python -m pip install -q --upgrade pip
 .venv/bin/python -m pip install -q -r requirements-dev.txt -r requirements-frontend.txt -r requirements-batch.txt \
-    -r requirements-station.txt
+    -r requirements-station.txt -r requirements-interop.txt
 # pyrealsense2 loads Debian's libusb at import time.
 if ! ldconfig -p 2>/dev/null | grep -q libusb-1.0.so.0; then
     if [ "$(id -u)" = 0 ]; then
@@ -27,7 +27,11 @@ if ! command -v chromedriver >/dev/null 2>&1 || ! ldconfig -p 2>/dev/null | grep
         echo "note: install chromium, chromium-driver, libpango-1.0-0 and libpangoft2-1.0-0 (sudo apt-get install ...) for the station's browser test and PDF export" >&2
     fi
 fi
-# The extension (bsv._bsv) in the shared, optimised dev profile, installed editable into .venv.
-VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop -q
+# The distribution was called "bsv" before issue 15 (now body-segment-volumes, same import name): drop an
+# old editable install of it so that one distribution owns the package and the `bsv` script.
+if .venv/bin/python -m pip show -q bsv >/dev/null 2>&1; then .venv/bin/python -m pip uninstall -q -y bsv; fi
+# The extension (bsv._bsv) in the release profile (the dev profile makes bsv.register ~1.5x slower),
+# installed editable into .venv.
+VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --release -q
 cargo build -q -p bsv-cli
 echo "bsv set up: .venv/bin/python -c 'import bsv', target/debug/bsv-cli"

@@ -125,6 +125,25 @@ class ImplausibleCaptureError(BsvError):
     camera: str | None = None
 
 
+class MissingExtraError(BsvError, ImportError):
+    """A package of an optional extra is not installed (``package``: the import name; ``extra``: the
+    extra that brings it, as in ``pip install "body-segment-volumes[frontend]"``)."""
+
+    def __init__(self, message: str, package: str | None = None, extra: str | None = None) -> None:
+        super().__init__(message)
+        self.package = package
+        self.extra = extra
+
+    def __reduce__(self) -> tuple[type, tuple[str, str | None, str | None]]:
+        return (type(self), (str(self), self.package, self.extra))
+
+
+class BsvWarning(BsvError, UserWarning):
+    """A result was obtained, but not from what the user may expect: e.g. a point cloud without segment
+    labels, so the fitted mesh takes the template's labels. Issued with ``warnings.warn`` (never raised
+    unless warnings are errors); a BsvError like every BSV class. Filter with ``warnings.simplefilter``."""
+
+
 class OutputExistsError(BsvError, FileExistsError):
     """An output file or folder exists and overwriting was not asked for (``overwrite=True``, ``--overwrite``)."""
 
@@ -249,6 +268,14 @@ class BatchInputError(InputError):
     what to do); the batch does not start."""
 
 
+# --- BSV Station (bsv.station) ---------------------------------------------------------------------
+
+
+class LoginRequired(BsvError):
+    """BSV Station: the request needs a login (the station listens on an address other than localhost and
+    the request carries no valid session); the app answers with the login page."""
+
+
 # --- uncertainty (bsv.uncertainty) ------------------------------------------------------------------
 
 
@@ -265,9 +292,9 @@ class ReportError(BsvError, RuntimeError):
 
 
 __all__ = [
-    "AssetError", "BatchInputError", "BenchError", "BlurredImageError", "BsipError", "BsvError", "CalibrationError", "CalibrationFileError",
+    "AssetError", "BatchInputError", "BenchError", "BlurredImageError", "BsipError", "BsvError", "BsvWarning", "CalibrationError", "CalibrationFileError",
     "CaptureError", "FloorError", "FormatError", "FrontendError", "ImplausibleCaptureError", "InputError", "LabelError",
-    "LandmarkMissingError", "MarkerNotFoundError", "MeshError", "NoCameraError", "OutputExistsError",
+    "LandmarkMissingError", "LoginRequired", "MarkerNotFoundError", "MeshError", "MissingExtraError", "NoCameraError", "OutputExistsError",
     "PersonIsolationError", "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",
     "RegistrationInputError", "RegistrationNumericError", "RegistrationParameterError",
     "RegistrationResourceError", "RegistrationStopped", "ReportError", "ScanError", "SegmentationError", "SolveError",

@@ -29,6 +29,7 @@ import numpy as np
 
 from . import _bsv
 from .errors import BsipError, OutputExistsError, PersonIsolationError
+from .extras import require
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
 from .types import SEGMENT_IDS, TRUNK_LIMBS, Mesh, PointCloud, Registration
 
@@ -47,7 +48,7 @@ SEGMENTATIONS = ("camera", "oracle")
 EXTREMITY_IDS = (1, 7, 8, 13, 14)
 
 
-@dataclass
+@dataclass(repr=False)
 class ProcessResult:
     """What :func:`process` produced: the cloud, the registration, the volumes report and the files."""
 
@@ -81,6 +82,17 @@ class ProcessResult:
 
         doc = self.volumes.get("intervals")
         return None if doc is None else Intervals.from_json(doc)
+
+    def __repr__(self) -> str:
+        total = self.volumes.get("volumes_l", {}).get("trunk_limbs")
+        vol = "" if total is None else f", trunk_limbs={total:.3f} L"
+        return f"ProcessResult({self.out_dir}, {len(self.cloud)} points{vol}, {len(self.files)} files)"
+
+    def _repr_html_(self) -> str:
+        """Notebook display: the volumes (against the truth for a demo) and a thumbnail (:mod:`bsv.display`)."""
+        from .display import registration_html
+
+        return registration_html(self.registration, self.truth, title=f"bsv process -> {self.out_dir}")
 
 
 class _Steps:
@@ -185,7 +197,7 @@ def _camera_spread(cam: str, extrinsics: dict[str, Any]) -> Any:
 
 
 def _read_label_png(path: Path) -> np.ndarray:
-    import cv2
+    cv2 = require("cv2")
 
     img = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
     if img is None:

@@ -31,14 +31,24 @@ IndexArray = npt.NDArray[np.int64]
 LabelArray = npt.NDArray[np.uint8]
 
 
-@dataclass
+def _segments_text(labels: Any) -> str:
+    """", 9 segments" for labels, "" without."""
+    if labels is None:
+        return ""
+    ids = {int(i) for i in np.unique(np.asarray(labels))} - {0}
+    return f", {len(ids)} segments"
+
+
+@dataclass(repr=False)
 class Mesh:
-    """A triangle mesh in metres: ``vertices`` (N, 3) float64, ``faces`` (M, 3) int64, optional uint8 labels."""
+    """A triangle mesh in metres: ``vertices`` (N, 3) float64, ``faces`` (M, 3) int64, optional uint8 labels
+    and optional (N, 3) uint8 sRGB vertex colours (what the object it came from carried)."""
 
     vertices: FloatArray
     faces: IndexArray
     vertex_labels: LabelArray | None = None
     face_labels: LabelArray | None = None
+    vertex_colors: npt.NDArray[np.uint8] | None = None
 
     def __post_init__(self) -> None:
         self.vertices = np.asarray(self.vertices)
@@ -47,15 +57,30 @@ class Mesh:
             self.vertex_labels = np.asarray(self.vertex_labels)
         if self.face_labels is not None:
             self.face_labels = np.asarray(self.face_labels)
+        if self.vertex_colors is not None:
+            self.vertex_colors = np.asarray(self.vertex_colors)
 
-    def to_trimesh(self):  # type: ignore[no-untyped-def]
-        """A ``trimesh.Trimesh`` of this mesh (requires trimesh)."""
-        import trimesh
+    def __repr__(self) -> str:
+        labels = self.vertex_labels if self.vertex_labels is not None else self.face_labels
+        return f"Mesh({len(self.vertices)} vertices, {len(self.faces)} faces{_segments_text(labels)})"
 
-        return trimesh.Trimesh(self.vertices, self.faces, process=False)
+    def to_trimesh(self) -> Any:
+        """A ``trimesh.Trimesh`` (vertex order kept) with the labels as ``vertex_attributes["label"]`` /
+        ``face_attributes["label"]`` and vertex colours (own, else the segment palette). Needs the
+        ``interop`` extra."""
+        from .interop import mesh_to_trimesh
+
+        return mesh_to_trimesh(self)
+
+    def to_open3d(self, legacy: bool = False) -> Any:
+        """An Open3D tensor ``TriangleMesh`` with ``vertex.label`` / ``triangle.label`` and colours, or with
+        ``legacy=True`` an ``open3d.geometry.TriangleMesh`` (no labels). Needs the ``interop`` extra."""
+        from .interop import mesh_to_open3d
+
+        return mesh_to_open3d(self, legacy)
 
 
-@dataclass
+@dataclass(repr=False)
 class PointCloud:
     """A point cloud in metres: ``points`` (N, 3) float64 with optional normals, uint8 colours and labels."""
 
@@ -76,8 +101,27 @@ class PointCloud:
     def __len__(self) -> int:
         return int(self.points.shape[0])
 
+    def __repr__(self) -> str:
+        extra = [name for name in ("normals", "colors") if getattr(self, name) is not None]
+        return (f"PointCloud({len(self)} points{_segments_text(self.labels)}"
+                f"{''.join(', ' + e for e in extra)})")
 
-@dataclass
+    def to_trimesh(self) -> Any:
+        """A ``trimesh.PointCloud`` with colours (own, else the segment palette) and ``metadata["label"]``,
+        ``metadata["normals"]``. Needs the ``interop`` extra."""
+        from .interop import cloud_to_trimesh
+
+        return cloud_to_trimesh(self)
+
+    def to_open3d(self, legacy: bool = False) -> Any:
+        """An Open3D tensor ``PointCloud`` with ``point.normals`` / ``colors`` / ``label``, or with
+        ``legacy=True`` an ``open3d.geometry.PointCloud`` (no labels). Needs the ``interop`` extra."""
+        from .interop import cloud_to_open3d
+
+        return cloud_to_open3d(self, legacy)
+
+
+@dataclass(repr=False)
 class Registration:
     """The result of :func:`bsv.register`: the fitted mesh, its volumes (the report dict with
     ``volumes["registration"]``, the summary), the per-iteration log, the parameters used and the
@@ -103,3 +147,9 @@ class Registration:
         vol = "" if whole is None else f", trunk_limbs={whole:.3f} L"
         return (f"Registration({len(self.mesh.vertices)} vertices, {len(self.log)} iterations, "
                 f"rms_mesh_to_points_mm={rms:.2f}{vol}, {self.seconds:.2f} s)")
+
+    def _repr_html_(self) -> str:
+        """Notebook display: a small table of the volumes and the fit, and a thumbnail of the segmented body."""
+        from .display import registration_html
+
+        return registration_html(self)

@@ -48,6 +48,63 @@ g torso\nf 1 3 2\nf 1 2 4\no shin_r\nf 2 3 4\ng head\nf 1 4 3\n";
     assert_eq!(m.vertex_labels, Some(vec![2, 2, 1, 1, 0]));
 }
 
+/// (triangle, face label) pairs of a labelled mesh, sorted (face order aside).
+fn sorted_faces(m: &TriMesh) -> Vec<([u32; 3], u8)> {
+    let fl = m.face_labels.as_ref().expect("face labels");
+    sorted_pairs(m.triangles.iter().copied().zip(fl.iter().copied()).collect())
+}
+
+fn sorted_pairs(mut v: Vec<([u32; 3], u8)>) -> Vec<([u32; 3], u8)> {
+    v.sort_unstable();
+    v
+}
+
+/// Enclosed volume by the divergence theorem (m^3).
+fn volume(m: &TriMesh) -> f64 {
+    m.triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| m.vertices[i as usize]);
+            (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                + a[2] * (b[0] * c[1] - b[1] * c[0]))
+                / 6.0
+        })
+        .sum()
+}
+
+#[test]
+fn interleaved_labels_give_one_group_per_segment_and_round_trip() {
+    // Face labels that change at every face (as a fitted mesh's do along its cut lines): the writer used
+    // to emit one `g` line per run (666 runs for a fitted body); now one per segment.
+    let mut m = icosphere(0.5, 2);
+    let nf = m.n_triangles();
+    let ids = [2u8, 3, 9, 2, 11, 3];
+    m.face_labels = Some((0..nf).map(|t| ids[t % ids.len()]).collect());
+    let text = obj::to_string(&m).expect("encode");
+    for name in ["torso", "upper_arm_l", "thigh_l", "shin_l"] {
+        assert_eq!(text.matches(&format!("\ng {name}\n")).count(), 1, "{name}");
+    }
+    assert_eq!(text.matches("\ng ").count(), 4);
+    let (back, report) = obj::parse(text.as_bytes()).expect("decode");
+    assert_eq!(back.vertices, m.vertices);
+    assert_eq!(sorted_faces(&back), sorted_faces(&m), "the same triangles with the same labels");
+    let bl = back.face_labels.as_ref().expect("labels");
+    assert!(bl.windows(2).all(|w| w[0] <= w[1]), "faces come grouped by ascending segment id");
+    assert!(report.vertex_labels_derived);
+    // Vertex labels are derived from the same faces, so they agree; the volume is the same.
+    let want =
+        bsv_core::labels::vertex_labels_from_faces(m.n_vertices(), &m.triangles, m.face_labels.as_ref().unwrap());
+    assert_eq!(back.vertex_labels.as_ref(), Some(&want));
+    assert!((volume(&back) - volume(&m)).abs() <= 1e-15 * volume(&m).abs().max(1.0));
+    assert!(volume(&m) > 0.5);
+
+    // An unlabelled mesh keeps its face order and gets no group.
+    let plain = icosphere(0.5, 1);
+    let text = obj::to_string(&plain).expect("encode");
+    assert!(!text.contains("\ng "));
+    assert_eq!(obj::parse(text.as_bytes()).expect("decode").0.triangles, plain.triangles);
+}
+
 #[test]
 fn writer_round_trips_exactly_and_groups_by_segment() {
     let mut m = icosphere(0.123_456_789, 2);
@@ -70,19 +127,15 @@ fn writer_round_trips_exactly_and_groups_by_segment() {
     let mut c = cuboid([1.0; 3]);
     c.vertex_labels = Some(c.vertices.iter().map(|p| if p[0] > 0.0 { 5 } else { 3 }).collect());
     let (back, _) = obj::parse(obj::to_string(&c).unwrap().as_bytes()).unwrap();
-    let want: Vec<u8> = c
+    let want: Vec<([u32; 3], u8)> = c
         .triangles
         .iter()
         .map(|t| {
             let n5 = t.iter().filter(|&&v| c.vertices[v as usize][0] > 0.0).count();
-            if n5 >= 2 {
-                5
-            } else {
-                3
-            }
+            (*t, if n5 >= 2 { 5 } else { 3 })
         })
         .collect();
-    assert_eq!(back.face_labels, Some(want));
+    assert_eq!(sorted_faces(&back), sorted_pairs(want));
 
     // File level.
     let dir = std::env::temp_dir().join(format!("bsv_io_obj_{}", std::process::id()));

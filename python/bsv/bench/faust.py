@@ -151,7 +151,7 @@ def label_registration(reg: Mesh, params: dict[str, Any] | None = None, samples:
     tmpl = default_template(full=True)
     pts = sample_surface(reg, samples)
     # an unlabelled cloud: bsv.register keeps the template's labels (its params["labels"] = "template")
-    fit = register(pts, None, tmpl, **dict(params or {}))
+    fit = register(pts, None, tmpl, label_source="template", **dict(params or {}))
     if fit.mesh.vertex_labels is None:
         raise BenchError("the full template registration returned no labels")
     vl = fit.mesh.vertex_labels[nearest_index(fit.mesh.vertices, reg.vertices)]

@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import OutputExistsError
+from ..extras import require
 from .errors import (
     BlurredImageError,
     CalibrationError,
@@ -65,7 +66,7 @@ MAX_EDGE_WIDTH_PX = 4.0
 
 
 def _gray(image: ImageLike) -> np.ndarray:
-    import cv2
+    cv2 = require("cv2")
 
     if isinstance(image, (str, Path)):
         img = cv2.imread(str(image), cv2.IMREAD_UNCHANGED)
@@ -89,7 +90,7 @@ def edge_width_px(gray: np.ndarray, roi: tuple[int, int, int, int] | None = None
     step edge is 1-2 px wide; a Gaussian blur of sigma s widens it to about 2.5 s. NaN when the region
     has no contrast to judge by. Without ``roi`` the extreme percentiles of the whole image are used (a
     marker fills only ~1 % of a frame)."""
-    import cv2
+    cv2 = require("cv2")
 
     g = gray if roi is None else gray[roi[1]:roi[3], roi[0]:roi[2]]
     if g.size < 9:
@@ -107,7 +108,7 @@ def edge_width_px(gray: np.ndarray, roi: tuple[int, int, int, int] | None = None
 
 
 def _detector(marker: MarkerSpec) -> cv2.aruco.ArucoDetector:
-    import cv2
+    cv2 = require("cv2")
 
     params = cv2.aruco.DetectorParameters()
     params.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
@@ -240,7 +241,7 @@ def marker_pose(corners: np.ndarray, intrinsics: Intrinsics, marker: MarkerSpec 
                 ) -> tuple[np.ndarray, np.ndarray, float]:
     """Marker-to-camera rotation (3 x 3), translation (metres) and the reprojection RMS (pixels) from
     4 corners: IPPE square, then Levenberg-Marquardt refinement."""
-    import cv2
+    cv2 = require("cv2")
 
     obj = marker.object_points()
     img = np.asarray(corners, dtype=np.float64).reshape(4, 1, 2)
@@ -598,7 +599,7 @@ def alignment(r_cm: np.ndarray, t_cm: np.ndarray, *, yaw_tol_deg: float = 0.5, s
 def draw_alignment(image: np.ndarray, corners: np.ndarray | None, info: Alignment | None, marker: MarkerSpec
                    ) -> np.ndarray:
     """Colour image with the detected marker outlined and the alignment instructions written on it."""
-    import cv2
+    cv2 = require("cv2")
 
     out = image.copy() if image.ndim == 3 else cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
     scale = max(out.shape[1] / 1000.0, 0.5)
@@ -620,7 +621,7 @@ def live(serial: str | None = None, board: Board = _DEFAULT_BOARD, *, side: str 
          height: int = 1080, fps: int = 30, yaw_tol_deg: float = 0.5, shift_tol_m: float = 0.005) -> None:
     """Live view of one RealSense camera's colour stream with the detected marker and the remaining yaw and
     transversal shift to face it, ALIGNED within tolerance; Esc or q quits. (Exercised by hand only.)"""
-    import cv2
+    cv2 = require("cv2")
 
     from .capture import import_realsense, open_colour_stream
 

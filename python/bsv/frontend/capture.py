@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import OutputExistsError
+from ..extras import require
 from .errors import CaptureError, NoCameraError, RecordingError
 from .intrinsics import Intrinsics
 
@@ -76,15 +77,8 @@ class CameraCapture:
 
 
 def import_realsense() -> ModuleType:
-    """``pyrealsense2``, or a CaptureError saying how to install it."""
-    try:
-        import pyrealsense2 as rs
-    except ImportError as e:  # pragma: no cover - depends on the machine
-        raise CaptureError(
-            "pyrealsense2 is not installed: pip install -r requirements-frontend.txt (and apt-get install "
-            f"libusb-1.0-0) ({e})"
-        ) from e
-    return rs
+    """``pyrealsense2``, or a :class:`bsv.errors.MissingExtraError` naming the ``frontend`` extra."""
+    return require("pyrealsense2")
 
 
 def connected_serials() -> list[str]:
@@ -120,7 +114,7 @@ def align_depth_to_colour(depth: np.ndarray, depth_intr: Intrinsics, colour_intr
     pixel's footprint (its two opposite corners deprojected at its depth, moved into the colour camera by
     ``rotation``/``translation_units`` (translation in depth units) and projected) is filled with the
     depth along the colour camera's axis, the nearest winning; 0 where no depth lands."""
-    import cv2
+    cv2 = require("cv2")
 
     d = np.asarray(depth)
     ys, xs = np.nonzero(d)
@@ -321,7 +315,7 @@ CAPTURE_FILES = ("color.png", "depth.png", "camera.json")
 
 def _reduce(frames: _Frames, config: CaptureConfig, folder: Path) -> CameraCapture:
     """Settling skip, acquisition window, subsampling, temporal median, alignment, files."""
-    import cv2
+    cv2 = require("cv2")
 
     where = f"recording {frames.recording}" if frames.recording else f"camera {frames.serial}"
     depth = frames.depth[config.settle_frames:]
@@ -431,7 +425,7 @@ def capture(
 def read_capture(folder: PathLike) -> dict[str, Any]:
     """Reads one camera folder (a capture's or the virtual scanner's): colour (RGB uint8), depth in metres
     (float64, 0 = none), its camera.json and the intrinsics."""
-    import cv2
+    cv2 = require("cv2")
 
     d = Path(folder)
     meta = _camera_meta(d)

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..extras import require
 from .errors import CalibrationError
 
 if TYPE_CHECKING:
@@ -46,7 +47,7 @@ class MarkerSpec:
 
     def aruco_dictionary(self) -> cv2.aruco.Dictionary:
         """The ``cv2.aruco.Dictionary`` (raises CalibrationError for an unknown name or an id out of range)."""
-        import cv2
+        cv2 = require("cv2")
 
         code = getattr(cv2.aruco, self.dictionary, None)
         if not isinstance(code, int):
@@ -65,13 +66,13 @@ class MarkerSpec:
 
     def image(self, pixels: int = 700, border_bits: int = 1) -> np.ndarray:
         """The printable marker (uint8, black modules on white), ``pixels`` wide including its black border."""
-        import cv2
+        cv2 = require("cv2")
 
         return cv2.aruco.generateImageMarker(self.aruco_dictionary(), self.marker_id, int(pixels), borderBits=border_bits)
 
     def mirrored_id(self) -> int | None:
         """The id this marker decodes as when seen mirrored (printed on the wrong side), if any."""
-        import cv2
+        cv2 = require("cv2")
 
         img = np.pad(self.image(280), 40, constant_values=255)
         det = cv2.aruco.ArucoDetector(self.aruco_dictionary(), cv2.aruco.DetectorParameters())

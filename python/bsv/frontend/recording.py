@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import OutputExistsError
+from ..extras import require
 from .errors import RecordingError
 from .intrinsics import Intrinsics
 
@@ -46,7 +47,7 @@ def write_recording(
     ``depth_scale`` metres), ``colour`` uint8 RGB (H x W x 3), one pair per frame at ``fps``; the
     depth-to-colour extrinsics (rotation 3 x 3, translation metres) default to identity. An existing file
     is refused (:class:`bsv.errors.OutputExistsError`) unless ``overwrite``."""
-    import pyrealsense2 as rs
+    rs = require("pyrealsense2")
 
     p = Path(path)
     if p.suffix != ".db3":

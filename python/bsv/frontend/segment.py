@@ -45,6 +45,7 @@ from typing import Any
 
 import numpy as np
 
+from ..extras import require
 from ..types import SEGMENT_IDS as _SEGMENT_IDS
 from ..types import SEGMENT_NAMES as _SEGMENT_NAMES
 from .errors import LandmarkMissingError, PersonNotFoundError, SegmentationError
@@ -222,13 +223,7 @@ def _mediapipe_holistic() -> ModuleType:
     # MediaPipe's C++ logging (glog/absl, TFLite) prints several lines per image: keep warnings out.
     os.environ.setdefault("GLOG_minloglevel", "2")
     os.environ.setdefault("TF_CPP_MIN_LOG_LEVEL", "2")
-    try:
-        from mediapipe.python.solutions import holistic
-    except ImportError as e:  # pragma: no cover - depends on the machine
-        raise SegmentationError(
-            f"mediapipe is not installed: pip install -r requirements-frontend.txt ({e})"
-        ) from e
-    return holistic
+    return require("mediapipe.python.solutions.holistic")
 
 
 def _check_model(holistic: Any, complexity: int) -> None:
@@ -494,7 +489,7 @@ def _bones_dist(p: np.ndarray, bones: Sequence[tuple[np.ndarray, np.ndarray]]) -
 
 def _polygon_dist(p: np.ndarray, poly: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     """Distance of pixel centres p (N, 2 integer x, y) to a filled polygon (0 inside)."""
-    import cv2
+    cv2 = require("cv2")
 
     inside = np.zeros(shape, dtype=np.uint8)
     cv2.fillPoly(inside, [np.round(poly).astype(np.int32).reshape(-1, 1, 2)], 1)
@@ -616,7 +611,7 @@ def label_pixels(mask: np.ndarray, pose: np.ndarray, hands: list, params: Segmen
 
 def _clean_mask(mask: np.ndarray) -> np.ndarray:
     """Largest connected component of the mask and any component at least a tenth its size."""
-    import cv2
+    cv2 = require("cv2")
 
     n, comp, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
     if n <= 1:
@@ -631,7 +626,7 @@ def refine_mask_with_depth(mask: np.ndarray, depth_m: np.ndarray, band_m: float 
     """The person mask refined by an aligned depth image (metres, 0 = none): pixels within ``grow_px`` of
     the mask that have depth within ``band_m`` of the mask's median depth; mask pixels without depth or
     outside that band are dropped."""
-    import cv2
+    cv2 = require("cv2")
 
     d = np.asarray(depth_m, dtype=np.float64)
     if d.shape != mask.shape:
@@ -703,7 +698,7 @@ def write_segmentation(seg: Segmentation, folder: PathLike, overwrite: bool = Fa
     """Writes ``segmentation.png`` (uint8 ids), ``segmentation_preview.png`` (the ids in the segment palette of
     :mod:`bsv.palette`), ``mask.png`` (0/255) and ``landmarks.json`` into ``folder``
     (created if needed); refuses (:class:`bsv.errors.OutputExistsError`) if any exists, unless ``overwrite``."""
-    import cv2
+    cv2 = require("cv2")
 
     from ..errors import OutputExistsError
 

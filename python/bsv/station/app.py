@@ -29,6 +29,7 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session as DbSession
 from starlette.middleware.sessions import SessionMiddleware
 
+from ..errors import LoginRequired
 from . import jobs as jobq
 from . import rig, security, uncertainty
 from .charts import subject_chart
@@ -65,10 +66,6 @@ class StationConfig:
     def require_login(self) -> bool:
         """Login is required on every address but localhost."""
         return not security.is_loopback(self.host)
-
-
-class LoginRequired(Exception):
-    """Raised by the principal dependency when the station needs a login and the request has none."""
 
 
 def _fmt(t: Any) -> str:

@@ -11,7 +11,11 @@
 //! the label most of its faces carry, ties going to the smaller id, unreferenced vertices 0).
 //!
 //! Writer: `v` lines with the shortest decimal that parses back to the same f64 (exact round trip),
-//! `f` lines in face order, and a `g <segment name>` line whenever the face label changes. A mesh with
+//! then, for a labelled mesh, one `g <segment name>` group per segment present (ascending segment id,
+//! `unlabelled` for id 0) holding that segment's `f` lines in their original relative order; so the
+//! faces of a file read back come grouped by segment (the same triangles and labels, in that order),
+//! and Blender, MeshLab or trimesh show one object part per segment. An unlabelled mesh keeps its face
+//! order and has no group. A mesh with
 //! vertex labels but no face labels gets face labels by majority of its three corners
 //! ([`crate::labels::face_labels_from_vertices`]: when all three differ, the corner with the smallest
 //! vertex index), since OBJ cannot store vertex labels.
@@ -310,16 +314,20 @@ pub fn to_string(mesh: &TriMesh) -> Result<String, AttributeError> {
         _ => None,
     };
     let face_labels = mesh.face_labels.as_ref().or(derived.as_ref());
-    let label_of = |t: usize| -> Option<u8> { face_labels.map(|fl| fl[t]) };
+    let mut order: Vec<usize> = (0..mesh.n_triangles()).collect();
+    if let Some(fl) = face_labels {
+        order.sort_by_key(|&t| fl[t]); // stable: original order within a segment
+    }
     let mut group: Option<u8> = None;
-    for (t, f) in mesh.triangles.iter().enumerate() {
-        if let Some(l) = label_of(t) {
+    for t in order {
+        if let Some(l) = face_labels.map(|fl| fl[t]) {
             if group != Some(l) {
                 let name = Segment::from_id(l).unwrap_or(Segment::Unlabelled).name();
                 let _ = writeln!(s, "g {name}");
                 group = Some(l);
             }
         }
+        let f = mesh.triangles[t];
         let _ = writeln!(s, "f {} {} {}", f[0] + 1, f[1] + 1, f[2] + 1);
     }
     Ok(s)

@@ -287,8 +287,8 @@ class UncertaintyError(BsvError, ValueError):
 
 
 class ReportError(BsvError, RuntimeError):
-    """The report cannot be made: its PDF renderer (WeasyPrint and Debian's pango) is missing or failed; says
-    what to install."""
+    """The report cannot be made: WeasyPrint cannot load Debian's pango, or fails to render report.pdf; says
+    what to install or what failed."""
 
 
 __all__ = [

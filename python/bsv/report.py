@@ -539,13 +539,15 @@ def _technical_html(result: Any, vols: dict[str, Any]) -> str:
 
 
 def require_pdf() -> None:
-    """Raises :class:`bsv.errors.ReportError` naming what to install when report.pdf cannot be made (no
-    WeasyPrint, or no pango for it): ``bsv process`` calls it before any work."""
+    """Checks that report.pdf can be made (``bsv process`` calls it before any work): without WeasyPrint a
+    :class:`bsv.errors.MissingExtraError` naming the ``frontend`` extra; without Debian's pango (WeasyPrint
+    fails to load it) a :class:`bsv.errors.ReportError` naming the packages to install."""
+    from .extras import require
+
     try:
-        import weasyprint  # noqa: F401
-    except (ImportError, OSError) as exc:
-        raise ReportError(f"report.pdf needs WeasyPrint and Debian's pango ({exc}); install them with "
-                          "`pip install weasyprint` (requirements-frontend.txt) and "
+        require("weasyprint")
+    except OSError as exc:
+        raise ReportError(f"report.pdf needs Debian's pango for WeasyPrint ({exc}); install it with "
                           "`apt-get install libpango-1.0-0 libpangoft2-1.0-0`") from exc
 
 

@@ -266,11 +266,11 @@ def test_volumes_json_is_unchanged_by_the_report(run):
 def test_without_weasyprint_process_stops_before_the_work_naming_what_to_install(run, tmp_path, monkeypatch):
     import sys
 
-    from bsv.errors import ReportError
+    from bsv.errors import MissingExtraError
 
     d, _, _ = run
     monkeypatch.setitem(sys.modules, "weasyprint", None)  # import weasyprint -> ImportError
-    with pytest.raises(ReportError, match=r"pip install weasyprint.*libpango"):
+    with pytest.raises(MissingExtraError, match=r"weasyprint.*body-segment-volumes\[frontend\]"):
         pipeline.process(d / "capture", d / "capture" / "calibration.json", tmp_path / "out", segmentation="oracle",
                          progress=False)
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())

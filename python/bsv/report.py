@@ -468,6 +468,7 @@ Volumes in litres, masses in kilograms; 95 % intervals give the range the true v
 {f'<p class="note">95 % intervals: {html.escape(iv.method)}.</p>' if iv else '<p class="note">No 95 % intervals were computed for this run.</p>'}
 <h2>Left / right</h2>{_table(["Part", "Left minus right, % of their mean"], asym_rows) if asym_rows else '<p class="note">Not measured.</p>'}
 <h2>Proportions</h2>{_table(["Ratio of volumes", "Value", "95 % interval"], ratio_rows) if ratio_rows else '<p class="note">Not measured.</p>'}
+{_bsip_html(result.bsip) if getattr(result, "bsip", None) is not None else ""}
 {seg_html}
 <h2>Fit to the measured points</h2>
 <div class="figs">{_figure(_cloud_figure(mesh, flabels, result.cloud), "measured points over the fitted body",
@@ -476,6 +477,29 @@ Volumes in litres, masses in kilograms; 95 % intervals give the range the true v
 {f"<h2>Notes</h2><ul>{notes}</ul>" if notes else ""}
 </main></body></html>
 """
+
+
+def _bsip_html(b: Any) -> str:
+    """The body-segment inertial parameters (``bsv process --bsip``): per segment mass, its share of the
+    body mass, length and centre of mass beside de Leva's (1996) values, the radii of gyration folded away."""
+    def pair(ours: float, theirs: float | None) -> str:
+        return f"{ours:.1f}" + ("" if theirs is None else f" ({theirs:.1f})")
+
+    rows, rg_rows = [], []
+    for s in b.segments.values():
+        r = s.reference
+        rows.append([_swatch(s.name), _fmt(s.mass_kg, 2), pair(s.mass_pct, r.mass_pct if r else None),
+                     f"{s.length_m * 1e3:.0f}", pair(s.com_pct, r.com_pct if r else None)])
+        ref_rg = (r.rg_sagittal_pct, r.rg_transverse_pct, r.rg_longitudinal_pct) if r else (None, None, None)
+        rg_rows.append([html.escape(plain_name(s.name)),
+                        *(pair(x, y) for x, y in zip(s.radii_of_gyration_pct(), ref_rg, strict=True))])
+    return ("<h2>Segment masses and centres of mass</h2>"
+            + _table(["Segment", "Mass (kg)", "% of body mass", "Length (mm)", "Centre of mass, % of length"], rows)
+            + f'<p class="note">In brackets: de Leva (1996), {html.escape(str(b.sex))}. Body-mass estimate '
+            f"{b.body_mass_kg:.1f} kg ({html.escape(str(b.mass_basis))}); densities: {html.escape(str(b.density_source))}."
+            " Full values (inertia tensors, joint centres): bsip.json, bsip.csv, model.osim.</p>"
+            "<details><summary>Radii of gyration (% of segment length)</summary>"
+            + _table(["Segment", "sagittal", "transverse", "longitudinal"], rg_rows) + "</details>")
 
 
 def _ratio_name(key: str) -> str:

@@ -274,3 +274,21 @@ def test_without_weasyprint_process_stops_before_the_work_naming_what_to_install
         pipeline.process(d / "capture", d / "capture" / "calibration.json", tmp_path / "out", segmentation="oracle",
                          progress=False)
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+def test_segment_inertial_parameters_are_shown_and_their_masses_used(run, tmp_path):
+    from bsv.biomech import compute
+
+    _, res, _ = run
+    b = compute(res.registration)
+    res.bsip = b
+    try:
+        doc = report.render_html(res, tmp_path, "bsip")
+        rows = {r["segment"]: r for r in csv.DictReader(io.StringIO(report.csv_text(res)))}
+    finally:
+        res.bsip = None
+    assert "Segment masses and centres of mass" in doc and "de Leva (1996)" in doc
+    for name, s in b.segments.items():
+        if name in rows:
+            assert float(rows[name]["mass_kg"]) == pytest.approx(s.mass_kg, abs=1e-3)
+    assert float(rows["thigh_l"]["density_kg_m3"]) != float(rows["torso"]["density_kg_m3"])  # segment-specific

@@ -44,8 +44,9 @@ def hex_colour(segment_id: int) -> str:
     return f"#{r:02x}{g:02x}{b:02x}"
 
 
-def colourise(ids: npt.ArrayLike, background: tuple[int, int, int] = (0, 0, 0)) -> npt.NDArray[np.uint8]:
-    """An (H, W, 3) uint8 RGB image of a segment-id image (ids 0-14; 0 and ids above 14 get ``background``)."""
+def colourise(ids: npt.ArrayLike, background: tuple[int, int, int] = (255, 255, 255)) -> npt.NDArray[np.uint8]:
+    """An (H, W, 3) uint8 RGB image of a segment-id image (ids 0-14; 0 and ids above 14 get ``background``,
+    white by default: previews that print well)."""
     a = np.asarray(ids)
     lut = np.asarray(PALETTE, dtype=np.uint8).copy()
     lut[0] = background

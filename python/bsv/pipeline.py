@@ -688,7 +688,8 @@ def _print_process(res: Any) -> None:
     print("\n".join(asymmetry_lines(res.volumes)))
     if res.bsip is not None:
         print(res.bsip.table())
-    print(f"report: {res.files['report']}")
+    print(f"report: {res.files['report']}" + (f" (PDF: {res.files['report_pdf']}; spreadsheet: {res.files['volumes_csv']})"
+                                              if "report_pdf" in res.files else ""))
 
 
 def _non_negative(text: str) -> int:

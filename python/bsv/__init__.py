@@ -22,6 +22,7 @@ from .errors import (
     BsvError,
     BsvWarning,
     FormatError,
+    ImplausibleCloudError,
     InputError,
     MeshError,
     MissingExtraError,
@@ -179,6 +180,11 @@ def register(
     ``bsv-cli register --help``). ``label_source``: "cloud" (each fitted vertex takes its nearest cloud
     point's label, the paper; default for labelled clouds) or "template" (the template's own labels).
     The GIL is released while the solver runs.
+
+    With the default (labelled human) template the cloud must be a standing person in the world frame
+    (Y up, facing +Z, left on +X, metres): otherwise :class:`bsv.ImplausibleCloudError` says what is wrong
+    and how to fix it (``check_plausible=False`` skips the check). ``volumes["registration"]["quality"]``
+    and :attr:`Registration.quality` hold per-segment fit quality figures with a ``doubtful`` flag.
     """
     cloud = as_cloud(points, labels=labels)
     tmpl = default_template() if template is None else as_mesh(template)
@@ -311,6 +317,7 @@ __all__ = [
     "BsvError",
     "BsvWarning",
     "FormatError",
+    "ImplausibleCloudError",
     "InputError",
     "Mesh",
     "MeshError",

@@ -33,6 +33,8 @@ class RegisterParams:
     # (float, default 0.015; 0 = off) and ``detached_min_fraction`` (float in [0, 1], default 0.25)
     # drop the detached pieces of a segment; ``bbox_max_outlier_distance_m`` (float > 0, default
     # 0.3; inf = off) leaves far sparse points out of the pre-alignment box.
+    # ``check_plausible`` (bool, default True): with a labelled human template, refuse a cloud that is
+    # not a standing person in the world frame (``ImplausibleCloudError``).
 
     def __init__(self, **kwargs: Any) -> None: ...
     def to_dict(self) -> dict[str, Any]: ...

@@ -29,13 +29,15 @@ Run `bsv <command> --help` for the options of a command. Lengths are metres, vol
 
 
 def _capture_main(argv: list[str]) -> int:
+    from .argtypes import real
     from .frontend.capture import CaptureConfig, capture
 
     ap = argparse.ArgumentParser(prog="bsv capture", description="Capture (or replay) the two RealSense cameras.")
     ap.add_argument("out_dir", help="folder receiving <camera>/color.png, depth.png, camera.json, recording.db3")
     ap.add_argument("--front", help="serial number of the front camera")
     ap.add_argument("--back", help="serial number of the back camera")
-    ap.add_argument("--seconds", type=float, default=5.0, help="still acquisition time (default 5 s)")
+    ap.add_argument("--seconds", type=real(0.1, 3600.0, "--seconds"), default=5.0,
+                    help="still acquisition time (default 5 s)")
     ap.add_argument("--d4xx", action="store_true", help="D4xx stream defaults instead of L515")
     ap.add_argument("--from-recording", action="store_true", help="replay OUT_DIR/<camera>/recording.db3")
     ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT_DIR")

@@ -76,6 +76,13 @@ class RegistrationInputError(RegistrationError, InputError):
     metres, non-manifold template, ...)."""
 
 
+class ImplausibleCloudError(RegistrationInputError):
+    """The cloud is not a standing person in the world frame (Y up, facing +Z, left on +X, metres): flat,
+    compact (a sphere), not upright, facing another way or not of a person's size. The message says what
+    was measured and the fix (rotate or turn the cloud, convert its units); ``parameter`` is
+    ``"check_plausible"`` (``check_plausible=False`` skips the check). Only with a labelled human template."""
+
+
 class RegistrationParameterError(RegistrationError, InputError):
     """A registration parameter is unknown, of the wrong type or out of range, or the schedule does
     not parse (``parameter`` names it)."""
@@ -293,7 +300,7 @@ class ReportError(BsvError, RuntimeError):
 
 __all__ = [
     "AssetError", "BatchInputError", "BenchError", "BlurredImageError", "BsipError", "BsvError", "BsvWarning", "CalibrationError", "CalibrationFileError",
-    "CaptureError", "FloorError", "FormatError", "FrontendError", "ImplausibleCaptureError", "InputError", "LabelError",
+    "CaptureError", "FloorError", "FormatError", "FrontendError", "ImplausibleCaptureError", "ImplausibleCloudError", "InputError", "LabelError",
     "LandmarkMissingError", "LoginRequired", "MarkerNotFoundError", "MeshError", "MissingExtraError", "NoCameraError", "OutputExistsError",
     "PersonIsolationError", "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",
     "RegistrationInputError", "RegistrationNumericError", "RegistrationParameterError",

@@ -28,7 +28,9 @@ from typing import Any
 import numpy as np
 
 from . import _bsv
-from .errors import BsipError, OutputExistsError, PersonIsolationError
+from .argtypes import real, whole
+from .argtypes import seed as seed_type
+from .errors import BsipError, InputError, OutputExistsError, PersonIsolationError
 from .extras import require
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
 from .types import SEGMENT_IDS, TRUNK_LIMBS, Mesh, PointCloud, Registration
@@ -320,6 +322,13 @@ def _check_outputs(out: Path, overwrite: bool, cameras: Sequence[str] = ("front"
 # process
 
 
+def _process_keywords() -> frozenset[str]:
+    """The keywords of :func:`process` that are not registration parameters (from its signature)."""
+    import inspect
+
+    return frozenset(inspect.signature(process).parameters) - {"register_params"}
+
+
 def process(
     capture_dir: PathLike,
     calibration: PathLike | None,
@@ -375,6 +384,7 @@ def process(
 
     if segmentation not in SEGMENTATIONS:
         raise SegmentationError(f"segmentation must be one of {SEGMENTATIONS}, got {segmentation!r}")
+    _bsv.RegisterParams(**register_params)  # bad registration parameters fail here, before any work
     cap = Path(capture_dir)
     out = Path(out_dir)
     _check_outputs(out, overwrite, cameras, bsip=bsip)
@@ -546,6 +556,7 @@ def demo(
     from . import bodies, scan
 
     out = Path(out_dir)
+    _bsv.RegisterParams(**{k: v for k, v in process_params.items() if k not in _process_keywords()})
     _check_outputs(out, overwrite, process_params.get("cameras", ("front", "back")), demo=True,
                    bsip=bool(process_params.get("bsip", False)))
     cap = out / "capture"
@@ -579,15 +590,16 @@ def demo(
 
 
 def _register_args(values: Sequence[str], flag: str = "--param") -> dict[str, Any]:
+    """``KEY=VALUE`` options as a dict (:func:`bsv.argtypes.key_value`); a malformed one is an InputError."""
+    from .argtypes import key_value
+
     out: dict[str, Any] = {}
     for kv in values:
-        if "=" not in kv:
-            raise SystemExit(f"{flag} expects KEY=VALUE, got {kv!r}")
-        k, v = kv.split("=", 1)
         try:
-            out[k] = json.loads(v)
-        except json.JSONDecodeError:
-            out[k] = v
+            k, v = key_value(kv)
+        except argparse.ArgumentTypeError as e:
+            raise InputError(f"{flag} {e}") from None
+        out[k] = v
     return out
 
 
@@ -604,8 +616,8 @@ def main_process(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--sor", action="store_true",
                     help="the paper's statistical outlier removal before merging (off by default: it erodes the "
                          "sparse sides; the registration removes flying pixels itself)")
-    ap.add_argument("--sor-k", type=int, default=600, help="with --sor: neighbours (default 600, the paper)")
-    ap.add_argument("--sor-std", type=float, default=0.05, help="with --sor: std ratio (default 0.05, the paper)")
+    ap.add_argument("--sor-k", type=whole(1, 100_000, "--sor-k neighbours"), default=600, help="with --sor: neighbours (default 600, the paper)")
+    ap.add_argument("--sor-std", type=real(0.0, 1e6, "--sor-std ratio"), default=0.05, help="with --sor: std ratio (default 0.05, the paper)")
     ap.add_argument("--keep-floor", action="store_true",
                     help="keep the person-mask points on the floor (diagnosis; the floor is still fitted and checked)")
     ap.add_argument("--no-isolate", action="store_true",
@@ -688,27 +700,19 @@ def _print_process(res: Any) -> None:
     print("\n".join(asymmetry_lines(res.volumes)))
     if res.bsip is not None:
         print(res.bsip.table())
+    doubtful = [k for k, q in res.registration.quality.items() if q.doubtful]
+    if doubtful:
+        print(f"warning: doubtful fit of {', '.join(doubtful)} (see Fit quality in the report)")
     print(f"report: {res.files['report']}" + (f" (PDF: {res.files['report_pdf']}; spreadsheet: {res.files['volumes_csv']})"
                                               if "report_pdf" in res.files else ""))
-
-
-def _non_negative(text: str) -> int:
-    """argparse type: a whole number >= 0 (argparse turns the ValueError into a usage error, exit 2)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{value} is negative; use 0 or more")
-    return value
 
 
 def main_demo(argv: Sequence[str] | None = None) -> int:
     """``bsv demo [-o OUT] [--seed N] [--condition l515]``."""
     ap = argparse.ArgumentParser(prog="bsv demo", description="The whole chain on a synthetic subject, no camera.")
     ap.add_argument("-o", "--out", default="bsv-demo", help="output folder (default ./bsv-demo)")
-    ap.add_argument("--seed", type=_non_negative, default=0, help="cohort seed (default 0)")
-    ap.add_argument("--subject", type=_non_negative, default=0, help="subject index in the cohort (default 0)")
+    ap.add_argument("--seed", type=seed_type, default=0, help="cohort seed (default 0)")
+    ap.add_argument("--subject", type=whole(0, 100_000, "--subject index"), default=0, help="subject index in the cohort (default 0)")
     ap.add_argument("--condition", choices=("noer", "l515", "cali", "l5ca"), default="l515",
                     help="virtual capture condition (default l515: depth noise)")
     ap.add_argument("--segmentation", choices=SEGMENTATIONS, default="camera",

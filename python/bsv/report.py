@@ -222,6 +222,29 @@ def cleaning_html(cloud_report: dict[str, Any]) -> str:
     return f"<h2>Cloud cleaning</h2>{table}{agree_html}{warn_html}"
 
 
+def quality_html(registration: dict[str, Any]) -> str:
+    """The per-segment fit quality table (``registration["quality"]``, rule in bsv-register quality.rs), in
+    plain language; a doubtful segment is marked in red. Empty when the summary has no quality figures."""
+    quality: dict[str, dict[str, Any]] = registration.get("quality") or {}
+    if not quality:
+        return ""
+    rows = [[_swatch(name), _fmt(q.get("rms_mm"), 1), _fmt(100 * q.get("coverage", math.nan), 0),
+             _fmt(100 * q.get("gap_fraction", math.nan), 0), _fmt(100 * q.get("exposed_uncovered", math.nan), 0),
+             '<span class="warn">doubtful</span>' if q.get("doubtful") else "ok"] for name, q in quality.items()]
+    return ("<h2>Fit quality</h2>" + _table(["Segment", "Fit distance, RMS (mm)", "Surface with points near (%)",
+                                              "In gaps (%)", "Seen by a camera, no points near (%)", "Fit"], rows)
+            + '<p class="note">Points near: a measured point within 10 mm. Doubtful: RMS above 10 mm, more than 20 % '
+              "seen without points near, or less than 50 % with points near: check the measured points of that "
+              "segment before using its volume.</p>")
+
+
+def _doubtful_html(registration: dict[str, Any]) -> str:
+    """A highlighted line naming the segments whose fit is doubtful (empty when none is)."""
+    bad = [n for n, q in (registration.get("quality") or {}).items() if q.get("doubtful")]
+    return (f'<ul class="warn"><li>Doubtful fit of {html.escape(", ".join(plain_name(n) for n in bad))}: see Fit '
+            "quality before using these volumes.</li></ul>") if bad else ""
+
+
 def _landmark_warnings_html(vols: dict[str, Any]) -> str:
     """The volumes JSON's ``warnings`` (landmarks not seen confidently and where they came from), highlighted."""
     warnings = vols.get("warnings") or []
@@ -458,7 +481,7 @@ def render_html(result: Any, out_dir: PathLike, title: str = "BSV report",
 <h1>{html.escape(title)}</h1>
 <p class="note">Body segment volumes from two depth cameras (bsv {html.escape(str(vols.get('bsv_version', '')))}).
 Volumes in litres, masses in kilograms; 95 % intervals give the range the true value lies in with 95 % confidence.</p>
-{key}{_landmark_warnings_html(vols)}{_warnings_html(result)}
+{key}{_doubtful_html(vols.get("registration") or {})}{_landmark_warnings_html(vols)}{_warnings_html(result)}
 <h2>Segments</h2>
 <div class="figs">{body}</div>
 {_legend_html(segments)}
@@ -468,6 +491,7 @@ Volumes in litres, masses in kilograms; 95 % intervals give the range the true v
 {f'<p class="note">95 % intervals: {html.escape(iv.method)}.</p>' if iv else '<p class="note">No 95 % intervals were computed for this run.</p>'}
 <h2>Left / right</h2>{_table(["Part", "Left minus right, % of their mean"], asym_rows) if asym_rows else '<p class="note">Not measured.</p>'}
 <h2>Proportions</h2>{_table(["Ratio of volumes", "Value", "95 % interval"], ratio_rows) if ratio_rows else '<p class="note">Not measured.</p>'}
+{quality_html(vols.get("registration") or {})}
 {_bsip_html(result.bsip) if getattr(result, "bsip", None) is not None else ""}
 {seg_html}
 <h2>Fit to the measured points</h2>
@@ -657,6 +681,7 @@ __all__ = [
     "face_labels",
     "like_for_like_truth",
     "palette",
+    "quality_html",
     "render_html",
     "render_mesh",
     "render_pdf",

@@ -121,6 +121,21 @@ class PointCloud:
         return cloud_to_open3d(self, legacy)
 
 
+@dataclass(frozen=True)
+class SegmentQuality:
+    """How well one segment was fitted (``bsv_register::SegmentQuality``, rule in ``quality.rs``):
+    ``rms_mm`` RMS distance to the cloud of the vertices not in a lateral gap and within 30 mm of it, ``coverage`` fraction of
+    vertices with a cloud point within 10 mm, ``gap_fraction`` fraction in the lateral gaps,
+    ``exposed_uncovered`` fraction facing a camera yet far from the cloud, ``doubtful`` the flag."""
+
+    vertices: int
+    rms_mm: float
+    coverage: float
+    gap_fraction: float
+    exposed_uncovered: float
+    doubtful: bool
+
+
 @dataclass(repr=False)
 class Registration:
     """The result of :func:`bsv.register`: the fitted mesh, its volumes (the report dict with
@@ -139,6 +154,12 @@ class Registration:
         """The registration summary (``volumes["registration"]``)."""
         summary: dict[str, Any] = self.volumes.get("registration") or {}
         return summary
+
+    @property
+    def quality(self) -> dict[str, SegmentQuality]:
+        """Per-segment quality figures of the fit (``summary["quality"]``), by segment name."""
+        raw: dict[str, dict[str, Any]] = self.summary.get("quality") or {}
+        return {name: SegmentQuality(**q) for name, q in raw.items()}
 
     def __repr__(self) -> str:
         s = self.summary

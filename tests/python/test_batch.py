@@ -292,3 +292,21 @@ def test_without_the_batch_extra_the_command_says_what_to_install(monkeypatch: p
     monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "pyarrow" else real(name, *a))
     assert batch_main(["x.ply", "--out", str(tmp_path / "o"), "--quiet"]) == 2
     assert "pip install 'bsv[batch]'" in capsys.readouterr().err and not (tmp_path / "o").exists()
+
+
+def test_what_bsip_writes_the_inertial_parameters_of_a_cloud_item(inputs: dict[str, Any], tmp_path: Path) -> None:
+    """``--what bsip`` on a cloud item, run directly (no cluster): bsip.json, bsip.csv and model.osim land in
+    the item folder with the volumes, and the masses sum to the body-mass estimate."""
+    import json
+
+    from bsv.batch.task import run_item
+
+    item = collect_items(inputs["inputs"][:1])[0]
+    rec = run_item(item, str(tmp_path), Spec(what="bsip", params={"schedule": SCHEDULE}), "hash")
+    assert rec["status"] == "ok", rec
+    folder = tmp_path / item.name
+    for name in ("fitted.ply", "volumes.json", "bsip.json", "bsip.csv", "model.osim"):
+        assert (folder / name).is_file(), name
+    doc = json.loads((folder / "bsip.json").read_text())
+    masses = [seg["mass_kg"] for seg in doc["segments"].values()]
+    assert len(masses) == 9 and sum(masses) == pytest.approx(doc["body_mass_kg"], rel=1e-9)

@@ -112,8 +112,11 @@ pub fn run(a: Args) -> Result<(), CliError> {
                 e[1],
                 e[2]
             );
-            if e.iter().fold(0.0f64, |m, v| m.max(*v)) > 5.0 {
-                say!("  note: larger than 5 m: is it in millimetres? BSV expects metres");
+            if bsv_core::geometry::looks_like_millimetres(e.iter().fold(0.0f64, |m, v| m.max(*v))) {
+                say!(
+                    "  note: larger than {} m: is it in millimetres? BSV expects metres",
+                    bsv_core::geometry::MAX_EXTENT_M
+                );
             }
         }
         match cloud.labels.as_deref() {

@@ -4,8 +4,8 @@ use crate::output::{check_outputs, write_json, CliError, Output};
 use bsv_core::template::{template, TemplateKind};
 use bsv_core::{io, TriMesh};
 use bsv_register::{
-    register, ControlFlow, InputError, IterationLog, LabelSource, PrealignMode, RegisterError, RegisterParams,
-    Registration, Schedule,
+    register, ControlFlow, ImplausibleError, InputError, IterationLog, LabelSource, PrealignMode, RegisterError,
+    RegisterParams, Registration, Schedule,
 };
 use bsv_volume::{report_with, SegmentOptions};
 use std::path::PathBuf;
@@ -41,6 +41,14 @@ pub struct Args {
     /// Units of the cloud file: m (default) or mm (divided by 1000 on reading).
     #[arg(long, default_value = "m", value_parser = ["m", "mm"])]
     units: String,
+    /// The cloud's axis that points up (+x, -x, +y, -y, +z, -z): the cloud is rotated so that it
+    /// becomes +y before the fit (the world frame: Y up, the subject facing +Z).
+    #[arg(long, allow_hyphen_values = true, default_value = "+y", value_parser = ["+x", "-x", "+y", "-y", "+z", "-z", "x", "y", "z"])]
+    up: String,
+    /// Do not refuse a cloud that does not look like a standing person in the world frame (flat,
+    /// compact, not upright, not facing +Z, not of a person's size in metres).
+    #[arg(long)]
+    no_plausibility_check: bool,
     /// Keep head, hand and foot points (by default they are dropped, as in the paper).
     #[arg(long)]
     keep_extremities: bool,
@@ -65,6 +73,7 @@ fn params_from(a: &Args, cloud_labelled: bool) -> Result<RegisterParams, CliErro
     let schedule = a.schedule.parse::<Schedule>().map_err(|e| with_flags(&RegisterError::from(e)))?;
     let mut p = RegisterParams { schedule, threads: a.threads, ..Default::default() };
     p.outliers.drop_extremities = !a.keep_extremities;
+    p.checks.check_plausible = !a.no_plausibility_check;
     if let Some(alpha) = a.alpha {
         p.energy.alpha = alpha;
     }
@@ -93,6 +102,7 @@ fn flag_of(parameter: &str) -> Option<&'static str> {
         "prealign" => "--prealign",
         "threads" => "--threads",
         "drop_extremities" => "--keep-extremities",
+        "check_plausible" => "--no-plausibility-check",
         _ => return None,
     })
 }
@@ -100,8 +110,18 @@ fn flag_of(parameter: &str) -> Option<&'static str> {
 /// The error's message with the flags of this command that carry out its remedy.
 fn with_flags(e: &RegisterError) -> String {
     let mut flags: Vec<&str> = e.parameters().iter().filter_map(|p| flag_of(p)).collect();
-    if let RegisterError::Input(InputError::CloudLooksLikeMillimetres { .. }) = e {
-        flags.insert(0, "--units mm");
+    let up;
+    match e {
+        RegisterError::Input(InputError::CloudLooksLikeMillimetres { .. })
+        | RegisterError::Implausible(ImplausibleError::Size { .. }) => flags.insert(0, "--units mm"),
+        RegisterError::Implausible(ImplausibleError::WrongUp { up: axis, .. }) => {
+            up = format!(
+                "--up {}",
+                if axis.len() == 1 { format!("+{axis} or --up -{axis}") } else { (*axis).to_string() }
+            );
+            flags.insert(0, &up);
+        }
+        _ => {}
     }
     if flags.is_empty() {
         e.to_string()
@@ -146,6 +166,14 @@ fn print_summary(reg: &Registration, timings: bool) {
         reg.rms_mesh_to_points_mm,
         reg.rms_points_to_mesh_mm
     );
+    for (name, q) in reg.quality.iter().filter(|(_, q)| q.doubtful) {
+        say!(
+            "warning: the fit of {name} is doubtful (RMS {:.1} mm, covered {:.0} %, seen but uncovered {:.0} %): check its cloud before using its volume",
+            q.rms_mm,
+            q.coverage * 100.0,
+            q.exposed_uncovered * 100.0
+        );
+    }
     if timings {
         let sum = |f: fn(&IterationLog) -> f64| reg.log.iter().map(f).sum::<f64>() * 1e3;
         say!(
@@ -169,6 +197,23 @@ fn read_template(a: &Args) -> Result<(TriMesh, String), CliError> {
     })
 }
 
+/// Rotates `cloud` so that its axis `up` (`+x`, `-x`, `+y`, `-y`, `+z`, `-z`; no sign = +) becomes
+/// +y: a quarter turn about z (x up) or x (z up), or a half turn about x (-y up); normals follow.
+fn turn_up(cloud: &mut bsv_core::PointCloud, up: &str) {
+    let f: fn([f64; 3]) -> [f64; 3] = match up {
+        "+x" | "x" => |[x, y, z]| [-y, x, z],
+        "-x" => |[x, y, z]| [y, -x, z],
+        "-y" => |[x, y, z]| [x, -y, -z],
+        "+z" | "z" => |[x, y, z]| [x, z, -y],
+        "-z" => |[x, y, z]| [x, -z, y],
+        _ => return,
+    };
+    cloud.points.iter_mut().for_each(|p| *p = f(*p));
+    if let Some(n) = &mut cloud.normals {
+        n.iter_mut().for_each(|p| *p = f(*p));
+    }
+}
+
 /// Runs `register`.
 pub fn run(a: Args) -> Result<(), CliError> {
     let outputs: Vec<Output<'_>> = (a.output.iter().map(|p| Output::file("--output", p)))
@@ -179,6 +224,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
     if a.units == "mm" {
         cloud.points.iter_mut().for_each(|p| *p = p.map(|v| v / 1000.0));
     }
+    turn_up(&mut cloud, &a.up);
     let labelled = cloud.labels.as_ref().is_some_and(|l| l.iter().any(|&v| v != 0));
     if !labelled {
         say!("the cloud has no segment labels: volumes come from the template's labels");

@@ -19,6 +19,10 @@ pub struct Args {
     /// Close holes with centroid fans instead of refusing an open mesh.
     #[arg(long)]
     close_holes: bool,
+    /// Units of the mesh file: m (default) or mm (divided by 1000 on reading). A mesh larger than
+    /// 5 m is refused in metres (the rule of registration clouds, `bsv_core::geometry::MAX_EXTENT_M`).
+    #[arg(long, default_value = "m", value_parser = ["m", "mm"])]
+    units: String,
     /// Overwrite the JSON output if it exists.
     #[arg(long)]
     force: bool,
@@ -29,7 +33,21 @@ pub fn run(a: Args) -> Result<(), CliError> {
     if let Some(out) = &a.json {
         check_outputs(&[Output::file("--json", out)], a.force)?;
     }
-    let mesh = io::read_mesh(&a.mesh)?;
+    let mut mesh = io::read_mesh(&a.mesh)?;
+    if a.units == "mm" {
+        mesh.vertices.iter_mut().for_each(|p| *p = p.map(|v| v / 1000.0));
+    }
+    if let Some(b) = bsv_core::geometry::Aabb::of_points(&mesh.vertices) {
+        let largest = b.extent().into_iter().fold(0.0f64, f64::max);
+        if bsv_core::geometry::looks_like_millimetres(largest) {
+            return Err(format!(
+                "{}: mesh extent {largest:.1} (max axis) is larger than {} m: it looks like millimetres; pass --units mm (or divide the coordinates by 1000)",
+                a.mesh.display(),
+                bsv_core::geometry::MAX_EXTENT_M
+            )
+            .into());
+        }
+    }
     let opts = SegmentOptions { close_holes: a.close_holes, ..SegmentOptions::default() };
     let report = report_with(&mesh, a.density, &opts).map_err(|e| format!("{}: {e}", a.mesh.display()))?;
     say_inline!("{report}");

@@ -56,6 +56,17 @@ pub fn normalize(a: [f64; 3]) -> [f64; 3] {
     }
 }
 
+/// The one rule for "not in metres" (registration clouds, `bsv-cli volume` / `info` meshes): a cloud or
+/// mesh whose largest (robust) bounding-box side exceeds this many metres is taken as millimetres
+/// (no body, box or room the project measures is 5 m long).
+pub const MAX_EXTENT_M: f64 = 5.0;
+
+/// True when a largest bounding-box side of `extent` (file units) breaks [`MAX_EXTENT_M`]: the
+/// coordinates are probably millimetres.
+pub fn looks_like_millimetres(extent: f64) -> bool {
+    extent > MAX_EXTENT_M
+}
+
 /// An axis-aligned bounding box.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Aabb {

@@ -178,6 +178,7 @@ fn register_class(e: &RegisterError) -> (&'static str, Vec<(&'static str, Field)
     use bsv_register::{InputError as I, NumericError as N};
     match e {
         RegisterError::Parameter(_) => ("RegistrationParameterError", Vec::new()),
+        RegisterError::Implausible(_) => ("ImplausibleCloudError", Vec::new()),
         RegisterError::Numeric(N::NoCorrespondences { iteration } | N::Diverged { iteration }) => {
             ("RegistrationNumericError", vec![("iteration", Field::Int(*iteration))])
         }

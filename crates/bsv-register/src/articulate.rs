@@ -15,8 +15,9 @@
 //!    (sign chosen so that they agree), about the template centroid; the twist about the axis is
 //!    left to the non-rigid fit;
 //! 3. optionally the axis is scaled so that the segment's extent along it (1 % / 99 % quantiles
-//!    of the projections) maps onto the cloud's, ends aligned; the cross-section is not scaled
-//!    (the gaps bias it);
+//!    of the projections) maps onto the cloud's, ends aligned; and optionally the cross-section's
+//!    depth and width are scaled to the cloud's (`section.rs`: from the front and back surfaces and
+//!    the silhouette, which the cameras do see);
 //! 4. `x -> c_cloud + R_L S_L (x - c_template)` per vertex, then the displacement field is smoothed
 //!    by a few Jacobi iterations over the mesh graph: a rigid motion is an affine field, which the
 //!    averaging keeps inside a segment, so only the joints are blended.
@@ -25,6 +26,7 @@
 //! only the joints' bending and the axial scale are baked in).
 
 use crate::cotan::CotanWeights;
+use crate::section::{fit_section, Section};
 use bsv_core::geometry::{cross, dot, normalize, sub};
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 
@@ -51,6 +53,8 @@ pub struct SegmentPose {
     pub axial_scale: f64,
     /// Angle between the two axes, degrees.
     pub angle_deg: f64,
+    /// The cross-section sizing applied after the rotation (see `section.rs`).
+    pub section: Section,
 }
 
 impl SegmentPose {
@@ -60,6 +64,7 @@ impl SegmentPose {
         let a = dot(d, self.axis) * (self.axial_scale - 1.0);
         let d = [d[0] + a * self.axis[0], d[1] + a * self.axis[1], d[2] + a * self.axis[2]];
         let r = self.rotation * Vector3::from(d);
+        let r = self.section.apply([r[0], r[1], r[2]]);
         [self.cloud_centroid[0] + r[0], self.cloud_centroid[1] + r[1], self.cloud_centroid[2] + r[2]]
     }
 }
@@ -123,6 +128,7 @@ pub fn segment_poses(
     points: &[[f64; 3]],
     labels: &[u8],
     axial_scale: bool,
+    cross_section: bool,
 ) -> Vec<SegmentPose> {
     let mut out = Vec::new();
     for &l in &LIMBS {
@@ -168,7 +174,7 @@ pub fn segment_poses(
                 cc = [cc[0] + ac[0] * off, cc[1] + ac[1] * off, cc[2] + ac[2] * off];
             }
         }
-        out.push(SegmentPose {
+        let mut pose = SegmentPose {
             label: l,
             template_centroid: ct,
             cloud_centroid: cc,
@@ -176,7 +182,16 @@ pub fn segment_poses(
             axis: at,
             axial_scale: scale,
             angle_deg: dot(at, ac).clamp(-1.0, 1.0).acos().to_degrees(),
-        });
+            section: Section::identity(),
+        };
+        if cross_section {
+            let posed: Vec<[f64; 3]> = tv.iter().map(|&x| sub(pose.apply(x), cc)).collect();
+            let rel: Vec<[f64; 3]> = cp.iter().map(|&p| sub(p, cc)).collect();
+            if let Some(section) = fit_section(&posed, &rel, ac) {
+                pose.section = section;
+            }
+        }
+        out.push(pose);
     }
     out
 }

@@ -7,6 +7,7 @@
 //! those, using [`RegisterError::parameters`] to find the parameters a remedy points to.
 
 use crate::params::PARAMETER_NAMES;
+pub use crate::plausible::ImplausibleError;
 use thiserror::Error;
 
 /// Why a registration could not run or did not finish.
@@ -15,6 +16,9 @@ pub enum RegisterError {
     /// The cloud or the template is unusable (checked before the fit).
     #[error(transparent)]
     Input(#[from] InputError),
+    /// The cloud is not a standing person in the world frame (`plausible.rs`).
+    #[error(transparent)]
+    Implausible(#[from] ImplausibleError),
     /// A registration parameter is invalid.
     #[error(transparent)]
     Parameter(#[from] ParameterError),
@@ -38,6 +42,7 @@ impl RegisterError {
     pub fn parameters(&self) -> &'static [&'static str] {
         match self {
             RegisterError::Input(e) => e.parameters(),
+            RegisterError::Implausible(_) => named("check_plausible"),
             RegisterError::Parameter(e) => e.parameters(),
             RegisterError::Numeric(e) => e.parameters(),
             RegisterError::Resource(e) => e.parameters(),

@@ -32,22 +32,27 @@ mod local;
 mod log;
 mod outliers;
 mod params;
+mod plausible;
 mod prealign;
 mod prepare;
+mod quality;
 mod registrar;
 mod result;
 mod schedule;
+mod section;
 mod solver;
 mod surface;
 
-pub use error::{InputError, NumericError, ParameterError, RegisterError, ResourceError};
+pub use error::{ImplausibleError, InputError, NumericError, ParameterError, RegisterError, ResourceError};
 pub use log::{Energy, IterationLog, Timings};
 pub use params::{
     ArticulationParams, CheckParams, EnergyParams, LabelSource, OutlierParams, PrealignMode, PrealignParams,
     PruningParams, RegisterParams, YawMode, PARAMETER_NAMES,
 };
+pub use plausible::{check_person, is_human_template};
 pub use prealign::Similarity;
 pub use prepare::{prepare, Prepared};
+pub use quality::SegmentQuality;
 pub use registrar::Registrar;
 pub use result::{LimbAlignment, Registration};
 pub use schedule::{CorrespondenceKind, Schedule, Stage, DEFAULT_SCHEDULE, MAX_ITERATIONS};

@@ -199,11 +199,20 @@ pub struct CheckParams {
     pub max_extent_m: f64,
     /// Smallest plausible cloud extent (metres). Default 0.05.
     pub min_extent_m: f64,
+    /// With a labelled human template, refuse a cloud that is not a standing person in the world
+    /// frame (flat, compact, not upright, not facing +Z, not of a person's size in metres; see
+    /// `plausible.rs`). Default true.
+    pub check_plausible: bool,
 }
 
 impl Default for CheckParams {
     fn default() -> Self {
-        CheckParams { min_points: 100, max_extent_m: 5.0, min_extent_m: 0.05 }
+        CheckParams {
+            min_points: 100,
+            max_extent_m: bsv_core::geometry::MAX_EXTENT_M,
+            min_extent_m: 0.05,
+            check_plausible: true,
+        }
     }
 }
 
@@ -255,6 +264,10 @@ pub struct ArticulationParams {
     /// Scale each limb along its axis by the ratio of the segment lengths in the articulated
     /// initialisation (ends aligned). Default true.
     pub articulate_axial_scale: bool,
+    /// Scale each limb's cross-section (depth and width) to the cloud's in the articulated
+    /// initialisation (see `section.rs`), so that the fit need not stretch the cells that the
+    /// lateral gaps leave without data. Default true.
+    pub articulate_cross_section: bool,
     /// Jacobi smoothing steps of the articulation's displacement field (blends the joints).
     /// Default 10.
     pub articulate_smooth_iterations: usize,
@@ -262,7 +275,12 @@ pub struct ArticulationParams {
 
 impl Default for ArticulationParams {
     fn default() -> Self {
-        ArticulationParams { articulate: true, articulate_axial_scale: true, articulate_smooth_iterations: 10 }
+        ArticulationParams {
+            articulate: true,
+            articulate_axial_scale: true,
+            articulate_cross_section: true,
+            articulate_smooth_iterations: 10,
+        }
     }
 }
 
@@ -328,7 +346,7 @@ impl Default for RegisterParams {
 
 /// Every key of the serde form of [`RegisterParams`] (the flat parameter names), in the order of
 /// the serialised form. A unit test keeps it equal to the serialised keys.
-pub const PARAMETER_NAMES: [&str; 30] = [
+pub const PARAMETER_NAMES: [&str; 32] = [
     "alpha",
     "cell_weight",
     "data_weight",
@@ -348,6 +366,7 @@ pub const PARAMETER_NAMES: [&str; 30] = [
     "min_points",
     "max_extent_m",
     "min_extent_m",
+    "check_plausible",
     "threads",
     "labels",
     "drop_extremities",
@@ -358,6 +377,7 @@ pub const PARAMETER_NAMES: [&str; 30] = [
     "surface_correction",
     "articulate",
     "articulate_axial_scale",
+    "articulate_cross_section",
     "articulate_smooth_iterations",
 ];
 
@@ -430,6 +450,13 @@ impl TryFrom<ParamsRepr> for RegisterParams {
         })
     }
 }
+
+/// Largest `estimate_normals_k`.
+pub const MAX_NORMAL_NEIGHBOURS: usize = 1000;
+/// Largest `articulate_smooth_iterations`.
+pub const MAX_SMOOTH_ITERATIONS: usize = 10_000;
+/// Largest `threads`.
+pub const MAX_THREADS: usize = 1024;
 
 /// `Ok` when `ok`, else the [`ParameterError::BadParameter`] for `name`.
 fn check(name: &'static str, value: f64, ok: bool, hint: &'static str) -> Result<(), ParameterError> {
@@ -509,6 +536,12 @@ impl RegisterParams {
             c.max_extent_m > c.min_extent_m && c.min_extent_m >= 0.0,
             "need 0 <= min_extent_m < max_extent_m",
         )?;
+        // Counts: a huge value would allocate or loop without end (found by tests/params_fuzz.rs).
+        let k = self.pruning.estimate_normals_k;
+        check("estimate_normals_k", k as f64, k <= MAX_NORMAL_NEIGHBOURS, "must be 0..=1000 neighbours")?;
+        let j = self.articulation.articulate_smooth_iterations;
+        check("articulate_smooth_iterations", j as f64, j <= MAX_SMOOTH_ITERATIONS, "must be 0..=10000")?;
+        check("threads", self.threads as f64, self.threads <= MAX_THREADS, "must be 0..=1024 (0 = all cores)")?;
         if self.schedule.total_iterations() == 0 {
             return Err(ParameterError::BadSchedule {
                 text: self.schedule.to_string(),

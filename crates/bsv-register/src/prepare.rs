@@ -102,6 +102,9 @@ pub fn prepare<'a>(
         (outliers_removed, detached_removed) = (cleaned.sparse, cleaned.detached);
         cloud = Cow::Owned(cleaned.cloud);
     }
+    if params.checks.check_plausible {
+        crate::plausible::check_person(&cloud, template)?;
+    }
     if params.labels == LabelSource::Template && template.vertex_labels.is_none() {
         return Err(InputError::TemplateWithoutLabels.into());
     }
@@ -256,7 +259,14 @@ fn articulate_limbs(
     let (true, Some(cl), Some(tl)) = (params.articulate, &cloud.labels, &template.vertex_labels) else {
         return (rest, Vec::new());
     };
-    let poses = articulate::segment_poses(&rest, tl, &cloud.points, cl, params.articulate_axial_scale);
+    let poses = articulate::segment_poses(
+        &rest,
+        tl,
+        &cloud.points,
+        cl,
+        params.articulate_axial_scale,
+        params.articulate_cross_section,
+    );
     if poses.is_empty() {
         return (rest, Vec::new());
     }
@@ -268,6 +278,8 @@ fn articulate_limbs(
             label: p.label,
             angle_deg: p.angle_deg,
             axial_scale: p.axial_scale,
+            depth_scale: p.section.depth_scale,
+            width_scale: p.section.width_scale,
             shift_mm: bsv_core::geometry::dist2(p.cloud_centroid, p.template_centroid).sqrt() * 1e3,
         })
         .collect();

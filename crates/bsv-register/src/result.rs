@@ -37,6 +37,8 @@ pub struct Registration {
     pub outliers_removed: usize,
     /// The limbs moved by the articulated initialisation (empty when it did not run).
     pub articulation: Vec<LimbAlignment>,
+    /// Per-segment quality figures of the fit, by segment name (`quality.rs`).
+    pub quality: std::collections::BTreeMap<String, crate::quality::SegmentQuality>,
 }
 
 /// One limb of the articulated initialisation ([`crate::ArticulationParams`]).
@@ -48,6 +50,10 @@ pub struct LimbAlignment {
     pub angle_deg: f64,
     /// Scale applied along the axis.
     pub axial_scale: f64,
+    /// Scale applied to the cross-section's depth (front-back), 1 = none (see `section.rs`).
+    pub depth_scale: f64,
+    /// Scale applied to the cross-section's width, 1 = none.
+    pub width_scale: f64,
     /// Distance between the template's and the cloud's segment centroids (after the global
     /// pre-alignment), mm.
     pub shift_mm: f64,

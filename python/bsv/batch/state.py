@@ -22,8 +22,9 @@ from typing import Any
 
 #: The journal file in the output folder.
 JOURNAL = "batch.jsonl"
-#: What a batch computes per item: the volumes (fitted.ply, volumes.json) or also the one-page report.
-WHATS = ("volumes", "report")
+#: What a batch computes per item: the volumes (fitted.ply, volumes.json), also the one-page report, or
+#: also the body-segment inertial parameters (bsip.json, bsip.csv, model.osim; :func:`bsv.bsip`).
+WHATS = ("volumes", "report", "bsip")
 
 
 @dataclass(frozen=True)

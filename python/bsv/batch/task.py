@@ -54,6 +54,10 @@ def _cloud_item(item: Item, tmp: Path, spec: Spec) -> dict[str, Any]:
         res = ProcessResult(tmp, cloud, reg, reg.volumes, {"views": [], "warnings": []}, {},
                             {"register": reg.seconds})
         write_report(res, tmp, title=f"BSV batch: {item.name}")
+    if spec.what == "bsip":
+        from .. import bsip
+
+        bsip(reg, out_dir=tmp)
     return {"volumes": reg.volumes, "cloud_points": len(cloud), "warnings": list(reg.volumes.get("notes") or [])}
 
 
@@ -61,7 +65,7 @@ def _capture_item(item: Item, tmp: Path, spec: Spec) -> dict[str, Any]:
     from ..pipeline import process
 
     res = process(item.path, item.calibration, tmp, segmentation=spec.segmentation, progress=False,
-                  density=spec.density, title=f"BSV batch: {item.name}", **spec.params)
+                  density=spec.density, title=f"BSV batch: {item.name}", bsip=spec.what == "bsip", **spec.params)
     warnings = [*res.cloud_report.get("warnings", []), *(res.volumes.get("notes") or [])]
     return {"volumes": res.volumes, "cloud_points": len(res.cloud), "warnings": warnings}
 

@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from collections.abc import Sequence
-from typing import Any
 
+from ..argtypes import key_value, seed, whole
 from .reference import CONDITIONS
 from .synth import COHORTS
 
@@ -27,14 +26,7 @@ def _ints(text: str) -> tuple[int, ...]:
         raise argparse.ArgumentTypeError(f"{text!r}: use a comma list of integers, e.g. 0,10,20") from exc
 
 
-def _param(text: str) -> tuple[str, Any]:
-    if "=" not in text:
-        raise argparse.ArgumentTypeError(f"{text!r}: use KEY=VALUE (VALUE as JSON, or a plain string)")
-    k, v = text.split("=", 1)
-    try:
-        return k.strip(), json.loads(v)
-    except json.JSONDecodeError:
-        return k.strip(), v
+_param = key_value
 
 
 def dask_options(p: argparse.ArgumentParser, what: str) -> None:
@@ -64,8 +56,8 @@ def parser() -> argparse.ArgumentParser:
         p.add_argument("--quiet", action="store_true", help="no progress bar")
 
     s = sub.add_parser("synth", help="synthetic cohort x error conditions (the paper's protocol without FAUST)")
-    s.add_argument("--n", type=int, default=10, help="cohort size (half female; default 10)")
-    s.add_argument("--seed", type=int, default=0, help="cohort seed (default 0)")
+    s.add_argument("--n", type=whole(1, 100_000, "--n subjects"), default=10, help="cohort size (half female; default 10)")
+    s.add_argument("--seed", type=seed, default=0, help="cohort seed (default 0)")
     s.add_argument("--conditions", type=_conditions, default=CONDITIONS, help="comma list of noer,l515,cali,l5ca")
     dask_options(s, "subjects")
     s.add_argument("--segmentation", choices=["oracle", "camera"], default="oracle",
@@ -90,7 +82,7 @@ def parser() -> argparse.ArgumentParser:
     common(s, "bench_synth")
 
     b = sub.add_parser("boxes", help="the paper's two boxes at 45 deg, noer and l5ca")
-    b.add_argument("--seeds", type=int, default=3, help="scan seeds per box and condition (default 3)")
+    b.add_argument("--seeds", type=whole(1, 10_000, "--seeds per box"), default=3, help="scan seeds per box and condition (default 3)")
     b.add_argument("--conditions", type=_conditions, default=("noer", "l5ca"), help="default noer,l5ca")
     common(b, "bench_boxes")
 
@@ -98,7 +90,7 @@ def parser() -> argparse.ArgumentParser:
     f.add_argument("--root", required=True, help="MPI-FAUST folder holding training/scans and training/registrations")
     f.add_argument("--scans", type=_ints, default=None, help="scan numbers (default: one A-pose-like scan per subject)")
     f.add_argument("--conditions", type=_conditions, default=CONDITIONS, help="comma list of noer,l515,cali,l5ca")
-    f.add_argument("--seed", type=int, default=0, help="scan seed (default 0)")
+    f.add_argument("--seed", type=seed, default=0, help="scan seed (default 0)")
     dask_options(f, "scans")
     common(f, "bench_faust")
     return ap
@@ -115,6 +107,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         from .output import check_outputs
 
         check_outputs(args.out, args.overwrite)  # before any work: a run can take an hour
+        from .. import RegisterParams
+        from .outliers import split_request
+
+        RegisterParams(**split_request(params)[1])  # a bad --param fails now, not in every run
         if args.command == "synth":
             from .output import write_outputs
             from .synth import SynthConfig, run_synth

@@ -207,10 +207,12 @@ def main(argv: list[str] | None = None) -> int:
     the exit status (2 and a message if files exist and --overwrite is not given, see bsv.exitcodes)."""
     import argparse
 
+    from ..argtypes import seed, whole
+
     ap = argparse.ArgumentParser(description="Write a synthetic MakeHuman cohort (PLY + ground-truth JSON).")
     ap.add_argument("out_dir")
-    ap.add_argument("n", type=int)
-    ap.add_argument("seed", type=int, nargs="?", default=0)
+    ap.add_argument("n", type=whole(1, 100_000, "N subjects"))
+    ap.add_argument("seed", type=seed, nargs="?", default=0)
     ap.add_argument("--no-local", action="store_true", help="macro phenotypes only (no local modifiers)")
     ap.add_argument("--overwrite", action="store_true", help="replace subject files and cohort.json already in OUT_DIR")
     args = ap.parse_args(argv)

@@ -233,7 +233,7 @@ def quality_html(registration: dict[str, Any]) -> str:
              '<span class="warn">doubtful</span>' if q.get("doubtful") else "ok"] for name, q in quality.items()]
     return ("<h2>Fit quality</h2>" + _table(["Segment", "Fit distance, RMS (mm)", "Surface with points near (%)",
                                               "In gaps (%)", "Seen by a camera, no points near (%)", "Fit"], rows)
-            + '<p class="note">Points near: a measured point within 10 mm. Doubtful: RMS above 10 mm, more than 20 % '
+            + '<p class="note">Points near: a measured point within 10 mm. A fit is doubtful with an RMS above 10 mm, more than 20 % '
               "seen without points near, or less than 50 % with points near: check the measured points of that "
               "segment before using its volume.</p>")
 

@@ -372,7 +372,7 @@ th{background:#f0f0f0}td:first-child,th:first-child{text-align:left}
 .figs{display:flex;flex-wrap:wrap;gap:12px;align-items:flex-start}
 figure{margin:0;max-width:100%}figure img{display:block;max-width:100%;height:auto}
 figcaption{font-size:13px;color:#444}
-figure.body{flex:1 1 140px;max-width:300px}.body img{width:100%}.seg img{max-height:320px;width:auto}
+figure.body{flex:1 1 140px;max-width:300px}figure.narrow{max-width:240px}.body img{width:100%}.seg img{max-height:320px;width:auto}
 .key{font-size:17px}.key b{font-size:19px}
 .legend{list-style:none;padding:0;margin:4px 0;display:flex;flex-wrap:wrap;gap:4px 14px;font-size:13px}
 .sw{display:inline-block;width:12px;height:12px;border:1px solid #555;margin-right:5px;vertical-align:-1px}
@@ -423,7 +423,7 @@ def render_html(result: Any, out_dir: PathLike, title: str = "BSV report",
     charts = ""
     if central:
         charts += _figure(_bar_chart(central, volumes_l, bands, same or None, "Torso", 1.9 + 0.6 * len(central)),
-                          "torso volume", "Torso (own scale)")
+                          "torso volume", "Torso (own scale)", "narrow")
     if limbs:
         charts += _figure(_bar_chart(limbs, volumes_l, bands, same or None, "Arms and legs", 5.2), "limb volumes",
                           "Arms and legs (own scale)")

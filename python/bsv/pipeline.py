@@ -7,8 +7,9 @@ and removed; depth-edge, far and separate pixels of the mask dropped), optional 
 removal, merge, head/hands/feet dropped) -> registration
 (:func:`bsv.register`) -> volumes. Writes into OUT: ``cloud.ply`` (labelled), ``fitted.ply`` (labelled
 fitted template), ``volumes.json`` (DESIGN.md "Formats" with the "registration" and "cloud" sections),
-the one-page ``report.html`` with its PNG figures (:mod:`bsv.report`) and, with camera segmentation,
-``segmentation/<camera>/`` (segmentation.png, mask.png, landmarks.json). Nothing is written into the
+the report (:mod:`bsv.report`: a self-contained ``report.html``, ``report.pdf`` and ``volumes.csv``) and,
+with camera segmentation, ``segmentation/<camera>/`` (segmentation.png, segmentation_preview.png, mask.png,
+landmarks.json). Nothing is written into the
 capture folder, and nothing existing in OUT is replaced unless asked (``overwrite``).
 
 demo: a synthetic subject of :mod:`bsv.bodies` -> virtual two-camera capture images (:func:`bsv.scan`)

@@ -285,12 +285,10 @@ def _legend_html(names: Sequence[str]) -> str:
     return '<ul class="legend">' + "".join(f"<li>{_swatch(n)}</li>" for n in names) + "</ul>"
 
 
-#: Member segments of the aggregates of DESIGN.md (``whole``: every segment measured).
+#: Member segments of the aggregates of DESIGN.md (``bsv_core::Aggregate::members``; ``whole``, every
+#: segment measured, is left out).
 AGGREGATE_MEMBERS: dict[str, tuple[str, ...]] = {
-    "trunk_limbs": tuple(SEGMENT_NAMES[i] for i in _bsv.TRUNK_LIMBS),
-    "arm_l": ("upper_arm_l", "forearm_l"), "arm_r": ("upper_arm_r", "forearm_r"),
-    "leg_l": ("thigh_l", "shin_l"), "leg_r": ("thigh_r", "shin_r"),
-}
+    name: tuple(SEGMENT_NAMES[i] for i in ids) for name, ids in _bsv.AGGREGATES.items() if ids}
 
 
 def like_for_like_truth(volumes_l: dict[str, float], truth: dict[str, float]) -> dict[str, float]:

@@ -106,6 +106,10 @@ def test_a_total_is_compared_with_the_truth_over_the_same_segments_only(run):
     assert same["whole"] == pytest.approx(sum(truth[n] for n in measured))  # not the full body's volume
     assert same["trunk_limbs"] == pytest.approx(truth["trunk_limbs"], rel=1e-9)
     assert same["arm_l"] == pytest.approx(truth["upper_arm_l"] + truth["forearm_l"])
+    # The members (Rust's bsv_core::Aggregate::members) are what the volumes add up.
+    assert set(report.AGGREGATE_MEMBERS) == {"trunk_limbs", "arm_l", "arm_r", "leg_l", "leg_r"}
+    for agg, members in report.AGGREGATE_MEMBERS.items():
+        assert vols[agg] == pytest.approx(sum(vols[m] for m in members), rel=1e-9), agg
     # A total whose segments were not all measured gets no truth beside it.
     partial = {k: v for k, v in vols.items() if k != "forearm_l"}
     assert "arm_l" not in report.like_for_like_truth(partial, truth)

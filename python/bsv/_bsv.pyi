@@ -25,6 +25,8 @@ PALETTE: tuple[tuple[int, int, int], ...]
 TRUNK_LIMBS: tuple[int, ...]
 #: Ids of head, hands and feet.
 EXTREMITIES: tuple[int, ...]
+#: Aggregate name -> member segment ids (empty for "whole": every segment present).
+AGGREGATES: dict[str, tuple[int, ...]]
 
 class RegisterParams:
     # Registration parameters (``bsv_register::RegisterParams``); unknown names, wrong types and

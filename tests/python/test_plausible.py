@@ -87,5 +87,5 @@ def test_the_report_shows_the_quality_table() -> None:
                                                "exposed_uncovered": 0.05, "doubtful": False, "vertices": 900},
                                      "forearm_l": {"rms_mm": 9.0, "coverage": 0.2, "gap_fraction": 0.3,
                                                    "exposed_uncovered": 0.5, "doubtful": True, "vertices": 90}}})
-    assert "Fit quality" in html and "forearm_l" in html and html.count("doubtful") >= 2
+    assert "Fit quality" in html and "Left forearm" in html and html.count("doubtful") >= 2
     assert quality_html({}) == ""

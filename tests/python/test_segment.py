@@ -100,6 +100,10 @@ def test_segment_capture_writes_files(scans):
     assert meta["view"] == "front" and len(meta["landmarks_px"]) == 71
     assert meta["segments"]["foot_r"] == 14 and sum(meta["counts"].values()) == int(s.mask.sum())
     assert (cv2.imread(str(folder / "front" / "mask.png"), cv2.IMREAD_UNCHANGED) > 0).sum() == s.mask.sum()
+    from bsv.palette import colourise
+
+    preview = cv2.cvtColor(cv2.imread(str(folder / "front" / "segmentation_preview.png")), cv2.COLOR_BGR2RGB)
+    assert np.array_equal(preview, colourise(s.labels))  # the raw ids in the segment palette, beside them
 
 
 def test_depth_refines_the_mask(scans):

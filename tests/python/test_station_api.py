@@ -374,6 +374,8 @@ def test_virtual_rig_job_then_a_failing_job_keeps_the_history(tmp_path: Path) ->
         job = _wait(c, r.headers["location"].rsplit("/", 1)[1])
         assert job["state"] == "done", job
         vols = c.get(f"/results/{job['result_id']}/files/volumes.json").json()
+        assert c.get(f"/results/{job['result_id']}/files/report.pdf").content.startswith(b"%PDF-")  # the handover copy
+        assert c.get(f"/results/{job['result_id']}/files/volumes.csv").text.startswith("segment,")
         truth = rig.virtual_body(0, 0, None)[1]
         assert abs(vols["volumes_l"]["trunk_limbs"] / truth["trunk_limbs"] - 1) < 0.05
         assert c.get(f"/results/{job['result_id']}/files/report.html").status_code == 200

@@ -151,23 +151,27 @@ impl fmt::Display for Segment {
     }
 }
 
-/// Palette colours by segment id (index 0 = unlabelled, light grey).
+/// Palette colours by segment id (index 0 = unlabelled, light grey): the one segment palette of every
+/// figure, legend and labelled PLY file. Drawn from Okabe & Ito's and Paul Tol's colour-blind-safe sets
+/// (hex codes in the comments) so that every pair differs by at least 10 CAM02-UCS units for normal
+/// vision and under deuteranopia and protanopia simulation (`tests/python/test_palette.py`). The left
+/// segment of a limb is the darker or more saturated of its pair.
 pub const PALETTE: [[u8; 3]; SEGMENT_COUNT] = [
-    [200, 200, 200],
-    [255, 213, 170],
-    [70, 130, 180],
-    [228, 26, 28],
-    [55, 126, 184],
-    [255, 127, 0],
-    [77, 175, 74],
-    [247, 129, 191],
-    [152, 78, 163],
-    [166, 86, 40],
-    [27, 158, 119],
-    [255, 255, 51],
-    [102, 194, 165],
-    [153, 153, 153],
-    [31, 120, 180],
+    [0xDD, 0xDD, 0xDD], // unlabelled: pale grey
+    [0xDD, 0xCC, 0x77], // head: Tol muted sand
+    [0x99, 0xDD, 0xFF], // torso: Tol light cyan
+    [0x00, 0x77, 0xBB], // upper_arm_l: Tol vibrant blue
+    [0x56, 0xB4, 0xE9], // upper_arm_r: Okabe-Ito sky blue
+    [0x33, 0x22, 0x88], // forearm_l: Tol muted indigo
+    [0xCC, 0x79, 0xA7], // forearm_r: Okabe-Ito reddish purple
+    [0x88, 0x22, 0x55], // hand_l: Tol muted wine
+    [0xAA, 0x33, 0x77], // hand_r: Tol bright purple
+    [0xD5, 0x5E, 0x00], // thigh_l: Okabe-Ito vermillion
+    [0xE6, 0x9F, 0x00], // thigh_r: Okabe-Ito orange
+    [0xBB, 0x55, 0x66], // shin_l: Tol high-contrast red
+    [0xEE, 0x88, 0x66], // shin_r: Tol light orange
+    [0x44, 0xBB, 0x99], // foot_l: Tol light mint
+    [0xF0, 0xE4, 0x42], // foot_r: Okabe-Ito yellow
 ];
 
 /// A named sum of segments reported next to the segments (DESIGN.md "Aggregates").

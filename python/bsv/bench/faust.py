@@ -254,5 +254,6 @@ def run_faust(root: str | Path, out: str | Path, scans: Sequence[int] | None = N
               "template": template}
     notes = [("Ground truth: FAUST registration meshes labelled by registering the 14-segment template to "
               "them (see bsv/bench/faust.py); the virtual rig scans the raw scans.")]
-    summary = write_outputs(out, "BSV FAUST benchmark", config, infos, runs, wall, notes, overwrite=overwrite)
+    summary = write_outputs(out, "BSV FAUST benchmark", config, infos, runs, wall, notes, overwrite=overwrite,
+                            on_faust=True)
     return runs, summary

@@ -22,13 +22,14 @@ def _plt() -> Any:
     return plt
 
 
-def rve_bars(summary: Mapping[str, Any], path: str | Path) -> Path:
-    """Grouped bars of mean RVE per segment (conditions x methods, the paper's NoEr/L5Ca); floors as ticks."""
+def rve_bars(summary: Mapping[str, Any], path: str | Path, paper: bool = False) -> Path:
+    """Grouped bars of mean RVE per segment (conditions x methods; with ``paper``, a run on FAUST, also the
+    paper's NoEr/L5Ca bars: like for like only); floors as ticks."""
     plt = _plt()
     methods = [m for m in ("bsv", "trimesh") if m in summary] + sorted(set(summary) - {"bsv", "trimesh"})
     conds = [c for c in CONDITIONS if any(c in summary[m] for m in methods)]
     series = [(f"{c} {m}" if len(methods) > 1 else c, m, c) for m in methods for c in conds]
-    nbars = len(series) + 2
+    nbars = len(series) + (2 if paper else 0)
     x = np.arange(len(PAPER_ROWS))
     width = 0.85 / nbars
     fig, ax = plt.subplots(figsize=(max(8.0, 1.1 * len(PAPER_ROWS) * nbars / 3), 4.8))
@@ -44,14 +45,15 @@ def rve_bars(summary: Mapping[str, Any], path: str | Path) -> Path:
         if not np.all(np.isnan(floors)):
             ax.scatter(xs, floors, marker="_", s=120, color="black", zorder=3,
                        label="floor" if k == next(i for i, s in enumerate(series) if s[2] in ("cali", "l5ca")) else None)
-    for j, (label, col, hatch) in enumerate((("paper NoEr", 0, "//"), ("paper L5Ca", 1, "xx"))):
+    for j, (label, col, hatch) in enumerate((("paper NoEr", 0, "//"), ("paper L5Ca", 1, "xx")) if paper else ()):
         xs = x + (len(series) + j - nbars / 2 + 0.5) * width
         ax.bar(xs, [PAPER[s][col] for s in PAPER_ROWS], width, label=label, color="white", edgecolor="grey",
                hatch=hatch)
     ax.set_xticks(x)
     ax.set_xticklabels(PAPER_ROWS, rotation=30, ha="right")
     ax.set_ylabel("RVE (%)")
-    ax.set_title("Relative volume error per segment (mean ± std) against the paper (FAUST)")
+    ax.set_title("Relative volume error per segment (mean ± std) against the paper (FAUST)" if paper
+                 else "Relative volume error per segment (mean ± std), synthetic bodies")
     ax.legend(fontsize=7, ncol=2)
     ax.grid(axis="y", alpha=0.3)
     fig.tight_layout()

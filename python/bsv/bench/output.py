@@ -60,9 +60,11 @@ def check_outputs(out: str | Path, overwrite: bool = False) -> None:
 
 def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos: Sequence[Mapping[str, Any]],
                   runs: Sequence[Run], wall_seconds: float, notes: Sequence[str] = (),
-                  overwrite: bool = False) -> dict[str, Any]:
+                  overwrite: bool = False, on_faust: bool = False) -> dict[str, Any]:
     """Writes every output file into ``out`` (created) and returns the summary; existing outputs are
-    refused (:func:`check_outputs`) unless ``overwrite``."""
+    refused (:func:`check_outputs`) unless ``overwrite``. ``on_faust``: the runs are on MPI-FAUST, the
+    paper's data, so its values are compared (marked better / worse, drawn beside ours); otherwise they
+    are shown as context only."""
     check_outputs(out, overwrite)
     d = Path(out)
     d.mkdir(parents=True, exist_ok=True)
@@ -84,7 +86,7 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
     write_csv(d / "results.csv", table)
     figs = []
     if table:
-        figs.append(rve_bars(summary, d / "rve_per_segment.png").name)
+        figs.append(rve_bars(summary, d / "rve_per_segment.png", paper=on_faust).name)
         for m in summary:
             figs.append(trunk_limbs_histogram(table, d / f"trunk_limbs_hist_{m}.png", m).name)
     if coverage:
@@ -98,12 +100,15 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
     md += [f"- {k}: `{v}`" for k, v in config.items()]
     md += [""] + [f"{n}" for n in notes]
     md += ["", "## Relative volume error (%), mean ± std over subjects", "",
-           ("Each cell: ours (the paper's FAUST value) ✓ better / ✗ worse. The paper reports NoEr and L5Ca; "
+           (("Each cell: ours (the paper's FAUST value) ✓ better / ✗ worse. " if on_faust else
+             "Each cell: ours (the paper's FAUST value, for context only: these are synthetic bodies, not FAUST "
+             "scans, so nothing is marked better or worse). ") + "The paper reports NoEr and L5Ca; "
             "noer, l515 and cali are compared with its NoEr column, l5ca with its L5Ca column. For cali and l5ca, "
             "`floor` is the mean RVE of a perfect registration of that cloud (bsv.bench.floor) and `excess` the "
-            "mean of (RVE - floor RVE) per subject."), "", paper_table(summary), "",
+            "mean of (RVE - floor RVE) per subject."), "", paper_table(summary, like_for_like=on_faust), "",
            "## Point2PartVolume-style accuracy (100 - mean RVE, %)", "",
-           "✓ = better than both P2PV numbers (BUFF, PDT13).", "", p2pv_table(summary), "",
+           "Point2PartVolume's numbers are on other data sets (BUFF, PDT13): context only, not compared.", "",
+           p2pv_table(summary), "",
            "## Signed error of trunk_limbs (%, mean ± std; negative = the fit shrinks the body)", "",
            bias_table(summary), ""]
     if "bsv" in summary:

@@ -129,9 +129,11 @@ def _mark(ours: float, ref: float | None, lower_is_better: bool = True) -> str:
     return " ✓" if better else " ✗"
 
 
-def paper_table(summary: Mapping[str, Any]) -> str:
-    """Markdown: mean ± std RVE (%) per segment (rows) and condition x method (columns), the paper's
-    value beside each cell (✓ better, ✗ worse), and for cali/l5ca the floor and the excess over it."""
+def paper_table(summary: Mapping[str, Any], like_for_like: bool = False) -> str:
+    """Markdown: mean ± std RVE (%) per segment (rows) and condition x method (columns), the paper's FAUST
+    value beside each cell, and for cali/l5ca the floor and the excess over it. ``like_for_like`` (a run on
+    FAUST itself): the cell is marked ✓ better / ✗ worse than the paper; otherwise (synthetic bodies) the
+    paper's value is context only and nothing is marked."""
     conds, methods = _present(summary, "conditions"), _present(summary, "methods")
     head = ["segment"]
     for c in conds:
@@ -149,7 +151,7 @@ def paper_table(summary: Mapping[str, Any]) -> str:
                 ref = paper_value(seg, c)
                 txt = f"{cell['rve_mean']:.2f} ± {cell['rve_std']:.2f}"
                 if ref is not None:
-                    txt += f" ({ref:.2f}){_mark(cell['rve_mean'], ref)}"
+                    txt += f" ({ref:.2f}){_mark(cell['rve_mean'], ref) if like_for_like else ''}"
                 if "floor_rve_mean" in cell:
                     txt += f"<br>floor {cell['floor_rve_mean']:.2f}, excess {cell['excess_mean']:+.2f}"
                 cells.append(txt)
@@ -159,13 +161,13 @@ def paper_table(summary: Mapping[str, Any]) -> str:
 
 def p2pv_table(summary: Mapping[str, Any]) -> str:
     """Markdown: accuracy = 100 - mean RVE (%) for torso, arms, legs, trunk_limbs per condition x method,
-    beside Point2PartVolume's BUFF and PDT13 accuracies (✓ = better than both)."""
+    beside Point2PartVolume's BUFF and PDT13 accuracies, for context only: those are other data sets, so no
+    cell is marked better or worse."""
     conds, methods = _present(summary, "conditions"), _present(summary, "methods")
     head = ["part"] + [f"{c} {m}" if len(methods) > 1 else c for c in conds for m in methods]
-    head += ["P2PV BUFF", "P2PV PDT13"]
+    head += ["P2PV on BUFF (other data)", "P2PV on PDT13 (other data)"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for part in P2PV_ROWS:
-        best = max(P2PV_BUFF[part], P2PV_PDT13[part])
         cells = [part]
         for c in conds:
             for m in methods:
@@ -174,7 +176,7 @@ def p2pv_table(summary: Mapping[str, Any]) -> str:
                     cells.append(EMPTY_CELL)
                 else:
                     acc = 100.0 - cell["rve_mean"]
-                    cells.append(f"{acc:.2f}{_mark(acc, best, lower_is_better=False)}")
+                    cells.append(f"{acc:.2f}")
         cells += [f"{P2PV_BUFF[part]:.2f}", f"{P2PV_PDT13[part]:.2f}"]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)

@@ -691,11 +691,12 @@ def segment_capture(folder: PathLike, cameras: Sequence[str] = ("front", "back")
 
 
 #: Files :func:`write_segmentation` writes into its folder.
-SEGMENTATION_FILES = ("segmentation.png", "mask.png", "landmarks.json")
+SEGMENTATION_FILES = ("segmentation.png", "segmentation_preview.png", "mask.png", "landmarks.json")
 
 
 def write_segmentation(seg: Segmentation, folder: PathLike, overwrite: bool = False) -> None:
-    """Writes ``segmentation.png`` (uint8 ids), ``mask.png`` (0/255) and ``landmarks.json`` into ``folder``
+    """Writes ``segmentation.png`` (uint8 ids), ``segmentation_preview.png`` (the ids in the segment palette of
+    :mod:`bsv.palette`), ``mask.png`` (0/255) and ``landmarks.json`` into ``folder``
     (created if needed); refuses (:class:`bsv.errors.OutputExistsError`) if any exists, unless ``overwrite``."""
     cv2 = require("cv2")
 
@@ -709,10 +710,13 @@ def write_segmentation(seg: Segmentation, folder: PathLike, overwrite: bool = Fa
         d.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise SegmentationError(f"cannot create the segmentation folder {d} ({exc}); choose a writable folder") from exc
-    ok = cv2.imwrite(str(d / "segmentation.png"), seg.labels) and cv2.imwrite(str(d / "mask.png"),
-                                                                               seg.mask.astype(np.uint8) * 255)
+    from ..palette import colourise
+
+    ok = (cv2.imwrite(str(d / "segmentation.png"), seg.labels)
+          and cv2.imwrite(str(d / "segmentation_preview.png"), cv2.cvtColor(colourise(seg.labels), cv2.COLOR_RGB2BGR))
+          and cv2.imwrite(str(d / "mask.png"), seg.mask.astype(np.uint8) * 255))
     if not ok:
-        raise SegmentationError(f"cannot write segmentation.png / mask.png into {d}: is it a writable folder?")
+        raise SegmentationError(f"cannot write segmentation.png / segmentation_preview.png / mask.png into {d}: is it a writable folder?")
     lm = {n: (None if not np.isfinite(r[0]) else [float(r[0]), float(r[1]), float(r[2])])
           for n, r in zip(seg.names, seg.landmarks, strict=False)}
     meta = {"view": seg.view, "segments": dict(SEGMENT_IDS), "hands_found": list(seg.hands_found),

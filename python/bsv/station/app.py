@@ -419,8 +419,8 @@ def create_app(config: StationConfig) -> FastAPI:
     @app.get("/results/{result_id}/files/{name}")
     def result_file(db: Db, who: Who, result_id: int, name: str) -> Response:
         res: Result = get_or_404(db, Result, result_id, "result")
-        if not re.fullmatch(r"[A-Za-z0-9_-]+\.(html|png|json|ply)", name):
-            raise HTTPException(400, "file name must be a plain report file name (report.html, *.png, volumes.json)")
+        if not re.fullmatch(r"[A-Za-z0-9_-]+\.(html|png|json|ply|pdf|csv)", name):
+            raise HTTPException(400, "file name must be a plain report file name (report.html, report.pdf, volumes.csv, *.png, volumes.json)")
         path = config.data / res.report_dir / name
         if not path.is_file():
             raise HTTPException(404, f"result {result_id} has no file {name}")
@@ -528,18 +528,15 @@ def create_app(config: StationConfig) -> FastAPI:
 
 
 def _label_png(path: Path) -> Response:
-    """A segment-id image (uint8) painted with the segment palette of :mod:`bsv.bodies` (0: black)."""
+    """A segment-id image (uint8) painted with the segment palette of :mod:`bsv.palette` (0: black)."""
     import cv2
-    import numpy as np
 
-    from ..bodies import PALETTE
+    from ..palette import colourise
 
     ids = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
     if ids is None or ids.ndim != 2:
         raise HTTPException(404, "the segmentation image cannot be read")
-    lut = np.asarray(PALETTE, dtype=np.uint8).copy()
-    lut[0] = 0
-    rgb = lut[np.clip(ids, 0, len(lut) - 1)]
+    rgb = colourise(ids, background=(0, 0, 0))
     ok, png = cv2.imencode(".png", cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
     if not ok:
         raise HTTPException(500, "the segmentation image could not be encoded")

@@ -16,9 +16,11 @@
 //!    axis that looks up (the remedy: rotate the cloud, `bsv-cli register --up`);
 //! 3. compact: the smallest side above [`MAX_COMPACT_RATIO`] x the largest -> a sphere or a block,
 //!    not a standing person (a person is 4-6 times taller than deep), [`ImplausibleError::Compact`];
-//! 4. upright without labels: the fraction of points above mid-height below [`MIN_TOP_FRACTION`]
+//! 4. upright without labels: the fraction of points above mid-height below [`MIN_TOP_FRACTION_HEADLESS`]
 //!    (a standing person carries its torso and arms in the upper half: 0.62-0.69 on the cohort, 0.5
-//!    for a body lying sideways, ~0.35 upside down) -> [`ImplausibleError::WrongUp`] with `-y`;
+//!    for a body lying sideways, ~0.35 upside down; ~0.46 for a cloud without head, hands and feet,
+//!    so the check also needs the upper half narrower along x than [`MAX_WIDTH_RATIO_UPSIDE_DOWN`] x
+//!    the lower half: torso and arms are wider than the legs) -> [`ImplausibleError::WrongUp`];
 //! 5. facing: with labels, the left limbs' centroid minus the right limbs' must point to +X (and
 //!    more along x than along z); without labels the body must be wider (x) than deep (z) when the
 //!    template is. Otherwise [`ImplausibleError::Facing`];
@@ -44,8 +46,12 @@ pub const MAX_TILT_DEG: f64 = 45.0;
 pub const MIN_UP_RATIO: f64 = 0.8;
 /// Smallest side / largest side above which the cloud is a compact blob (sphere, block).
 pub const MAX_COMPACT_RATIO: f64 = 0.6;
-/// Smallest fraction of an unlabelled cloud's points above its mid-height.
-pub const MIN_TOP_FRACTION: f64 = 0.55;
+/// With the width cue: a cloud with its upper half narrower than this times its lower half and less
+/// than [`MIN_TOP_FRACTION_HEADLESS`] of its points in the upper half is upside down (a headless
+/// upright cloud: ~0.46 of its points above mid-height, its upper half 2-2.6 times wider).
+pub const MAX_WIDTH_RATIO_UPSIDE_DOWN: f64 = 0.8;
+/// See [`MAX_WIDTH_RATIO_UPSIDE_DOWN`] (an upside-down headless cloud: ~0.54).
+pub const MIN_TOP_FRACTION_HEADLESS: f64 = 0.6;
 /// Smallest height (y side of the robust box) of a person without head and feet, metres.
 pub const MIN_HEIGHT_M: f64 = 0.4;
 /// Largest such height, metres.
@@ -126,7 +132,11 @@ pub fn check_person(cloud: &PointCloud, template: &TriMesh) -> Result<(), Implau
     // 4. Upright (unlabelled): the upper half holds most points.
     if parts.as_ref().and_then(Centroids::body_axis).is_none() {
         let top = top_fraction(&cloud.points, &bbox, 1, 1.0);
-        if top < MIN_TOP_FRACTION {
+        // A cloud without its head, hands and feet (what a lab registers) carries only about half of
+        // its points in the upper half, but its upper half (torso and arms) is still wider than its
+        // lower half (the legs); upside down both cues turn. Refuse only when both do.
+        let (upper, lower) = (half_width(&cloud.points, &bbox, true), half_width(&cloud.points, &bbox, false));
+        if top < MIN_TOP_FRACTION_HEADLESS && upper < MAX_WIDTH_RATIO_UPSIDE_DOWN * lower {
             // The signed axis (of those nearly as long as the longest) whose "upper half" is heaviest.
             let up = (0..6)
                 .filter(|&a| e[a / 2] >= MIN_UP_RATIO * largest)
@@ -166,6 +176,18 @@ pub fn check_person(cloud: &PointCloud, template: &TriMesh) -> Result<(), Implau
 fn top_fraction(points: &[[f64; 3]], bbox: &bsv_core::geometry::Aabb, k: usize, sign: f64) -> f64 {
     let mid = 0.5 * (bbox.min[k] + bbox.max[k]);
     points.iter().filter(|p| sign * (p[k] - mid) > 0.0).count() as f64 / points.len().max(1) as f64
+}
+
+/// The 1 % - 99 % extent along x of the points in the upper (or lower) half along y.
+fn half_width(points: &[[f64; 3]], bbox: &bsv_core::geometry::Aabb, upper: bool) -> f64 {
+    let mid = 0.5 * (bbox.min[1] + bbox.max[1]);
+    let mut x: Vec<f64> = points.iter().filter(|p| (p[1] > mid) == upper).map(|p| p[0]).collect();
+    if x.len() < 2 {
+        return 0.0;
+    }
+    x.sort_by(f64::total_cmp);
+    let at = |q: f64| x[((q * (x.len() - 1) as f64) as usize).min(x.len() - 1)];
+    at(0.99) - at(0.01)
 }
 
 /// The axis name (`+x`, `-x`, `+y`, ...) closest to the unit vector `a`.

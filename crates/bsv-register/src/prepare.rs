@@ -187,7 +187,9 @@ fn clean_cloud(
         out_of_box[i] = !a;
     }
     let mut detached = attached.iter().filter(|&&a| !a).count();
-    if kept.len() - detached < min_points {
+    // Spill is a few percent of a cloud; a "removal" of half of it means the cloud is too sparse for
+    // the voxels to connect its surface (a subsampled cloud), not that half of it is spill.
+    if kept.len() - detached < min_points || 2 * detached > kept.len() {
         out_of_box.iter_mut().for_each(|d| *d = false);
         detached = 0;
     }

@@ -629,14 +629,7 @@ def main_process(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--refine-floor", action="store_true",
                     help="correct each camera's pitch, roll and height with the floor it sees (the cameras must see it)")
     ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT")
-    ap.add_argument("--bsip", action="store_true",
-                    help="also segment masses, centres of mass, inertia, joint centres and lengths: bsip.json, "
-                         "bsip.csv (de Leva layout) and model.osim (OpenSim)")
-    ap.add_argument("--bsip-density", metavar="KG_M3|JSON",
-                    help="with --bsip: one density in kg/m^3, or a JSON mapping by segment or kind, e.g. "
-                         "'{\"thigh\": 1060}' (default: Dempster 1955 via Winter 2009 Table 4.1)")
-    ap.add_argument("--bsip-sex", choices=("male", "female"), default="male",
-                    help="with --bsip: the column of de Leva's (1996) table to compare with (default male)")
+    _add_bsip_options(ap)
     ap.add_argument("--quiet", action="store_true", help="no progress output")
     a = ap.parse_args(list(argv) if argv is not None else None)
     from . import read_mesh
@@ -662,6 +655,18 @@ def main_process(argv: Sequence[str] | None = None) -> int:
         return 0
 
     return run_command("bsv process", run)
+
+
+def _add_bsip_options(ap: argparse.ArgumentParser) -> None:
+    """``--bsip``, ``--bsip-density`` and ``--bsip-sex`` (``bsv process`` and ``bsv demo``)."""
+    ap.add_argument("--bsip", action="store_true",
+                    help="also segment masses, centres of mass, inertia, joint centres and lengths: bsip.json, "
+                         "bsip.csv (de Leva layout) and model.osim (OpenSim)")
+    ap.add_argument("--bsip-density", metavar="KG_M3|JSON",
+                    help="with --bsip: one density in kg/m^3, or a JSON mapping by segment or kind, e.g. "
+                         "'{\"thigh\": 1060}' (default: Dempster 1955 via Winter 2009 Table 4.1)")
+    ap.add_argument("--bsip-sex", choices=("male", "female"), default="male",
+                    help="with --bsip: the column of de Leva's (1996) table to compare with (default male)")
 
 
 def _bsip_args(a: argparse.Namespace) -> dict[str, Any]:
@@ -722,14 +727,7 @@ def main_demo(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--no-room", action="store_true",
                     help="render the subject alone on grey instead of in a clinic room (floor, walls)")
     ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT")
-    ap.add_argument("--bsip", action="store_true",
-                    help="also segment masses, centres of mass, inertia, joint centres and lengths: bsip.json, "
-                         "bsip.csv (de Leva layout) and model.osim (OpenSim)")
-    ap.add_argument("--bsip-density", metavar="KG_M3|JSON",
-                    help="with --bsip: one density in kg/m^3, or a JSON mapping by segment or kind, e.g. "
-                         "'{\"thigh\": 1060}' (default: Dempster 1955 via Winter 2009 Table 4.1)")
-    ap.add_argument("--bsip-sex", choices=("male", "female"), default="male",
-                    help="with --bsip: the column of de Leva's (1996) table to compare with (default male)")
+    _add_bsip_options(ap)
     ap.add_argument("--quiet", action="store_true", help="only the final table")
     a = ap.parse_args(list(argv) if argv is not None else None)
     from .exitcodes import run_command

@@ -673,16 +673,17 @@ def _bsip_args(a: argparse.Namespace) -> dict[str, Any]:
     """The keywords of process for ``--bsip``, ``--bsip-density`` and ``--bsip-sex`` (none without --bsip)."""
     if not a.bsip:
         if a.bsip_density is not None:
-            raise SystemExit("--bsip-density needs --bsip")
+            raise InputError("--bsip-density needs --bsip")
         return {}
     density = None
     if a.bsip_density is not None:
+        bad = f"--bsip-density expects a number in kg/m^3 or a JSON mapping, got {a.bsip_density!r}"
         try:
             density = json.loads(a.bsip_density)
         except json.JSONDecodeError:
-            raise SystemExit(f"--bsip-density expects a number or a JSON mapping, got {a.bsip_density!r}") from None
+            raise InputError(bad) from None
         if not isinstance(density, (int, float, dict)) or isinstance(density, bool):
-            raise SystemExit(f"--bsip-density expects a number or a JSON mapping, got {a.bsip_density!r}")
+            raise InputError(bad)
     return {"bsip": True, "bsip_density": density, "bsip_sex": a.bsip_sex}
 
 

@@ -304,6 +304,12 @@ def _run(client: Any, todo: list[tuple[Item, str]], out: Path, spec: Spec, table
         stop.set()
         if watchdog is not None:
             watchdog.join()
+            # A timed-out task runs on until its worker's restart (done once the watchdog has joined)
+            # and may have renamed its folder into place after the failure was recorded: a failed
+            # item has no folder.
+            for name in timed_out:
+                if result.records.get(name, {}).get("status") != "ok":
+                    _remove_stale(out, name)
         with contextlib.suppress(Exception):
             client.unsubscribe_topic(topic)
         pending = [f for f in futures.values() if not f.done()]

@@ -272,7 +272,33 @@ def scan(
             raise OutputExistsError(f"{img} is not empty; pass overwrite=True to write into it")
     rm: bool | dict[str, Any] = dict(room) if isinstance(room, Mapping) else bool(room)
     p, n, c, lab = _bsv.scan(m.vertices, m.faces, m.vertex_labels, m.face_labels, condition, int(seed), img, rm)
+    if img is not None:
+        _record_rig_covariance(Path(img) / "calibration.json", condition)
     return PointCloud(p, n, c, lab)
+
+
+def _record_rig_covariance(path: Path, condition: str) -> None:
+    """Writes the virtual rig's own calibration spread into its calibration.json (``extrinsics_covariance``
+    per camera, :mod:`bsv.uncertainty`): exact extrinsics in noer and l515, the paper's repeatability (the
+    model the rig draws its errors from) in cali and l5ca. Without it the intervals of a virtual capture
+    would assume the paper's spread even where the rig's calibration is exact."""
+    import json
+    import os
+
+    from .frontend.calibrate import covariance_json
+    from .uncertainty import paper_covariance
+
+    if not path.is_file():
+        return
+    doc = json.loads(path.read_text())
+    exact = condition in ("noer", "l515")
+    for cam, entry in (doc.get("cameras") or {}).items():
+        cov = np.zeros((6, 6)) if exact else paper_covariance(cam)
+        source = "virtual rig: exact extrinsics" if exact else "virtual rig: the paper's repeatability"
+        entry["extrinsics_covariance"] = covariance_json(cov, source)
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(json.dumps(doc, indent=1) + "\n")
+    os.replace(tmp, path)
 
 
 def surface_distances(points: Any, mesh: Any) -> npt.NDArray[np.float64]:

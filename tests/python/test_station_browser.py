@@ -50,6 +50,7 @@ def _shot(drv: Any, name: str) -> None:
 
 def _capture(drv: Any, swollen: str | None, shot: str, timeout: float = 300.0, button: str = "capture") -> float:
     if swollen is not None:
+        WebDriverWait(drv, 30).until(lambda d: d.find_elements(By.ID, "swollen"))  # the subject page has loaded
         Select(drv.find_element(By.ID, "swollen")).select_by_value(swollen)
     t0 = time.monotonic()
     before = drv.current_url
@@ -98,7 +99,7 @@ def test_two_virtual_sessions_and_the_comparison_flag_the_swollen_forearm(browse
         _shot(drv, "06-compare")
         assert flags["forearm_l"] == "yes", flags
         assert [s for s, f in flags.items() if f == "yes"] == ["forearm_l"], flags
-        assert "repeatability table" in drv.find_element(By.ID, "interval-source").text
+        assert "intervals from the pipeline" in drv.find_element(By.ID, "interval-source").text
         drv.get(server.url + "/sessions/2")
         _shot(drv, "07-session")
         drv.get(server.url + "/rig")

@@ -70,8 +70,11 @@ def history_png(labels: Sequence[str], volumes: Sequence[dict[str, Any]]) -> str
                 if pts:
                     xs = [i for i, _ in pts]
                     ys = [iv.value for _, iv in pts]
-                    err = [[iv.value - iv.lo for _, iv in pts], [iv.hi - iv.value for _, iv in pts]]
-                    ax.errorbar(xs, ys, yerr=err, fmt="o-", capsize=3, ms=4, lw=1)
+                    # The interval is for the true value (the error model's bias removed): it need not
+                    # contain the estimate, so it is drawn from its own ends, not as an error bar.
+                    ax.plot(xs, ys, "o-", ms=4, lw=1)
+                    ax.vlines(xs, [iv.lo for _, iv in pts], [iv.hi for _, iv in pts], lw=1, color="0.35")
+                    ax.plot(xs + xs, [iv.lo for _, iv in pts] + [iv.hi for _, iv in pts], "_", ms=6, color="0.35")
                 ax.set_title(title, fontsize=9)
                 ax.set_ylabel(unit, fontsize=7)
                 ax.set_xticks(x, [str(s) for s in labels], fontsize=7)

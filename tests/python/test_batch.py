@@ -244,7 +244,8 @@ def test_an_interrupted_batch_continues_where_it_stopped(inputs: dict[str, Any],
     out = tmp_path / "batch"
     proc = subprocess.Popen([sys.executable, "-m", "bsv.cli", "batch", *ins, "--out", str(out), "--workers", "1",
                              "--segmentation", "oracle", "--quiet", "--no-dashboard", *FAST],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 240
     while time.monotonic() < deadline and proc.poll() is None:
         if (out / JOURNAL).is_file() and (out / JOURNAL).read_text().count("\n") >= 1:

@@ -27,7 +27,10 @@ print("finished", flush=True)
 
 def test_ctrl_c_stops_a_long_fit_at_the_next_iteration() -> None:
     # 100,000 iterations take about an hour; the interrupt must end the fit at the next iteration.
-    proc = subprocess.Popen([sys.executable, "-c", SCRIPT], stdout=subprocess.PIPE, text=True)
+    # The child gets the default SIGINT disposition: an ignored SIGINT is inherited across exec, and an
+    # earlier test's cluster may leave the test process ignoring it (Python then never installs its handler).
+    proc = subprocess.Popen([sys.executable, "-c", SCRIPT], stdout=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert proc.stdout is not None
     try:
         assert proc.stdout.readline().strip() == "started"

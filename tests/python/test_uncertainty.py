@@ -242,7 +242,14 @@ def test_calibration_json_with_and_without_covariance(tmp_path):
     from bsv.frontend.errors import CalibrationFileError
 
     bsv.scan(_box_mesh(), "noer", 0, images=tmp_path / "cap")
-    old = cal.read_calibration(tmp_path / "cap" / "calibration.json")  # the scanner writes no covariance
+    rig = cal.read_calibration(tmp_path / "cap" / "calibration.json")  # the rig records its own (exact) spread
+    np.testing.assert_array_equal(rig.cameras["front"].covariance, np.zeros((6, 6)))
+    assert rig.cameras["front"].covariance_source == "virtual rig: exact extrinsics"
+    doc = json.loads((tmp_path / "cap" / "calibration.json").read_text())
+    for entry in doc["cameras"].values():
+        del entry["extrinsics_covariance"]
+    (tmp_path / "older.json").write_text(json.dumps(doc))
+    old = cal.read_calibration(tmp_path / "older.json")  # files written before the covariance existed
     assert old.cameras["front"].covariance is None
     c = old.cameras["back"]
     c.covariance, c.covariance_source = unc.paper_covariance("back"), "paper default"
@@ -277,7 +284,7 @@ def test_process_writes_intervals_that_hold_the_truth(demo_l5ca):
     res = demo_l5ca
     doc = json.loads((res.out_dir / "volumes.json").read_text())
     iv = doc["intervals"]
-    assert iv["level"] == 0.95 and "Monte Carlo" in iv["method"] and "paper default" in iv["method"]
+    assert iv["level"] == 0.95 and "Monte Carlo" in iv["method"] and "the paper's repeatability" in iv["method"]
     assert "refined by the floor" in iv["method"]
     ref = doc["calibration_refinement"]["cameras"]
     assert set(ref) == {"front", "back"} and all(r["floor_points"] > 1000 for r in ref.values())

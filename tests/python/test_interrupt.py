@@ -35,8 +35,7 @@ def test_ctrl_c_stops_a_long_fit_at_the_next_iteration() -> None:
     try:
         assert proc.stdout.readline().strip() == "started"
         time.sleep(0.5)
-        # Ctrl-C, repeated every 5 s as a user would (a lone SIGINT was once not honoured under a load of
-        # ~20 on the shared CI machine; see the closing note of 2026-12-02).
+        # Ctrl-C, repeated every 5 s as a user would.
         out = ""
         for _ in range(24):
             proc.send_signal(signal.SIGINT)

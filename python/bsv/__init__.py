@@ -165,6 +165,7 @@ def register(
     progress: bool | Callable[[dict[str, Any]], None] = False,
     density: float = 1000.0,
     label_source: str | None = None,
+    keypoints: Mapping[str, Any] | None = None,
     **params: Any,
 ) -> Registration:
     """Fits the template to a point cloud by regularized ARAP and measures the segment volumes.
@@ -185,9 +186,31 @@ def register(
     (Y up, facing +Z, left on +X, metres): otherwise :class:`bsv.ImplausibleCloudError` says what is wrong
     and how to fix it (``check_plausible=False`` skips the check). ``volumes["registration"]["quality"]``
     and :attr:`Registration.quality` hold per-segment fit quality figures with a ``doubtful`` flag.
+
+    ``keypoints``: measured joint centres ``{name: position}`` (names of
+    :data:`bsv.frontend.landmarks.JOINTS`: ``shoulder_l``, ``elbow_r``, ``hip_l``, ``knee_r``, ...; a
+    position is xyz in metres, ``(xyz, confidence)``, a ``{"xyz", "confidence"}`` dict or a
+    :class:`~bsv.frontend.landmarks.JointCentre`) that pull the template's own joint centres (the
+    keypoint term; parameters ``keypoint_weight``, ``keypoint_robust_m``). Only the embedded templates
+    carry joints; the fitted-to-measured distances are in ``volumes["registration"]["keypoints"]``.
     """
     cloud = as_cloud(points, labels=labels)
     tmpl = default_template() if template is None else as_mesh(template)
+    measured = rings = None
+    if keypoints is not None:
+        from .keypoints import JOINT_NAMES, as_keypoints, joint_rings
+
+        measured = as_keypoints(keypoints)
+        rings = joint_rings(tmpl)
+        if rings is None and measured:
+            err = InputError("keypoints need a template that carries joint centres: the embedded templates "
+                             "(template=None, bsv.default_template(), the 'fine' and 'full' ones) do; this one "
+                             "does not, so fit it without keypoints")
+            err.argument = "keypoints"
+            raise err
+        if rings is not None:  # joints this template does not reach (ankles without feet) are not pulled
+            carried = {r[0] for r in rings}
+            measured = [m for m in measured if m[0] in carried or m[0] not in JOINT_NAMES]
     callback: Callable[[dict[str, Any]], None] | None
     if progress is True:
         callback = _print_iteration
@@ -195,6 +218,8 @@ def register(
         callback = progress
     else:
         callback = None
+    if label_source is None and "labels" in params:  # the registration parameter's name for it
+        label_source = str(params.pop("labels"))
     if label_source is None:
         label_source = "cloud" if cloud.labels is not None else "template"
         if cloud.labels is None:
@@ -217,6 +242,8 @@ def register(
         RegisterParams(**params),
         float(density),
         callback,
+        measured,
+        rings,
     )
     fitted = Mesh(result.vertices, tmpl.faces, result.vertex_labels, None)
     vols = result.report.to_dict()

@@ -2,7 +2,7 @@
 # layer; Rust errors -> the classes of :mod:`bsv.errors`). Kept in sync with the extension by
 # tests/python/test_stubs.py (every name, every function's parameters and defaults).
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any, TypeAlias
 
 import numpy as np
@@ -126,7 +126,10 @@ def register(
     params: RegisterParams,
     density: float = 1000.0,
     progress: Callable[[dict[str, Any]], object] | None = None,
+    keypoints: Sequence[tuple[str, Sequence[float], float]] | None = None,
+    joint_rings: Sequence[tuple[str, Sequence[int], Sequence[float]]] | None = None,
 ) -> RegistrationResult: ...
+def template_joints(kind: str) -> list[tuple[str, list[int], list[float], tuple[float, float, float]]]: ...
 def scan(
     vertices: ArrayLike,
     faces: ArrayLike,

@@ -330,6 +330,13 @@ def _process_keywords() -> frozenset[str]:
     return frozenset(inspect.signature(process).parameters) - {"register_params"}
 
 
+#: Where the fitted mesh takes its segments from on the camera path: the template's own (anatomical)
+#: boundaries carried by the fit, not the 2-D cut lines of the colour images transferred from the cloud.
+#: Measured (bench synth --segmentation camera, n 10, seed 0, noer / l515 mean RVE %): thighs 7.3 / 8.1
+#: with the cloud's labels against 2.8 / 3.0 with the template's, torso 2.8 / 2.3 against 1.6 / 1.7.
+CAMERA_LABEL_SOURCE = "template"
+
+
 def process(
     capture_dir: PathLike,
     calibration: PathLike | None,
@@ -355,6 +362,7 @@ def process(
     bsip_density: float | dict[str, float] | None = None,
     bsip_sex: str = "male",
     refine_floor: bool = False,
+    keypoints: bool = False,
     **register_params: Any,
 ) -> ProcessResult:
     """Segmentation, cloud, registration and volumes of a capture folder (``CAPTURE_DIR/<camera>/`` with
@@ -377,7 +385,13 @@ def process(
 
     ``refine_floor`` (``--refine-floor``): correct each camera's pitch, roll and height with the floor it
     sees (:func:`bsv.frontend.floorplane.refine_extrinsics`; the camera must see the floor) before building
-    the cloud; the correction is in volumes.json's ``calibration_refinement``."""
+    the cloud; the correction is in volumes.json's ``calibration_refinement``.
+
+    Labels of the fitted mesh: with camera segmentation the template's own segments
+    (:data:`CAMERA_LABEL_SOURCE`), with oracle labels the cloud's; ``labels="cloud"`` or
+    ``labels="template"`` chooses. ``keypoints`` (``--keypoints``, camera segmentation): the joint centres
+    lifted from both views pull the template's joints in the first iterations (``bsv.register``'s keypoint
+    term; measured neutral on the synthetic cohort, benchmarks/BENCH.md)."""
     from . import register as bsv_register
     from . import write_mesh, write_point_cloud
     from .frontend.capture import read_capture
@@ -450,9 +464,12 @@ def process(
     if progress:
         _print_cloud(len(cloud), cloud_report)
 
+    label_source = register_params.pop("labels", CAMERA_LABEL_SOURCE if segmentation == "camera" else None)
+    measured = joints if keypoints and joints else None
     reg: Registration = steps.run(
         "register", "registering the template (ARAP)",
-        lambda: bsv_register(cloud, template=template, progress=False, density=density, **register_params))
+        lambda: bsv_register(cloud, template=template, progress=False, density=density, label_source=label_source,
+                             keypoints=measured, **register_params))
 
     inertial = None
     if bsip:
@@ -628,6 +645,8 @@ def main_process(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="registration parameter (repeatable)")
     ap.add_argument("--refine-floor", action="store_true",
                     help="correct each camera's pitch, roll and height with the floor it sees (the cameras must see it)")
+    ap.add_argument("--keypoints", action="store_true",
+                    help="let the joint centres lifted from both views pull the template's joints (camera segmentation)")
     ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT")
     _add_bsip_options(ap)
     ap.add_argument("--quiet", action="store_true", help="no progress output")
@@ -649,7 +668,7 @@ def main_process(argv: Sequence[str] | None = None) -> int:
                       overwrite=a.overwrite, keep_extremities=a.keep_extremities, sor=a.sor, sor_k=a.sor_k,
                       sor_std_ratio=a.sor_std, remove_floor=not a.keep_floor, isolate_person=not a.no_isolate,
                       cloud_params=_register_args(a.cloud_param, "--cloud-param"),
-                      refine_floor=a.refine_floor,
+                      refine_floor=a.refine_floor, keypoints=a.keypoints,
                       **_bsip_args(a), **_register_args(a.param))
         _print_process(res)
         return 0

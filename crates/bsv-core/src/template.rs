@@ -6,6 +6,7 @@ use crate::TriMesh;
 static DEFAULT_PLY: &[u8] = include_bytes!("../../../assets/template/template.ply");
 static FINE_PLY: &[u8] = include_bytes!("../../../assets/template/template_fine.ply");
 static FULL_PLY: &[u8] = include_bytes!("../../../assets/template/template_full.ply");
+static JOINTS_JSON: &str = include_str!("../../../assets/template/template_joints.json");
 
 /// Which embedded template.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -30,6 +31,15 @@ impl TemplateKind {
         }
     }
 
+    /// The key of this template in `template_joints.json`.
+    fn joints_key(self) -> &'static str {
+        match self {
+            TemplateKind::Default => "template",
+            TemplateKind::Fine => "template_fine",
+            TemplateKind::Full => "template_full",
+        }
+    }
+
     /// The embedded PLY bytes (binary little-endian, vertex and face labels).
     pub fn ply_bytes(self) -> &'static [u8] {
         match self {
@@ -43,6 +53,53 @@ impl TemplateKind {
 /// The embedded template of `kind`, labelled, in metres, A-pose, world frame.
 pub fn template(kind: TemplateKind) -> Result<TriMesh, PlyError> {
     ply::parse_mesh(kind.ply_bytes())
+}
+
+/// A joint centre carried by a template: the convex combination `sum_k weights[k] * v[vertices[k]]`
+/// of the ring of template vertices around the limb at the joint (`assets/template/template_joints.json`,
+/// made by `bsv.bodies.template_joints` from the MakeHuman rig).
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+pub struct JointRing {
+    /// Joint name as `bsv.frontend.landmarks.JOINTS` writes it: `shoulder_l`, `elbow_r`, `hip_l`, ...
+    #[serde(skip)]
+    pub name: String,
+    /// Template vertex indices of the ring.
+    pub vertices: Vec<usize>,
+    /// Non-negative weights summing to 1, one per vertex.
+    pub weights: Vec<f64>,
+    /// The centre on the template (metres), for checks.
+    pub centre: [f64; 3],
+}
+
+impl JointRing {
+    /// The joint's position on a mesh with the template's vertex order.
+    pub fn position(&self, vertices: &[[f64; 3]]) -> [f64; 3] {
+        let mut c = [0.0; 3];
+        for (&v, &w) in self.vertices.iter().zip(&self.weights) {
+            for k in 0..3 {
+                c[k] += w * vertices[v][k];
+            }
+        }
+        c
+    }
+}
+
+#[derive(serde::Deserialize)]
+struct JointsFile {
+    templates: std::collections::BTreeMap<String, std::collections::BTreeMap<String, JointRing>>,
+}
+
+/// The joint rings of the embedded template of `kind`, sorted by name.
+pub fn template_joints(kind: TemplateKind) -> Vec<JointRing> {
+    // The file is embedded and checked by the tests below: a parse failure is a build defect.
+    let file: JointsFile = match serde_json::from_str(JOINTS_JSON) {
+        Ok(f) => f,
+        Err(_) => return Vec::new(),
+    };
+    file.templates
+        .get(kind.joints_key())
+        .map(|m| m.iter().map(|(name, r)| JointRing { name: name.clone(), ..r.clone() }).collect())
+        .unwrap_or_default()
 }
 
 #[cfg(test)]
@@ -61,6 +118,22 @@ mod tests {
             present.dedup();
             assert_eq!(present.len(), n_segments, "{kind:?}");
             assert!(crate::geometry::signed_volume(&m.vertices, &m.triangles) > 0.04);
+        }
+    }
+
+    #[test]
+    fn joint_rings_reproduce_their_centres_on_each_template() {
+        for (kind, n_joints) in [(TemplateKind::Default, 10), (TemplateKind::Fine, 10), (TemplateKind::Full, 12)] {
+            let m = template(kind).expect("embedded template parses");
+            let rings = template_joints(kind);
+            assert_eq!(rings.len(), n_joints, "{kind:?}");
+            for r in &rings {
+                assert!(r.weights.iter().all(|&w| w >= 0.0), "{} weights >= 0", r.name);
+                assert!((r.weights.iter().sum::<f64>() - 1.0).abs() < 1e-9, "{} weights sum to 1", r.name);
+                let p = r.position(&m.vertices);
+                let d = crate::geometry::sub(p, r.centre);
+                assert!(crate::geometry::dot(d, d).sqrt() < 1e-6, "{kind:?} {} off by {d:?}", r.name);
+            }
         }
     }
 }

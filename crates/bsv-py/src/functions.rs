@@ -125,6 +125,19 @@ fn default_template<'py>(py: Python<'py>, full: bool) -> PyResult<Bound<'py, PyT
     mesh_to(py, &mesh)
 }
 
+/// The joint rings of the embedded template `kind` ("default", "fine" or "full"): a list of
+/// `(name, vertex indices, weights, centre)`, sorted by name.
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+fn template_joints(kind: &str) -> PyResult<Vec<(String, Vec<usize>, Vec<f64>, [f64; 3])>> {
+    let Some(k) = TemplateKind::parse(kind) else {
+        return Err(pyo3::exceptions::PyValueError::new_err(format!(
+            "template kind {kind:?}: expected \"default\", \"fine\" or \"full\""
+        )));
+    };
+    Ok(bsv_core::template::template_joints(k).into_iter().map(|r| (r.name, r.vertices, r.weights, r.centre)).collect())
+}
+
 /// The rig's room from the `room` argument: absent, `None` or `False`: no room; `True`: the clinic
 /// room varied by `seed`; a dict: `Room` keys (missing keys take the clinic's values, no variation).
 fn room_from(room: Option<&Bound<'_, PyAny>>, seed: u64) -> PyResult<Option<Room>> {
@@ -243,6 +256,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(check_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(volumes, m)?)?;
     m.add_function(wrap_pyfunction!(default_template, m)?)?;
+    m.add_function(wrap_pyfunction!(template_joints, m)?)?;
     m.add_function(wrap_pyfunction!(scan, m)?)?;
     m.add_function(wrap_pyfunction!(surface_distances, m)?)?;
     m.add_function(wrap_pyfunction!(face_labels_from_vertices, m)?)?;

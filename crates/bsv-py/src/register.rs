@@ -37,12 +37,15 @@ impl Progress {
     }
 }
 
+/// A template joint ring from Python: `(name, vertex indices, weights)`.
+type RingTuple = (String, Vec<usize>, Vec<f64>);
+
 /// Registers a template onto a cloud. Head/hand/foot points are dropped by the library unless
 /// `params` has `drop_extremities=False` (the count is `summary["extremities_dropped"]`). The fitted
 /// mesh is measured here (`SegmentOptions::fitted()`, `density`).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (template_vertices, template_faces, template_vertex_labels, template_face_labels, points, normals, labels, params, density=1000.0, progress=None))]
+#[pyo3(signature = (template_vertices, template_faces, template_vertex_labels, template_face_labels, points, normals, labels, params, density=1000.0, progress=None, keypoints=None, joint_rings=None))]
 pub fn register<'py>(
     py: Python<'py>,
     template_vertices: &Bound<'py, PyAny>,
@@ -55,14 +58,26 @@ pub fn register<'py>(
     params: Bound<'py, PyRegisterParams>,
     density: f64,
     progress: Option<Bound<'py, PyAny>>,
+    keypoints: Option<Vec<(String, [f64; 3], f64)>>,
+    joint_rings: Option<Vec<RingTuple>>,
 ) -> PyResult<PyRegistration> {
+    let measured: Vec<bsv_register::Keypoint> = keypoints
+        .unwrap_or_default()
+        .into_iter()
+        .map(|(name, position, confidence)| bsv_register::Keypoint { name, position, confidence })
+        .collect();
+    let rings: Vec<bsv_core::template::JointRing> = joint_rings
+        .unwrap_or_default()
+        .into_iter()
+        .map(|(name, vertices, weights)| bsv_core::template::JointRing { name, vertices, weights, centre: [0.0; 3] })
+        .collect();
     let tmpl = mesh_from(template_vertices, template_faces, template_vertex_labels, template_face_labels)?;
     let cloud = cloud_from(points, normals, None, labels)?;
     let p = &params.get().inner;
     let mut state = Progress { callback: progress.map(Bound::unbind), error: None };
     let fitted = py.detach(|| {
         // A raising callback or Ctrl-C stops the fit after the current iteration.
-        let reg = bsv_register::register(&tmpl, &cloud, p, &mut |it| {
+        let reg = bsv_register::register_with_keypoints(&tmpl, &rings, &cloud, &measured, p, &mut |it| {
             if state.iteration(it) {
                 ControlFlow::Continue(())
             } else {

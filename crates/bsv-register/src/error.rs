@@ -114,6 +114,30 @@ pub enum InputError {
         /// The limit used.
         limit_m: f64,
     },
+    /// A measured joint centre names a joint the template does not carry.
+    #[error("keypoint `{name}`: the template carries no such joint (it carries: {known}); use one of those names or drop the keypoint")]
+    UnknownKeypoint {
+        /// The measured joint's name.
+        name: String,
+        /// The template's joint names.
+        known: String,
+    },
+    /// A measured joint centre is unusable.
+    #[error("keypoint `{name}`: {reason}; give a finite position in metres and a confidence in [0, 1]")]
+    BadKeypoint {
+        /// The measured joint's name.
+        name: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A template joint ring does not fit the template (wrong vertex indices or weights).
+    #[error("template joint `{name}` does not fit the template ({n_vertices} vertices): its ring refers to other vertices or its weights are not >= 0 summing to 1; give the rings made for this template (the embedded templates carry theirs)")]
+    BadJointRing {
+        /// The joint's name.
+        name: String,
+        /// The template's vertex count.
+        n_vertices: usize,
+    },
     /// The template mesh holds no vertex or no triangle.
     #[error("template mesh is empty ({vertices} vertices, {triangles} triangles): load a closed triangle mesh")]
     EmptyTemplate {
@@ -189,7 +213,10 @@ impl InputError {
             | InputError::NonFiniteTemplateVertex { .. }
             | InputError::NonManifoldTemplate { .. }
             | InputError::DegenerateTemplate { .. }
-            | InputError::LengthMismatch { .. } => &[],
+            | InputError::LengthMismatch { .. }
+            | InputError::UnknownKeypoint { .. }
+            | InputError::BadKeypoint { .. }
+            | InputError::BadJointRing { .. } => &[],
         }
     }
 }

@@ -28,6 +28,7 @@ mod correspond;
 mod cotan;
 mod detached;
 mod error;
+mod keypoints;
 mod local;
 mod log;
 mod outliers;
@@ -44,6 +45,7 @@ mod solver;
 mod surface;
 
 pub use error::{ImplausibleError, InputError, NumericError, ParameterError, RegisterError, ResourceError};
+pub use keypoints::{Keypoint, KeypointResidual, Keypoints};
 pub use log::{Energy, IterationLog, Timings};
 pub use params::{
     ArticulationParams, CheckParams, EnergyParams, LabelSource, OutlierParams, PrealignMode, PrealignParams,
@@ -71,12 +73,7 @@ pub fn register(
     params: &RegisterParams,
     progress: &mut dyn FnMut(&IterationLog) -> ControlFlow<()>,
 ) -> Result<Registration, RegisterError> {
-    params.validate()?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(params.threads)
-        .build()
-        .map_err(|e| ResourceError::ThreadPool { threads: params.threads, reason: e.to_string() })?;
-    register_in(&pool, template, cloud, params, progress)
+    register_with_keypoints(template, &[], cloud, &[], params, progress)
 }
 
 /// [`register`] in the caller's rayon `pool` (`params.threads` is ignored): the parallel parts of
@@ -88,7 +85,39 @@ pub fn register_in(
     params: &RegisterParams,
     progress: &mut dyn FnMut(&IterationLog) -> ControlFlow<()>,
 ) -> Result<Registration, RegisterError> {
-    let prepared = prepare(template, cloud, params)?;
+    register_in_with_keypoints(pool, template, &[], cloud, &[], params, progress)
+}
+
+/// [`register`] with the keypoint term: see [`register_in_with_keypoints`].
+pub fn register_with_keypoints(
+    template: &TriMesh,
+    rings: &[bsv_core::template::JointRing],
+    cloud: &PointCloud,
+    measured: &[Keypoint],
+    params: &RegisterParams,
+    progress: &mut dyn FnMut(&IterationLog) -> ControlFlow<()>,
+) -> Result<Registration, RegisterError> {
+    params.validate()?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(params.threads)
+        .build()
+        .map_err(|e| ResourceError::ThreadPool { threads: params.threads, reason: e.to_string() })?;
+    register_in_with_keypoints(&pool, template, rings, cloud, measured, params, progress)
+}
+
+/// [`register_in`] with the keypoint term (`keypoints.rs`): the `measured` joint centres pull the
+/// template's joints, defined by `rings` (made for this template; the embedded templates carry
+/// theirs: `bsv_core::template::template_joints`). With no measured joint it is [`register_in`].
+pub fn register_in_with_keypoints(
+    pool: &rayon::ThreadPool,
+    template: &TriMesh,
+    rings: &[bsv_core::template::JointRing],
+    cloud: &PointCloud,
+    measured: &[Keypoint],
+    params: &RegisterParams,
+    progress: &mut dyn FnMut(&IterationLog) -> ControlFlow<()>,
+) -> Result<Registration, RegisterError> {
+    let prepared = prepare(template, cloud, params)?.with_keypoints(rings, measured)?;
     let mut fit = Registrar::new(pool, prepared, params)?;
     while let Some(entry) = fit.step()? {
         if progress(entry).is_break() {

@@ -101,6 +101,20 @@ pub struct EnergyParams {
     /// centroid of the vertex's points (Lloyd relaxation: it evens out vertices that bunched up or
     /// spread along the surface). Default 0 (see the bent-capsule test for a case that wants it).
     pub tangential_weight_p2m: f64,
+    /// Weight of a measured joint centre (keypoint term, `keypoints.rs`) in units of one vertex's data
+    /// weight: the template's joint is pulled as strongly as `keypoint_weight` vertices are pulled to
+    /// the cloud, times the joint's confidence. Default 40. Used only when keypoints are given.
+    pub keypoint_weight: f64,
+    /// Robust scale (m) of the keypoint term: a joint whose measured centre lies `r` from the fitted
+    /// one pulls with the factor `1 / (1 + (r / keypoint_robust_m)^2)`. Default 0.03.
+    pub keypoint_robust_m: f64,
+    /// Pull a template joint only along its limb (the normal of the joint's ring): the measured joints
+    /// place the segment boundaries along the limbs, the cloud keeps the surface. Default true.
+    pub keypoint_axial: bool,
+    /// The keypoint term acts in the first `keypoint_iterations` iterations only: it places the
+    /// template's joints, then the cloud alone finishes the fit (a joint held against the cloud's
+    /// pull stretches the limb and thins its unseen sides). Default 5 (the first stage).
+    pub keypoint_iterations: usize,
 }
 
 impl Default for EnergyParams {
@@ -111,6 +125,10 @@ impl Default for EnergyParams {
             data_weight: 1.0,
             tangential_weight: 0.0,
             tangential_weight_p2m: 0.0,
+            keypoint_weight: 40.0,
+            keypoint_robust_m: 0.03,
+            keypoint_axial: true,
+            keypoint_iterations: 5,
         }
     }
 }
@@ -346,12 +364,16 @@ impl Default for RegisterParams {
 
 /// Every key of the serde form of [`RegisterParams`] (the flat parameter names), in the order of
 /// the serialised form. A unit test keeps it equal to the serialised keys.
-pub const PARAMETER_NAMES: [&str; 32] = [
+pub const PARAMETER_NAMES: [&str; 36] = [
     "alpha",
     "cell_weight",
     "data_weight",
     "tangential_weight",
     "tangential_weight_p2m",
+    "keypoint_weight",
+    "keypoint_robust_m",
+    "keypoint_axial",
+    "keypoint_iterations",
     "schedule",
     "prune_distance_factor",
     "prune_distance_floor_m",
@@ -579,6 +601,18 @@ impl EnergyParams {
             self.tangential_weight_p2m,
             (0.0..=1.0).contains(&self.tangential_weight_p2m),
             "must be in [0, 1]",
+        )?;
+        check(
+            "keypoint_weight",
+            self.keypoint_weight,
+            self.keypoint_weight.is_finite() && self.keypoint_weight >= 0.0 && self.keypoint_weight <= 1e6,
+            "must be in [0, 1e6] (0 = measured joints are ignored)",
+        )?;
+        check(
+            "keypoint_robust_m",
+            self.keypoint_robust_m,
+            self.keypoint_robust_m.is_finite() && self.keypoint_robust_m > 0.0,
+            "must be finite and > 0 (metres)",
         )
     }
 }

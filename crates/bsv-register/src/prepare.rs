@@ -8,10 +8,12 @@ use crate::correspond::{build_tree, nearest_batch};
 use crate::cotan::CotanWeights;
 use crate::detached;
 use crate::error::{InputError, NumericError, RegisterError};
+use crate::keypoints::{Keypoint, Keypoints};
 use crate::outliers;
 use crate::params::{ArticulationParams, LabelSource, OutlierParams, RegisterParams};
 use crate::prealign::{self, Similarity};
 use crate::result::LimbAlignment;
+use bsv_core::template::JointRing;
 use bsv_core::{PointCloud, TriMesh};
 use std::borrow::Cow;
 use std::time::Instant;
@@ -29,6 +31,8 @@ pub struct Prepared<'a> {
     pub(crate) extremities_dropped: usize,
     pub(crate) detached_removed: usize,
     pub(crate) outliers_removed: usize,
+    /// Measured joint centres pulling the template's joints (empty: no keypoint term).
+    pub(crate) keypoints: Keypoints,
     /// When the registration started (for `Registration::setup_seconds` and `total_seconds`).
     pub(crate) started: Instant,
 }
@@ -45,6 +49,13 @@ impl<'a> Prepared<'a> {
     /// The rest shape: the template's vertices pre-aligned and articulated, metres.
     pub fn rest(&self) -> &[[f64; 3]] {
         &self.rest
+    }
+    /// Adds the keypoint term: `measured` joint centres pull the template's joints (`rings`, made for
+    /// this template: the embedded templates carry theirs, `bsv_core::template::template_joints`).
+    /// An [`InputError`] names a joint that is unknown, unusable or whose ring does not fit.
+    pub fn with_keypoints(mut self, rings: &[JointRing], measured: &[Keypoint]) -> Result<Self, RegisterError> {
+        self.keypoints = Keypoints::new(rings, measured, self.template.vertices.len())?;
+        Ok(self)
     }
     /// The pre-alignment used.
     pub fn similarity(&self) -> &Similarity {
@@ -122,6 +133,7 @@ pub fn prepare<'a>(
         extremities_dropped,
         detached_removed,
         outliers_removed,
+        keypoints: Keypoints::default(),
         started,
     })
 }

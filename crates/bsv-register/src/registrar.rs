@@ -293,6 +293,16 @@ impl<'a> Registrar<'a> {
         if n_corr == 0 {
             return Err(NumericError::NoCorrespondences { iteration }.into());
         }
+        if iteration < e.keypoint_iterations {
+            self.input.keypoints.apply(
+                &f.cur,
+                e.keypoint_weight * e.data_weight,
+                e.keypoint_robust_m,
+                e.keypoint_axial,
+                &mut f.d,
+                &mut f.q,
+            );
+        }
         Ok((n_corr, rms_m2p, rms_p2m))
     }
 

@@ -39,6 +39,8 @@ pub struct Registration {
     pub articulation: Vec<LimbAlignment>,
     /// Per-segment quality figures of the fit, by segment name (`quality.rs`).
     pub quality: std::collections::BTreeMap<String, crate::quality::SegmentQuality>,
+    /// Distance of each fitted template joint to its measured centre (empty without keypoints).
+    pub keypoints: Vec<crate::keypoints::KeypointResidual>,
 }
 
 /// One limb of the articulated initialisation ([`crate::ArticulationParams`]).

@@ -91,15 +91,29 @@ class Fit:
     info: dict[str, Any] = field(default_factory=dict)
 
 
-def register_bsv(cloud: PointCloud, template: Mesh, params: Mapping[str, Any] | None = None) -> Fit:
-    """BSV's regularized ARAP registration (:func:`bsv.register`) of ``template`` to the labelled cloud."""
+#: ``--param`` keys the bench itself reads (not registration parameters): ``keypoints=true`` lets the
+#: camera path's measured joints pull the template's (``bsv process --keypoints``);
+#: ``keypoint_joints=elbow+knee`` keeps only those joints.
+BENCH_ONLY_PARAMS: tuple[str, ...] = ("keypoints", "keypoint_joints")
+
+
+def register_bsv(cloud: PointCloud, template: Mesh, params: Mapping[str, Any] | None = None,
+                 keypoints: Mapping[str, Any] | None = None) -> Fit:
+    """BSV's regularized ARAP registration (:func:`bsv.register`) of ``template`` to the labelled cloud,
+    with the measured joint centres ``keypoints`` when given and ``--param keypoints=true``."""
     from .. import register
 
     t0 = time.perf_counter()
     kw = dict(params or {})
     # `--param labels:template` is the registration's label source, not the cloud's per-point labels
     label_source = kw.pop("labels", None)
-    reg = register(cloud.points, cloud.labels, template, label_source=label_source, **kw)
+    if str(kw.pop("keypoints", "false")).lower() not in ("true", "1", "yes", "on"):
+        keypoints = None
+    kinds = kw.pop("keypoint_joints", None)  # e.g. --param keypoint_joints=elbow+knee
+    if keypoints is not None and kinds:
+        keep = str(kinds).replace("+", ",").split(",")
+        keypoints = {k: v for k, v in keypoints.items() if k.rsplit("_", 1)[0] in keep}
+    reg = register(cloud.points, cloud.labels, template, label_source=label_source, keypoints=keypoints, **kw)
     wall = time.perf_counter() - t0
     summary = dict(reg.volumes.get("registration", {}) or {})
     info = {k: summary[k] for k in ("rms_mesh_to_points_mm", "rms_points_to_mesh_mm", "iterations", "prealign")
@@ -108,10 +122,10 @@ def register_bsv(cloud: PointCloud, template: Mesh, params: Mapping[str, Any] | 
 
 
 def register_method(method: str, cloud: PointCloud, template: Mesh,
-                    params: Mapping[str, Any] | None = None) -> Fit:
-    """Dispatch: ``bsv`` or ``trimesh`` (the peer, :mod:`bsv.bench.peer`)."""
+                    params: Mapping[str, Any] | None = None, keypoints: Mapping[str, Any] | None = None) -> Fit:
+    """Dispatch: ``bsv`` or ``trimesh`` (the peer, :mod:`bsv.bench.peer`; it takes no keypoints)."""
     if method == "bsv":
-        return register_bsv(cloud, template, params)
+        return register_bsv(cloud, template, params, keypoints)
     if method == "trimesh":
         from .peer import register_trimesh
 

@@ -108,9 +108,10 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         check_outputs(args.out, args.overwrite)  # before any work: a run can take an hour
         from .. import RegisterParams
+        from .common import BENCH_ONLY_PARAMS
         from .outliers import split_request
 
-        RegisterParams(**split_request(params)[1])  # a bad --param fails now, not in every run
+        RegisterParams(**{k: v for k, v in split_request(params)[1].items() if k not in BENCH_ONLY_PARAMS})  # a bad --param fails now, not in every run
         if args.command == "synth":
             from .output import write_outputs
             from .synth import SynthConfig, run_synth

@@ -132,6 +132,7 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
     truth_surface = mesh if truth_mesh is None else truth_mesh
     unfiltered: tuple[float | None, float | None] = (None, None)
     joint_errs: dict[str, list[float]] | None = None
+    joints: dict[str, Any] | None = None
     lab = cloud_mode == "lab" or segmentation == "camera"
     need_files = condition in CALIBRATED or lab
     with tempfile.TemporaryDirectory(prefix="bsv-bench-") as tmp:
@@ -155,6 +156,10 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
             uncleaned = build_views_cloud(views, tmp, sor=False, remove_floor=False, isolate_person=False)[0]
             unfiltered = cloud_far_pct(keep_trunk_limbs(uncleaned), truth_surface)
     kinds, params = split_request(params)  # --param bench_outliers=floor,wall,mixed (bench/outliers.py)
+    if segmentation == "camera" and "labels" not in params:  # the camera path's labels, as bsv process
+        from ..pipeline import CAMERA_LABEL_SOURCE
+
+        params = {**params, "labels": CAMERA_LABEL_SOURCE}
     cloud: PointCloud = inject(keep_trunk_limbs(raw), kinds, seed)
     far2, far10 = cloud_far_pct(cloud, truth_surface)
     for method in methods:
@@ -162,7 +167,7 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
                   cloud_far_2cm_pct=far2, cloud_far_10cm_pct=far10, unfiltered_far_2cm_pct=unfiltered[0],
                   unfiltered_far_10cm_pct=unfiltered[1])
         try:
-            fit = register_method(method, cloud, template, params)
+            fit = register_method(method, cloud, template, params, keypoints=joints)
             run.estimated_l, run.seconds, run.info, run.ok = fit.volumes_l, fit.seconds, fit.info, True
             if method == "bsv":  # the intervals' ingredients (bench/coverage.py)
                 from .coverage import record

@@ -8,6 +8,7 @@ Run ``python -m bsv.bodies.template OUT_DIR --overwrite`` (or scripts/make_asset
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -15,10 +16,12 @@ import numpy as np
 from ..errors import OutputExistsError, TemplateError
 from ..types import SEGMENT_IDS, Mesh
 from .body import make_body
+from .joints import rig_joints
 from .labels import vertex_labels_from_faces
 from .meshio import obj_text, ply_bytes
 from .model import Phenotype
 from .pose import Pose
+from .template_joints import template_joints
 
 REMOVED = ("head", "hand_l", "hand_r", "foot_l", "foot_r")
 
@@ -164,6 +167,8 @@ def templates() -> dict[str, Mesh]:
 
 #: Names of the default templates (each written as NAME.ply and NAME.obj).
 TEMPLATE_NAMES = ("template", "template_full", "template_fine")
+#: The joint rings of every template (:mod:`bsv.bodies.template_joints`), written beside them.
+JOINTS_FILE = "template_joints.json"
 
 
 def write_templates(out_dir: str | Path, overwrite: bool = False) -> dict[str, tuple[int, int]]:
@@ -171,6 +176,7 @@ def write_templates(out_dir: str | Path, overwrite: bool = False) -> dict[str, t
     are refused before any work (:class:`bsv.errors.OutputExistsError`) unless ``overwrite``."""
     out = Path(out_dir)
     existing = [f"{n}.{ext}" for n in TEMPLATE_NAMES for ext in ("ply", "obj") if (out / f"{n}.{ext}").exists()]
+    existing += [JOINTS_FILE] if (out / JOINTS_FILE).exists() else []
     if existing and not overwrite:
         raise OutputExistsError(f"{out} already holds {', '.join(existing)}; pass overwrite=True "
                                 "(python -m bsv.bodies.template OUT_DIR --overwrite) to regenerate them")
@@ -183,6 +189,11 @@ def write_templates(out_dir: str | Path, overwrite: bool = False) -> dict[str, t
                 f"{len(m.vertices)} vertices, {len(m.faces)} triangles. Regenerate: python -m bsv.bodies.template")
         (out / f"{name}.obj").write_text(obj_text(m.vertices, m.faces, _face_labels(m), note))
         counts[name] = (len(m.vertices), len(m.faces))
+    centres = rig_joints(Phenotype(gender=0.5), default_pose())
+    doc = {"about": "Joint centres of each template as convex combinations of its vertices (bsv.bodies.template_joints;"
+                    " the MakeHuman rig's bone heads). Regenerate: python -m bsv.bodies.template",
+           "templates": {name: template_joints(m, centres) for name, m in built.items()}}
+    (out / JOINTS_FILE).write_text(json.dumps(doc, indent=1) + "\n")
     return counts
 
 

@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import LimbMissingError, SegmentationError
+from ..keypoints import JOINT_NAMES
 from .intrinsics import Intrinsics
 from .segment import (
     POSE_NAMES,
@@ -49,8 +50,7 @@ from .segment import (
 )
 
 #: Joint centres estimated, named as :func:`bsv.bodies.joints.rig_joints` and :data:`bsv.biomech` name them.
-JOINTS: tuple[str, ...] = tuple(f"{j}_{s}" for s in ("l", "r")
-                                for j in ("shoulder", "elbow", "wrist", "hip", "knee", "ankle"))
+JOINTS: tuple[str, ...] = JOINT_NAMES
 #: The limbs, by their landmarks (a landmark found in neither view names its limb).
 LIMBS: dict[str, tuple[str, ...]] = {
     f"{side} {limb}": tuple(f"{side}_{j}" for j in joints)

@@ -14,6 +14,7 @@ impl Registrar<'_> {
     /// `surface_correction` is on), the final RMS distances and the labels of the fitted mesh.
     pub fn finish(self) -> Result<Registration, RegisterError> {
         let (pool, params, template) = (self.pool, self.params, self.input.template);
+        let keypoints = self.input.keypoints.residuals(&self.fit.cur);
         let mut cur = self.fit.cur;
         // Discretisation correction (see [`surface_correction`]).
         if params.surface_correction {
@@ -42,6 +43,7 @@ impl Registrar<'_> {
             outliers_removed: input.outliers_removed,
             articulation: input.articulation,
             quality,
+            keypoints,
         })
     }
 }

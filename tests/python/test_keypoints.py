@@ -1,0 +1,92 @@
+"""The registration's keypoint term: template joint rings, measured joints pulling them, typed errors."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import bsv
+from bsv import _bsv
+from bsv.bodies.joints import rig_joints
+from bsv.bodies.model import Phenotype
+from bsv.bodies.template import default_pose, templates
+from bsv.bodies.template_joints import template_joints
+from bsv.keypoints import as_keypoints, joint_rings, template_kind
+
+ASSET = Path(__file__).resolve().parents[2] / "assets" / "template" / "template_joints.json"
+
+
+@pytest.fixture(scope="module")
+def template_scan() -> bsv.PointCloud:
+    """The default template itself, scanned without error: its true joints are the rings' centres."""
+    return bsv.scan(bsv.default_template(), "noer", 3)
+
+
+def test_embedded_rings_are_the_generator_output_and_hit_the_rig_joints() -> None:
+    centres = rig_joints(Phenotype(gender=0.5), default_pose())
+    made = {name: template_joints(m, centres) for name, m in templates().items()}
+    assert json.loads(ASSET.read_text())["templates"] == json.loads(json.dumps(made))  # regenerate if this fails
+    t = bsv.default_template()
+    assert template_kind(t) == "default"
+    rings = joint_rings(t)
+    assert rings is not None and {r[0] for r in rings} == {f"{j}_{s}" for s in "lr"
+                                                            for j in ("shoulder", "elbow", "wrist", "hip", "knee")}
+    for name, idx, w in rings:
+        assert np.linalg.norm(np.asarray(w) @ t.vertices[idx] - centres[name]) < 1e-9, name
+    moved = bsv.Mesh(t.vertices + 0.001, t.faces, t.vertex_labels, t.face_labels)
+    assert template_kind(moved) is None and joint_rings(moved) is None
+
+
+def test_a_measured_knee_moves_the_template_knee(template_scan: bsv.PointCloud) -> None:
+    rings = {r[0]: r for r in _bsv.template_joints("default")}
+    t = bsv.default_template()
+    knee = np.asarray(rings["knee_l"][3])
+    hip = np.asarray(rings["hip_l"][3])
+    axis = (knee - hip) / np.linalg.norm(knee - hip)
+    target = knee + 0.03 * axis  # 3 cm lower along the thigh
+    params = {"keypoint_iterations": 20, "keypoint_weight": 200.0}
+
+    def fitted_knee(**kw: object) -> np.ndarray:
+        r = bsv.register(template_scan, template=t, **params, **kw)  # type: ignore[arg-type]
+        _, idx, w, _ = rings["knee_l"]
+        return np.asarray(w) @ r.mesh.vertices[idx]
+
+    free = fitted_knee()
+    pulled = fitted_knee(keypoints={"knee_l": target})
+    # pulled along the limb, most of the way from where the fit alone puts it
+    assert np.dot(pulled - free, axis) > 0.015, (pulled - free)
+    assert abs(np.dot(pulled - target, axis)) < 0.25 * abs(np.dot(free - target, axis))  # the pull is axial
+    r = bsv.register(template_scan, template=t, keypoints={"knee_l": (target, 1.0)}, **params)
+    res = {k["name"]: k for k in r.volumes["registration"]["keypoints"]}
+    assert set(res) == {"knee_l"} and res["knee_l"]["distance_mm"] < 40.0
+
+
+def test_zero_confidence_changes_nothing(template_scan: bsv.PointCloud) -> None:
+    a = bsv.register(template_scan)
+    b = bsv.register(template_scan, keypoints={"elbow_r": {"xyz": [0.0, 1.0, 0.0], "confidence": 0.0}})
+    assert np.array_equal(a.mesh.vertices, b.mesh.vertices)
+
+
+def test_joints_the_template_does_not_reach_are_not_pulled(template_scan: bsv.PointCloud) -> None:
+    r = bsv.register(template_scan, keypoints={"ankle_l": [0.1, 0.07, 0.0], "knee_l": [0.1, 0.5, 0.0]})
+    assert [k["name"] for k in r.volumes["registration"]["keypoints"]] == ["knee_l"]
+
+
+def test_bad_keypoints_are_typed_errors(template_scan: bsv.PointCloud) -> None:
+    with pytest.raises(bsv.InputError, match="nose"):
+        bsv.register(template_scan, keypoints={"nose": [0.0, 1.6, 0.1]})
+    with pytest.raises(bsv.InputError, match="confidence"):
+        as_keypoints({"knee_l": ([0.0, 0.5, 0.0], 2.0)})
+    with pytest.raises(bsv.InputError, match="finite"):
+        as_keypoints({"knee_l": [0.0, np.nan, 0.0]})
+    with pytest.raises(bsv.InputError, match="dict"):
+        as_keypoints([("knee_l", [0.0, 0.5, 0.0])])  # type: ignore[arg-type]
+    t = bsv.default_template()
+    other = bsv.Mesh(t.vertices * 1.01, t.faces, t.vertex_labels, t.face_labels)
+    with pytest.raises(bsv.InputError, match="template"):
+        bsv.register(template_scan, template=other, keypoints={"knee_l": [0.1, 0.5, 0.0]})
+    with pytest.raises(bsv.RegistrationParameterError, match="keypoint_weight"):
+        bsv.register(template_scan, keypoint_weight=-1.0)

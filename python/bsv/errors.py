@@ -178,6 +178,12 @@ class BlurredImageError(CalibrationError):
     """The image (or the marker in it) is too blurred for an accurate pose."""
 
 
+class BoardDepthError(CalibrationError):
+    """The depth image of the calibration board cannot refine the extrinsics: too few valid depth pixels on
+    the board, or a board plane too far from where the colour (PnP) pose puts it (a wrong depth scale,
+    depth not aligned to colour, or a depth image of another scene)."""
+
+
 class CalibrationFileError(CalibrationError):
     """A calibration or intrinsics JSON file is missing or malformed."""
 
@@ -299,7 +305,7 @@ class ReportError(BsvError, RuntimeError):
 
 
 __all__ = [
-    "AssetError", "BatchInputError", "BenchError", "BlurredImageError", "BsipError", "BsvError", "BsvWarning", "CalibrationError", "CalibrationFileError",
+    "AssetError", "BatchInputError", "BenchError", "BlurredImageError", "BoardDepthError", "BsipError", "BsvError", "BsvWarning", "CalibrationError", "CalibrationFileError",
     "CaptureError", "FloorError", "FormatError", "FrontendError", "ImplausibleCaptureError", "ImplausibleCloudError", "InputError", "LabelError",
     "LandmarkMissingError", "LoginRequired", "MarkerNotFoundError", "MeshError", "MissingExtraError", "NoCameraError", "OutputExistsError",
     "PersonIsolationError", "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",

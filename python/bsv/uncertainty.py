@@ -124,20 +124,36 @@ def perturb(r: np.ndarray, t: np.ndarray, delta: np.ndarray) -> tuple[np.ndarray
 #: conservative allowance for real floors (the virtual rig's floor gives ~0.05 mm / 0.005 deg).
 FLOOR_STD: tuple[float, float, float] = (0.001, math.radians(0.05), math.radians(0.05))
 
+#: Systematic allowance of a board-depth refinement (:mod:`bsv.frontend.boardplane`), added to the plane
+#: fit's own covariance: the two tilts of the board face (rad) and its offset along its normal (m). What
+#: is common to both cameras (the board's placement, a bow of the board, the sensor's depth bias at the
+#: board's distance, which the body shares) moves the whole reconstruction rigidly and does not enter a
+#: volume; this covers what differs between the two faces: the board's thickness tolerance and flatness
+#: (0.5 mm) and a face that is not a perfect plane in depth across its ~80 px (0.03 deg = 0.1 mm over the
+#: 22 cm face). The virtual rig's board fit alone gives ~0.02 mm / 0.01 deg.
+BOARD_STD: tuple[float, float, float] = (math.radians(0.03), math.radians(0.03), 0.0005)
+
+
+def condition(cov: np.ndarray, rows: np.ndarray, noise: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Gaussian conditioning of the 6-parameter covariance ``cov`` on measurements ``rows @ delta`` with
+    noise covariance ``noise``: (gain ``K = S A^T (A S A^T + N)^-1``, posterior ``S - K A S``)."""
+    s = np.asarray(cov, dtype=np.float64)
+    a = np.asarray(rows, dtype=np.float64)
+    k = s @ a.T @ np.linalg.inv(a @ s @ a.T + np.asarray(noise, dtype=np.float64))
+    out = s - k @ a @ s
+    return k, (out + out.T) / 2.0
+
 
 def condition_on_floor(cov: np.ndarray, rotation: np.ndarray, std: Sequence[float] = FLOOR_STD) -> np.ndarray:
     """The covariance after the floor has measured the camera's height and its tilts about the world's
-    horizontal x and z axes with standard deviations ``std``: Gaussian conditioning
-    ``S - S A^T (A S A^T + N)^-1 A S``, ``A`` the rows of those three world quantities in :data:`PARAMETERS`."""
+    horizontal x and z axes with standard deviations ``std``: Gaussian conditioning (:func:`condition`),
+    the rows being those three world quantities in :data:`PARAMETERS`."""
     r = np.asarray(rotation, dtype=np.float64)
     a = np.zeros((3, 6))
     a[0, :3] = r.T @ np.array([0.0, 1.0, 0.0])  # world height of the translation
     a[1, 3:] = r.T @ np.array([1.0, 0.0, 0.0])  # rotation about the world x axis
     a[2, 3:] = r.T @ np.array([0.0, 0.0, 1.0])  # rotation about the world z axis
-    s = np.asarray(cov, dtype=np.float64)
-    k = s @ a.T @ np.linalg.inv(a @ s @ a.T + np.diag(np.square(np.asarray(std, dtype=np.float64))))
-    out = s - k @ a @ s
-    return (out + out.T) / 2.0
+    return condition(cov, a, np.diag(np.square(np.asarray(std, dtype=np.float64))))[1]
 
 
 @dataclass(frozen=True)
@@ -365,6 +381,7 @@ def asymmetry_text(value: float, interval: tuple[float, float] | None) -> str:
 
 
 __all__ = [
+    "BOARD_STD",
     "DEFAULT_DEPTH",
     "DEFAULT_SAMPLES",
     "DEFAULT_SEED",
@@ -380,6 +397,7 @@ __all__ = [
     "calibration_spread",
     "check_covariance",
     "combine",
+    "condition",
     "condition_on_floor",
     "default_error_model",
     "error_models",

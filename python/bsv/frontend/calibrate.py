@@ -21,6 +21,13 @@ are a small pose change in the camera frame composed on the right (``R' = R Rodr
 frames it is the sample covariance of the per-frame poses about the result (the repeatability of one
 frame: an upper bound for the frames' noise, a lower bound for a new session's board placement); with
 fewer, the paper's standard deviations (:data:`bsv.uncertainty.PAPER_STD`).
+
+With depth images of the board (aligned to colour, ``--depth front=DIR back=DIR``), each camera's pose is
+then refined by the board face's plane in its depth (:mod:`bsv.frontend.boardplane`: distance to the
+board and the two tilts about axes in the board plane), the covariance conditioned on it, its source
+suffixed ``+board depth`` (``"frames+board depth"``: the update's prior was the frames' covariance plus
+the paper's, since the frames' spread misses the systematic errors the depth corrects; ``"paper
+default+board depth"``) and the refinement's figures written under ``board_depth``.
 """
 
 from __future__ import annotations
@@ -45,13 +52,20 @@ from .errors import (
     WrongMarkerError,
 )
 from .intrinsics import Intrinsics, load_intrinsics
-from .marker import SIDES, Board, MarkerSpec
+from .marker import BOARD_MARGIN_M, SIDES, Board, MarkerSpec
 
 if TYPE_CHECKING:
     import cv2
 
 PathLike = str | Path
 ImageLike = np.ndarray | PathLike
+#: A depth image: metres (float array) or raw 16-bit units (uint16 array or PNG path, times a depth scale).
+DepthLike = np.ndarray | PathLike
+
+#: Metres per unit of a 16-bit depth image when nothing says otherwise (the L515's default depth unit).
+DEFAULT_DEPTH_SCALE: float = 0.00025
+#: Suffix of the covariance source when the board's depth refined the extrinsics.
+BOARD_DEPTH_SOURCE: str = "+board depth"
 
 #: The default marker and board (frozen dataclasses, shared as argument defaults).
 _DEFAULT_MARKER = MarkerSpec()
@@ -307,8 +321,10 @@ class CameraCalibration:
     spread_deg: float = 0.0
     #: 6 x 6 covariance of the extrinsics (module doc); None when the file had none.
     covariance: np.ndarray | None = None
-    #: Where the covariance comes from: "frames" or "paper default".
+    #: Where the covariance comes from: "frames" or "paper default", suffixed "+board depth" when refined.
     covariance_source: str = ""
+    #: The board-depth refinement's figures (:meth:`bsv.frontend.boardplane.BoardRefinement.report`), if any.
+    board_depth: dict[str, Any] | None = None
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready entry of calibration.json."""
@@ -322,6 +338,7 @@ class CameraCalibration:
             "frames": int(self.frames),
             "reprojection_rms_px": float(self.reprojection_rms_px),
             "spread": {"translation_mm": float(self.spread_mm), "rotation_deg": float(self.spread_deg)},
+            **({} if self.board_depth is None else {"board_depth": self.board_depth}),
         }
 
 
@@ -410,13 +427,15 @@ def read_calibration(path: PathLike) -> Calibration:
         if not np.isfinite(r).all() or abs(np.linalg.det(r) - 1.0) > 1e-3:
             raise CalibrationFileError(f"{p}: camera {name!r} rotation is not a rotation matrix")
         cov, source = _read_covariance(c.get("extrinsics_covariance"), f"{p} camera {name!r}")
+        bd = c.get("board_depth")
         cams[name] = CameraCalibration(name, Intrinsics.from_json(c.get("intrinsics"), f"{p} camera {name!r}"), r, t,
                                        serial=c.get("serial"), frames=int(c.get("frames", 0)), covariance=cov,
-                                       covariance_source=source)
+                                       covariance_source=source, board_depth=bd if isinstance(bd, dict) else None)
     m = doc.get("marker") or {}
     board = Board(MarkerSpec(m.get("dictionary", "DICT_ARUCO_ORIGINAL"), int(m.get("id", 336)), float(m.get("size_m", 0.16))),
                   float(m.get("centre_height_m", 1.0)), float(m.get("board_thickness_m", 0.005)),
-                  float(m.get("board_x_m", 0.0)), float(m.get("board_z_m", 0.0)))
+                  float(m.get("board_x_m", 0.0)), float(m.get("board_z_m", 0.0)),
+                  float(m.get("board_margin_m", BOARD_MARGIN_M)))
     return Calibration(cams, board)
 
 
@@ -458,6 +477,8 @@ def calibrate_camera(
     max_edge_width_px: float = MAX_EDGE_WIDTH_PX,
     max_frame_mm: float = MAX_FRAME_MM,
     max_frame_deg: float = MAX_FRAME_DEG,
+    depth: Sequence[DepthLike] | None = None,
+    depth_scale: float = DEFAULT_DEPTH_SCALE,
 ) -> CameraCalibration:
     """Calibrates one camera (``side`` "front" or "back") from frames of the still board; every frame must
     show the marker (a frame without it raises, naming the frame).
@@ -466,7 +487,13 @@ def calibrate_camera(
     before the non-linear pose estimate); ``"pose"`` averages the per-frame poses (chordal mean rotation,
     mean translation). Either way the per-frame poses give the reported spread, and a frame whose camera
     pose lies more than ``max_frame_mm`` / ``max_frame_deg`` from the result (a frame of the other camera,
-    a board that moved) is an error naming it, never averaged in."""
+    a board that moved) is an error naming it, never averaged in.
+
+    ``depth``: depth frames of the same still board, aligned to the colour frames (metres, or 16-bit
+    units times ``depth_scale``); their per-pixel median refines the pose and its covariance
+    (:func:`bsv.frontend.boardplane.refine_with_board`; BoardDepthError when they do not show the board).
+    The update's prior is the paper's covariance, plus the frames' when there are enough frames (the frames'
+    spread alone misses the colour pose's systematic errors that the depth corrects)."""
     if side not in SIDES:
         raise CalibrationError(f"unknown camera side {side!r}; expected one of {SIDES}")
     if average not in ("image", "pose"):
@@ -503,9 +530,48 @@ def calibrate_camera(
     cov, cov_source = frames_covariance(side, [p[0] for p in poses], centres, r_wc, t_wc)
     spread_mm = float(np.sqrt(np.mean(np.sum((np.asarray(centres) - t_wc) ** 2, axis=1)))) * 1000.0
     spread_deg = float(np.sqrt(np.mean([rotation_angle_deg(r, r_cm) ** 2 for r in rs])))
+    board_depth = None
+    if depth is not None:
+        from .boardplane import median_depth, refine_with_board
+
+        dm = median_depth([load_depth(d, depth_scale, f"{side} depth frame {i}") for i, d in enumerate(depth)])
+        # The frames' spread holds only the image noise, not the systematic errors of a colour pose that
+        # the depth is there to correct (intrinsics, print size, corner bias): the update's prior adds the
+        # paper's repeatability to it, which the directions the board does not measure then keep.
+        from ..uncertainty import paper_covariance
+
+        prior = cov + paper_covariance(side) if cov_source == "frames" else cov
+        ref = refine_with_board(r_wc, t_wc, prior, dm, intrinsics, board, side)
+        r_wc, t_wc, cov = ref.rotation, ref.translation, ref.covariance
+        cov_source += BOARD_DEPTH_SOURCE
+        board_depth = {"frames": len(depth), **ref.report()}
     return CameraCalibration(side, intrinsics, r_wc, t_wc, serial=serial, frames=len(rs),
                              reprojection_rms_px=float(np.sqrt(np.mean(np.square(errs)))),
-                             spread_mm=spread_mm, spread_deg=spread_deg, covariance=cov, covariance_source=cov_source)
+                             spread_mm=spread_mm, spread_deg=spread_deg, covariance=cov, covariance_source=cov_source,
+                             board_depth=board_depth)
+
+
+def load_depth(depth: DepthLike, scale: float = DEFAULT_DEPTH_SCALE, name: str = "depth") -> np.ndarray:
+    """A depth image in metres (float64, 0 = no depth): a float array is taken as metres, a uint16 array or
+    a 16-bit PNG as units of ``scale`` metres. Raises CalibrationFileError for an unreadable or 8-bit file."""
+    cv2 = require("cv2")
+
+    if isinstance(depth, (str, Path)):
+        img = cv2.imread(str(depth), cv2.IMREAD_UNCHANGED)
+        if img is None:
+            raise CalibrationFileError(f"cannot read depth image {depth}: missing file or not an image")
+    else:
+        img = np.asarray(depth)
+    if img.ndim != 2:
+        raise CalibrationFileError(f"{name}: a depth image has one channel, got shape {img.shape}")
+    if img.dtype == np.uint16:
+        if not 0 < scale < 1:
+            raise CalibrationError(f"depth scale {scale} must be metres per depth unit, e.g. 0.00025 (L515)")
+        return img.astype(np.float64) * scale
+    if np.issubdtype(img.dtype, np.floating):
+        return np.where(np.isfinite(img), img, 0.0).astype(np.float64)
+    raise CalibrationFileError(f"{name}: depth must be 16-bit (PNG) or float metres, got {img.dtype}; save the "
+                               "depth stream as 16-bit PNG")
 
 
 def calibrate(
@@ -516,18 +582,26 @@ def calibrate(
     serials: Mapping[str, str] | None = None,
     out: PathLike | None = None,
     overwrite: bool = False,
+    depth: Mapping[str, Sequence[DepthLike]] | None = None,
+    depth_scale: Mapping[str, float] | None = None,
 ) -> Calibration:
     """Calibrates every camera of ``images`` ({"front": frames, "back": frames}) and optionally writes
     calibration.json to ``out`` (an existing file is refused before any work, :class:`bsv.errors.OutputExistsError`,
-    unless ``overwrite``)."""
+    unless ``overwrite``). ``depth``: per camera, depth frames of the board for the refinement
+    (:func:`calibrate_camera`), in units of ``depth_scale[camera]`` (default :data:`DEFAULT_DEPTH_SCALE`)."""
     if out is not None and Path(out).exists() and not overwrite:
         raise OutputExistsError(f"{out} already exists; pass overwrite=True (--overwrite) to replace it")
+    unknown = sorted(set(depth or {}) - set(images))
+    if unknown:
+        raise CalibrationError(f"depth given for camera(s) {unknown} without colour images of the board")
     cams = {}
     for side, frames in images.items():
         if side not in intrinsics:
             raise CalibrationError(f"no intrinsics given for camera {side!r}; pass them from the device or a file")
         cams[side] = calibrate_camera(frames, intrinsics[side], side, board,
-                                      serial=None if serials is None else serials.get(side))
+                                      serial=None if serials is None else serials.get(side),
+                                      depth=None if depth is None else depth.get(side),
+                                      depth_scale=(depth_scale or {}).get(side, DEFAULT_DEPTH_SCALE))
     cal = Calibration(cams, board)
     if out is not None:
         cal.write(out, overwrite=overwrite)
@@ -541,6 +615,36 @@ def image_files(folder: PathLike) -> list[Path]:
     if not files:
         raise CalibrationFileError(f"{d}: no PNG/JPEG images of the calibration board found")
     return files
+
+
+def depth_files(folder: PathLike, default_scale: float | None = None) -> tuple[list[Path], float]:
+    """The 16-bit depth PNGs of a folder, sorted by name, and their depth scale: ``default_scale`` when
+    given, else the folder's ``camera.json`` ``depth_scale`` (as ``bsv capture`` and the virtual rig write
+    it), else :data:`DEFAULT_DEPTH_SCALE`. A capture folder's camera.json that names its ``depth`` image
+    selects that one file. Raises CalibrationFileError when there are none."""
+    d = Path(folder)
+    doc: dict[str, Any] = {}
+    meta = d / "camera.json"
+    if meta.is_file():
+        try:
+            doc = json.loads(meta.read_text())
+            if not isinstance(doc, dict):
+                raise TypeError("not a JSON object")
+        except (OSError, ValueError, TypeError) as e:
+            raise CalibrationFileError(f"{meta}: unreadable ({e}); remove it or fix it") from e
+    if isinstance(doc.get("depth"), str):
+        files = [d / doc["depth"]]
+    else:
+        files = sorted(p for p in d.iterdir() if p.suffix.lower() == ".png") if d.is_dir() else []
+    if not files:
+        raise CalibrationFileError(f"{d}: no 16-bit depth PNGs of the calibration board found")
+    scale = default_scale
+    if scale is None and "depth_scale" in doc:
+        try:
+            scale = float(doc["depth_scale"])
+        except (TypeError, ValueError) as e:
+            raise CalibrationFileError(f"{meta}: depth_scale is not a number ({e}); pass --depth-scale") from e
+    return files, DEFAULT_DEPTH_SCALE if scale is None else scale
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -674,6 +778,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--marker-size", type=float, default=0.16, help="printed marker side, metres")
     ap.add_argument("--marker-height", type=float, default=1.0, help="marker centre height above the floor, metres")
     ap.add_argument("--board-thickness", type=float, default=0.005, help="metres")
+    ap.add_argument("--depth", nargs="*", default=[], help="CAMERA=DIR of 16-bit depth PNGs of the board, aligned "
+                    "to colour: refines each camera's pose and covariance with the board face's plane")
+    ap.add_argument("--depth-scale", type=float, default=None, help="metres per depth unit (default: DIR/camera.json's "
+                    f"depth_scale, else {DEFAULT_DEPTH_SCALE}, the L515's)")
     ap.add_argument("-o", "--out", default="calibration.json")
     ap.add_argument("--overwrite", action="store_true")
     ap.add_argument("--live", metavar="CAMERA", help="live alignment window for this camera (front/back)")
@@ -689,7 +797,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     files = {k: image_files(v) for k, v in dirs.items()}
     intr_files = _pairs(a.intrinsics, "intrinsics")
     intr = {k: load_intrinsics(intr_files[k], k) if k in intr_files else _missing(k) for k in files}
-    cal = calibrate(files, intr, board, serials=serials, out=a.out, overwrite=a.overwrite)
+    depth_dirs = _pairs(a.depth, "depth")
+    depth = {k: depth_files(v, a.depth_scale) for k, v in depth_dirs.items()}
+    cal = calibrate(files, intr, board, serials=serials, out=a.out, overwrite=a.overwrite,
+                    depth={k: f for k, (f, _) in depth.items()}, depth_scale={k: sc for k, (_, sc) in depth.items()})
     for k, c in cal.cameras.items():
         print(f"{k}: centre {np.round(c.translation, 4).tolist()} m, {c.frames} frames, reprojection "
               f"{c.reprojection_rms_px:.3f} px, spread {c.spread_mm:.2f} mm / {c.spread_deg:.3f} deg")
@@ -697,6 +808,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             sd = np.sqrt(np.diag(c.covariance))
             print(f"{k}: extrinsics covariance ({c.covariance_source}): 1 sd translation "
                   f"{np.round(sd[:3] * 1000, 3).tolist()} mm, rotation {np.round(np.degrees(sd[3:]), 3).tolist()} deg")
+        if c.board_depth is not None:
+            b = c.board_depth
+            print(f"{k}: board depth: {b['points']} points, plane rms {b['rms_mm']:.2f} mm, colour pose off by "
+                  f"{b['tilt_deg']:.3f} deg; moved {b['depth_mm']:+.2f} mm toward the board, turned "
+                  f"{np.round(b['rotation_world_deg'], 3).tolist()} deg")
     print(f"wrote {a.out}")
     return 0
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from ..errors import (
     BlurredImageError,
+    BoardDepthError,
     BsvError,
     CalibrationError,
     CalibrationFileError,
@@ -24,6 +25,7 @@ from ..errors import (
 
 __all__ = [
     "BlurredImageError",
+    "BoardDepthError",
     "BsvError",
     "CalibrationError",
     "CalibrationFileError",

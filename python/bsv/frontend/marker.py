@@ -30,6 +30,10 @@ if TYPE_CHECKING:
 #: Camera sides and the board face each one sees.
 SIDES = ("front", "back")
 
+#: White margin of the board around the printed marker on each side (metres): the board face is a square of
+#: side ``marker size + 2 margin``.
+BOARD_MARGIN_M: float = 0.03
+
 
 @dataclass(frozen=True)
 class MarkerSpec:
@@ -83,17 +87,34 @@ class MarkerSpec:
 @dataclass(frozen=True)
 class Board:
     """Placement of the double-sided board in the world: marker centre height above the floor, board
-    thickness (the two faces are ``thickness`` apart), and the board's mid-plane position (x0, z0)."""
+    thickness (the two faces are ``thickness`` apart), the board's mid-plane position (x0, z0) and its white
+    margin around the marker (the face is a square of side ``marker.size_m + 2 margin_m``)."""
 
     marker: MarkerSpec = MarkerSpec()
     centre_height_m: float = 1.0
     thickness_m: float = 0.005
     x0_m: float = 0.0
     z0_m: float = 0.0
+    margin_m: float = BOARD_MARGIN_M
 
     def __post_init__(self) -> None:
-        if not np.isfinite([self.centre_height_m, self.thickness_m, self.x0_m, self.z0_m]).all() or self.thickness_m < 0:
-            raise CalibrationError(f"invalid board placement {self}: finite values and thickness >= 0 needed")
+        vals = [self.centre_height_m, self.thickness_m, self.x0_m, self.z0_m, self.margin_m]
+        if not np.isfinite(vals).all() or self.thickness_m < 0 or self.margin_m < 0:
+            raise CalibrationError(f"invalid board placement {self}: finite values, thickness and margin >= 0 needed")
+
+    @property
+    def face_size_m(self) -> float:
+        """Side of the (square) board face, metres."""
+        return self.marker.size_m + 2.0 * self.margin_m
+
+    def face_corners(self, side: str, inset_m: float = 0.0) -> np.ndarray:
+        """World corners (4 x 3) of the board face seen by camera ``side``, moved ``inset_m`` inward."""
+        r, t = self.marker_to_world(side)
+        h = self.face_size_m / 2.0 - inset_m
+        if h <= 0:
+            raise CalibrationError(f"inset {inset_m} m leaves nothing of the {self.face_size_m} m board face")
+        sq = np.array([[-h, h, 0.0], [h, h, 0.0], [h, -h, 0.0], [-h, -h, 0.0]])
+        return sq @ r.T + t
 
     def marker_to_world(self, side: str) -> tuple[np.ndarray, np.ndarray]:
         """Rotation (3 x 3) and translation of the marker frame of the face seen by camera ``side``."""
@@ -109,7 +130,7 @@ class Board:
         return {
             "dictionary": self.marker.dictionary, "id": self.marker.marker_id, "size_m": self.marker.size_m,
             "centre_height_m": self.centre_height_m, "board_thickness_m": self.thickness_m,
-            "board_x_m": self.x0_m, "board_z_m": self.z0_m,
+            "board_x_m": self.x0_m, "board_z_m": self.z0_m, "board_margin_m": self.margin_m,
             "faces": {s: {"rotation": r.tolist(), "translation": t.tolist()} for s in SIDES
                       for r, t in [self.marker_to_world(s)]},
         }
@@ -121,7 +142,7 @@ def render_view(
     rotation: np.ndarray,
     translation: np.ndarray,
     *,
-    margin_m: float = 0.03,
+    margin_m: float = BOARD_MARGIN_M,
     background: int = 110,
     samples: int = 8,
     seed: int = 0,

@@ -65,6 +65,7 @@ def test_the_top_of_the_readme_is_kept() -> None:
 
 def test_every_picture_the_readme_shows_exists() -> None:
     links = re.findall(r"!\[[^\]]*\]\(([^)\s]+)\)", (ROOT / "README.md").read_text())
+    assert "docs/images/segmented-body.png" in links
     for link in links:
         path = ROOT / link
         assert path.is_file() and path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", link
@@ -137,3 +138,7 @@ def test_the_readme_commands_run_in_order(tmp_path: Path) -> None:
     # the lab path really used the calibration that `bsv calibrate` wrote from examples/calib
     work = tmp_path / "work"
     assert (work / "calibration.json").is_file() and (work / "out" / "capture" / "report.html").is_file()
+    # the README's picture is drawn from such a folder: its script still works on the demo's outputs
+    fig = _script("make_readme_figure").draw(work / "out" / "demo-plain")
+    fig.savefig(tmp_path / "figure.png")
+    assert (tmp_path / "figure.png").stat().st_size > 20_000

@@ -123,13 +123,14 @@ def marker_of(comment: str | None) -> str | None:
 
 @dataclass(frozen=True)
 class Block:
-    """A fenced code block: its language, the README line of its first content line, its lines and the
-    heading above it ("" before the first heading)."""
+    """A fenced code block: its language, the README line of its first content line, its lines, the
+    heading above it ("" before the first heading) and whether it comes before the title (``# ...``)."""
 
     lang: str
     line: int
     lines: tuple[str, ...]
     section: str
+    before_title: bool = False
 
 
 FENCE = re.compile(r"^(```+|~~~+)\s*([\w+-]*)\s*$")
@@ -139,6 +140,7 @@ def blocks(text: str) -> list[Block]:
     """Every fenced code block of a Markdown text, in order (an unclosed fence is a :class:`ReadmeError`)."""
     out: list[Block] = []
     section = ""
+    titled = False
     lines = text.splitlines()
     i = 0
     while i < len(lines):
@@ -146,6 +148,7 @@ def blocks(text: str) -> list[Block]:
         if m is None:
             if lines[i].startswith("#"):
                 section = lines[i].lstrip("#").strip()
+                titled = titled or lines[i].startswith("# ")
             i += 1
             continue
         fence, lang = m.group(1), m.group(2).lower()
@@ -154,7 +157,7 @@ def blocks(text: str) -> list[Block]:
             j += 1
         if j == len(lines):
             raise ReadmeError(f"README line {i + 1}: the ``` block is never closed")
-        out.append(Block(lang, i + 2, tuple(lines[i + 1:j]), section))
+        out.append(Block(lang, i + 2, tuple(lines[i + 1:j]), section, not titled))
         i = j + 1
     return out
 
@@ -191,11 +194,10 @@ def commands(block: Block) -> list[Command]:
 
 def readme_commands(text: str) -> tuple[list[Command], list[Command]]:
     """(setup commands: those of the blocks before the README's title, the commands to run in order)."""
-    title = next((k for k, line in enumerate(text.splitlines(), 1) if line.startswith("# ")), None)
     setup: list[Command] = []
     run: list[Command] = []
     for b in blocks(text):
-        (setup if title is not None and b.line < title else run).extend(commands(b))
+        (setup if b.before_title else run).extend(commands(b))
     return setup, run
 
 

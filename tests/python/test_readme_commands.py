@@ -30,6 +30,7 @@ def _script(name: str) -> ModuleType:
 rc = _script("readme_commands")
 
 SAMPLE = """```bash
+# a comment, not the title
 bash scripts/setup.sh
 ```
 
@@ -78,7 +79,7 @@ def test_blocks_commands_and_markers() -> None:
         ("first", "bash", None), ("second", "bash", "needs cameras"), ("echo", "bash", None),
         ("third", "bash", None), ("fourth", "bash", "long"), ('print("hi")', "python", None)]
     second = todo[1]
-    assert second.text == "second \\\n   --b x    # needs cameras: a reason" and second.line == 11
+    assert second.text == "second \\\n   --b x    # needs cameras: a reason" and second.line == 12
     assert all(c.section == "Use it" for c in todo)
     assert rc.trailing_comment("a 'b # c' \"# d\" e\\#f # g") == "g"
     assert rc.trailing_comment("a#b") is None

@@ -11,11 +11,12 @@ README line, exit status and the end of its stderr and stdout.
 A command is skipped only when its README line says so, with a trailing comment that starts with a marker
 (``# needs cameras: 5 s still capture``); the markers and what they mean are :data:`MARKERS`. ``--long``
 also runs the ``long`` ones and starts each ``server`` one, waits until it answers (or stays up), and
-stops it. The block before the README's title (the setup and test commands) is not run: it is what made
-this environment, and its ``bash scripts/test.sh`` runs this very script through
-tests/python/test_readme_commands.py.
+stops it. The commands before the README's title (setup + demo, and the tests) are what made this
+environment, so by default they are reported, not run; ``--setup`` runs them first, in the repository's
+folder where they belong (``bash scripts/setup.sh`` is idempotent), except ``bash scripts/test.sh``, which
+runs this very script through tests/python/test_readme_commands.py.
 
-Usage: python scripts/readme_commands.py [--long] [--keep] [--workdir DIR] [--readme README.md]
+Usage: python scripts/readme_commands.py [--setup] [--long] [--keep] [--workdir DIR] [--readme README.md]
 Exit status 0 when every command that ran succeeded, 1 on a failure, 2 on a README the runner cannot read.
 """
 
@@ -310,14 +311,16 @@ def prepare(work: Path) -> None:
         link.symlink_to(ROOT / "examples", target_is_directory=True)
 
 
-def run(readme: Path, work: Path, *, long: bool = False, timeout: float = TIMEOUT_S,
-        report: Callable[[Outcome], None] | None = None) -> list[Outcome]:
+#: A command before the title that is never run: it runs this script.
+RUNS_THIS = "scripts/test.sh"
+
+
+def run(readme: Path, work: Path, *, long: bool = False, setup: bool = False, repo: Path = ROOT,
+        timeout: float = TIMEOUT_S, report: Callable[[Outcome], None] | None = None) -> list[Outcome]:
     """Runs the README's commands in order in ``work`` (see the module docstring); returns what happened
-    to each one (setup commands first, as skipped), or raises :class:`CommandFailed` / :class:`ReadmeError`."""
-    setup, todo = readme_commands(readme.read_text())
-    cli = find_cli()
-    env = environment(cli)
-    prepare(work)
+    to each one (the commands before the title first: skipped, or with ``setup`` run in ``repo``), or raises
+    :class:`CommandFailed` / :class:`ReadmeError`."""
+    before, todo = readme_commands(readme.read_text())
     outcomes: list[Outcome] = []
 
     def note(o: Outcome) -> None:
@@ -325,9 +328,16 @@ def run(readme: Path, work: Path, *, long: bool = False, timeout: float = TIMEOU
         if report is not None:
             report(o)
 
-    for c in setup:
-        note(Outcome(c, "skipped", reason="setup and test commands before the title: they made this environment, "
-                                          "and scripts/test.sh runs this script"))
+    for c in before:
+        if RUNS_THIS in c.text:
+            note(Outcome(c, "skipped", reason=f"before the title; {RUNS_THIS} runs this script"))
+        elif setup:
+            note(Outcome(c, "ok", run_command(c, repo, dict(os.environ), timeout)))
+        else:
+            note(Outcome(c, "skipped", reason="before the title: the setup that made this environment (--setup runs "
+                                              "it in the repository's folder)"))
+    env = environment(find_cli())  # after the setup, which builds bsv-cli
+    prepare(work)
     for c in todo:
         kind, why = MARKERS[c.marker] if c.marker else ("run", "")
         if kind == "skip" or (kind in ("long", "server") and not long):
@@ -351,6 +361,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--readme", type=Path, default=ROOT / "README.md")
     ap.add_argument("--long", action="store_true", help="also the commands marked `# long` and `# server`")
+    ap.add_argument("--setup", action="store_true",
+                    help="first run the commands before the title (setup + demo) in the repository's folder")
     ap.add_argument("--workdir", type=Path, help="run here (default: a new temporary folder)")
     ap.add_argument("--keep", action="store_true", help="keep the temporary folder")
     ap.add_argument("--timeout", type=float, default=TIMEOUT_S, help="seconds one command may run")
@@ -359,7 +371,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"running {a.readme} in {work}", flush=True)
     t0 = time.monotonic()
     try:
-        outcomes = run(a.readme, work, long=a.long, timeout=a.timeout, report=print_outcome)
+        outcomes = run(a.readme, work, long=a.long, setup=a.setup, timeout=a.timeout, report=print_outcome)
     except ReadmeError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

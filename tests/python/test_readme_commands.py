@@ -120,6 +120,21 @@ def test_a_server_is_started_checked_and_stopped(tmp_path: Path) -> None:
         rc.run_server(dead, tmp_path, env, start_s=30.0)
 
 
+def test_the_commands_before_the_title_run_only_with_setup_and_in_the_repository(tmp_path: Path) -> None:
+    readme = tmp_path / "README.md"
+    readme.write_text("```bash\necho setup > ran-setup.txt\nbash scripts/test.sh\n```\n\n# Title\n\n"
+                      "```bash\necho use > ran-use.txt\n```\n")
+    repo, work = tmp_path / "repo", tmp_path / "work"
+    repo.mkdir()
+    quiet = rc.run(readme, work, repo=repo)
+    assert [o.status for o in quiet] == ["skipped", "skipped", "ok"] and not (repo / "ran-setup.txt").exists()
+    assert "--setup runs it" in quiet[0].reason and "runs this script" in quiet[1].reason
+    assert (work / "ran-use.txt").read_text() == "use\n" and (work / "examples").is_symlink()
+    again = rc.run(readme, tmp_path / "work2", setup=True, repo=repo)
+    assert [o.status for o in again] == ["ok", "skipped", "ok"]
+    assert (repo / "ran-setup.txt").read_text() == "setup\n" and not (tmp_path / "work2" / "ran-setup.txt").exists()
+
+
 @pytest.mark.slow
 def test_the_readme_commands_run_in_order(tmp_path: Path) -> None:
     readme = tmp_path / "README.md"  # this test's copy: an edit while it runs does not change what it checks

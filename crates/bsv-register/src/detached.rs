@@ -26,7 +26,7 @@
 //! of a small segment's largest piece (a shin seen by one camera holds ~4 % of the cloud) that
 //! forms ONE piece is kept.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 /// Voxel key of `p` (side `1 / inv`), or `None` when it cannot be keyed (see `outliers.rs`).
 fn key(p: &[f64; 3], inv: f64) -> Option<[i64; 3]> {
@@ -87,7 +87,7 @@ pub fn attached_points(points: &[[f64; 3]], labels: Option<&[u8]>, voxel: f64, m
     let inv = 1.0 / voxel;
     let label = |i: usize| labels.and_then(|l| l.get(i).copied()).unwrap_or(0);
     // Voxel id of every point (per label), and the voxels' keys and point counts.
-    let mut ids: HashMap<(u8, [i64; 3]), u32> = HashMap::with_capacity(points.len() / 8);
+    let mut ids: HashMap<(u8, [i64; 3]), u32> = HashMap::with_capacity_and_hasher(points.len() / 8, Default::default());
     let mut voxels: Vec<(u8, [i64; 3])> = Vec::new();
     let mut counts: Vec<u32> = Vec::new();
     let point_voxel: Vec<Option<u32>> = points

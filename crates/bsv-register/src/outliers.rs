@@ -14,7 +14,7 @@
 //! keyed without overflow; it is always dropped (it is nowhere near a body).
 
 use rayon::prelude::*;
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 /// Largest voxel key magnitude (2^52): keys and their +-1 neighbours never overflow an `i64`, and
 /// every integer up to it is exact in an `f64`.
@@ -42,7 +42,7 @@ pub fn sparse_points(points: &[[f64; 3]], voxel: f64, min_fraction: f64) -> Vec<
     }
     let inv = 1.0 / voxel;
     let keys: Vec<Option<[i64; 3]>> = points.par_iter().map(|p| key(p, inv)).collect();
-    let mut counts: HashMap<[i64; 3], u32> = HashMap::with_capacity(points.len() / 4);
+    let mut counts: HashMap<[i64; 3], u32> = HashMap::with_capacity_and_hasher(points.len() / 4, Default::default());
     for k in keys.iter().flatten() {
         *counts.entry(*k).or_insert(0) += 1;
     }

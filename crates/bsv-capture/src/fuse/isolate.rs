@@ -20,7 +20,7 @@
 
 use bsv_core::geometry::{dist2, scale};
 use rayon::prelude::*;
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 /// A pixel is a depth edge when at least this many of its 8 neighbours are nearer by more than the step.
 pub const EDGE_MIN_NEARER: usize = 2;
@@ -122,7 +122,8 @@ fn voxel_key(p: [f64; 3], inv: f64) -> [i64; 3] {
 pub fn voxel_components(points: &[[f64; 3]], link_m: f64) -> Components {
     let inv = 1.0 / link_m;
     let keys: Vec<[i64; 3]> = points.par_iter().map(|&p| voxel_key(p, inv)).collect();
-    let mut voxel_of: HashMap<[i64; 3], u32> = HashMap::with_capacity(points.len() / 16 + 16);
+    let mut voxel_of: HashMap<[i64; 3], u32> =
+        HashMap::with_capacity_and_hasher(points.len() / 16 + 16, Default::default());
     let point_voxel: Vec<u32> = keys
         .iter()
         .map(|k| {
@@ -142,7 +143,7 @@ pub fn voxel_components(points: &[[f64; 3]], link_m: f64) -> Components {
     }
     // Number components by decreasing size, ties by first point.
     let roots: Vec<u32> = point_voxel.iter().map(|&v| uf.find(v)).collect();
-    let mut first_and_count: HashMap<u32, (usize, usize)> = HashMap::new();
+    let mut first_and_count: HashMap<u32, (usize, usize)> = HashMap::default();
     for (i, &r) in roots.iter().enumerate() {
         first_and_count.entry(r).or_insert((i, 0)).1 += 1;
     }

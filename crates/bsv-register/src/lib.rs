@@ -37,6 +37,7 @@ mod plausible;
 mod prealign;
 mod prepare;
 mod quality;
+mod raytrail;
 mod registrar;
 mod result;
 mod schedule;

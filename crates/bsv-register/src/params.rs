@@ -258,6 +258,11 @@ pub struct OutlierParams {
     /// See [`Self::detached_voxel_m`]. Default 0.25: a segment's front and back pieces (split by the
     /// lateral gaps) are each far larger; a spill of a few percent of the points is far smaller.
     pub detached_min_fraction: f64,
+    /// Ray-parallel point removal before the fit (`raytrail.rs`): a point whose PCA normal makes
+    /// an angle with the viewing axis Z whose cosine is below this (it lies on a sheet that contains
+    /// the cameras' rays: a flying-pixel trail beside a silhouette, or a grazing point) is dropped;
+    /// skipped when more than a tenth of the cloud would go (an all-round scan). 0 = off. Default 0.2.
+    pub ray_parallel_max_cos: f64,
 }
 
 impl Default for OutlierParams {
@@ -268,6 +273,7 @@ impl Default for OutlierParams {
             outlier_min_fraction: 0.1,
             detached_voxel_m: 0.015,
             detached_min_fraction: 0.25,
+            ray_parallel_max_cos: 0.2,
         }
     }
 }
@@ -364,7 +370,7 @@ impl Default for RegisterParams {
 
 /// Every key of the serde form of [`RegisterParams`] (the flat parameter names), in the order of
 /// the serialised form. A unit test keeps it equal to the serialised keys.
-pub const PARAMETER_NAMES: [&str; 36] = [
+pub const PARAMETER_NAMES: [&str; 37] = [
     "alpha",
     "cell_weight",
     "data_weight",
@@ -396,6 +402,7 @@ pub const PARAMETER_NAMES: [&str; 36] = [
     "outlier_min_fraction",
     "detached_voxel_m",
     "detached_min_fraction",
+    "ray_parallel_max_cos",
     "surface_correction",
     "articulate",
     "articulate_axial_scale",
@@ -543,6 +550,12 @@ impl RegisterParams {
             o.detached_min_fraction,
             (0.0..=1.0).contains(&o.detached_min_fraction),
             "must be in [0, 1] (0 = keep every piece)",
+        )?;
+        check(
+            "ray_parallel_max_cos",
+            o.ray_parallel_max_cos,
+            (0.0..1.0).contains(&o.ray_parallel_max_cos),
+            "must be in [0, 1) (0 = off)",
         )?;
         check(
             "bbox_max_outlier_distance_m",

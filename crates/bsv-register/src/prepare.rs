@@ -105,12 +105,26 @@ pub fn prepare<'a>(
     // far from the body (mixed pixels toward a wall): redone only when there are such points, so
     // a clean cloud is prepared exactly as without these removals.
     let (mut outliers_removed, mut detached_removed) = (0, 0);
+    // Ray-parallel points first: the whole trail, far part included, shows it is a sheet along the
+    // rays; after the sparse-point removal only its part near the surface is left, which the
+    // surface's own points would hide.
+    let keep = crate::raytrail::keep_not_ray_parallel(&cloud.points, params.outliers.ray_parallel_max_cos)
+        .map_err(NumericError::index)?;
+    let ray_parallel = keep.iter().filter(|&&k| !k).count();
+    if ray_parallel > 0 && cloud.points.len() - ray_parallel >= params.checks.min_points {
+        let mut c = cloud.into_owned();
+        c.retain_indices(|i| keep[i]);
+        cloud = Cow::Owned(c);
+        outliers_removed += ray_parallel;
+        // The box without the trails (they reach tens of centimetres behind the silhouettes).
+        cloud_box = prealign::check_cloud(&cloud, &params.checks, params.prealignment.bbox_quantile)?;
+    }
     let far = params.prealignment.bbox_max_outlier_distance_m;
     if let Some(cleaned) = clean_cloud(&cloud, &params.outliers, params.checks.min_points, far)? {
         if let Some(box_cloud) = &cleaned.for_box {
             cloud_box = prealign::check_cloud(box_cloud, &params.checks, params.prealignment.bbox_quantile)?;
         }
-        (outliers_removed, detached_removed) = (cleaned.sparse, cleaned.detached);
+        (outliers_removed, detached_removed) = (outliers_removed + cleaned.sparse, cleaned.detached);
         cloud = Cow::Owned(cleaned.cloud);
     }
     if params.checks.check_plausible {

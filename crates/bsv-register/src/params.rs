@@ -261,7 +261,7 @@ pub struct OutlierParams {
     /// Ray-parallel point removal before the fit (`raytrail.rs`): a point whose PCA normal makes
     /// an angle with the viewing axis Z whose cosine is below this (it lies on a sheet that contains
     /// the cameras' rays: a flying-pixel trail beside a silhouette, or a grazing point) is dropped;
-    /// skipped when more than a tenth of the cloud would go (an all-round scan). 0 = off. Default 0.2.
+    /// skipped when more than 7 % of the cloud would go (an all-round scan). 0 = off. Default 0.2.
     pub ray_parallel_max_cos: f64,
 }
 

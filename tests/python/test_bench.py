@@ -409,3 +409,30 @@ def test_reduced_synth_run_regression_guard(tmp_path: Path) -> None:
     table = read_csv(tmp_path / "results.csv")
     assert len(table) == 4 * 14
     assert {r["condition"] for r in table if r["floor_l"] is not None} == {"l5ca"}
+
+
+#: Bounds of the reduced camera-path run (2 subjects, noer, MediaPipe on the rig's room renders), set with
+#: margin over the values measured with the current engine (template segments): trunk_limbs 0.21 %, worst
+#: segment mean 4.1 % (upper_arm_l), joint centres 7-8 mm median. trunk_limbs and the joints are held to the
+#: landmarks issue's targets (0.8 %, 15 mm).
+BOUND_CAMERA_TRUNK_LIMBS_NOER = 0.8
+BOUND_CAMERA_SEGMENT_NOER = 8.0
+BOUND_CAMERA_JOINT_MEDIAN_MM = 15.0
+
+
+@pytest.mark.slow
+def test_reduced_camera_path_regression_guard(tmp_path: Path) -> None:
+    pytest.importorskip("mediapipe", reason="the camera path needs the front-end extra (MediaPipe)")
+    from bsv.bench.joints import summarise
+
+    code = bench_main(["synth", "--n", "2", "--conditions", "noer", "--segmentation", "camera",
+                       "--out", str(tmp_path), "--quiet"])
+    assert code == 0
+    doc = json.loads((tmp_path / "results.json").read_text())
+    assert len(doc["runs"]) == 2 and not doc["failures"]
+    s = doc["summary"]["bsv"]["noer"]
+    assert s["trunk_limbs"]["rve_mean"] < BOUND_CAMERA_TRUNK_LIMBS_NOER
+    segs = [k for k in PAPER if k != "trunk_limbs"]
+    assert max(s[k]["rve_mean"] for k in segs) < BOUND_CAMERA_SEGMENT_NOER
+    runs = [Run(**{k: v for k, v in r.items() if k in Run.__dataclass_fields__}) for r in doc["runs"]]
+    assert summarise(runs)["noer"]["all"]["median_mm"] < BOUND_CAMERA_JOINT_MEDIAN_MM

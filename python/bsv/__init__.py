@@ -275,7 +275,9 @@ def scan(
     """Virtual two-camera capture (DESIGN.md rig) of a labelled mesh: a merged, labelled cloud.
 
     ``condition``: "noer", "l515", "cali" or "l5ca". With ``images``, also writes per-camera depth and
-    colour PNGs and camera JSON into that folder, as a real capture would.
+    colour PNGs and camera JSON into that folder, as a real capture would, and its calibration.json with
+    each camera's ``extrinsics_covariance`` (:mod:`bsv.uncertainty`): zero in noer and l515 (exact
+    extrinsics), the paper's repeatability the rig draws its errors from in cali and l5ca.
 
     ``room``: ``True`` puts the rig in a clinic room (a floor, walls 0.6 m behind each camera, side
     walls, a ceiling; distances varied by ``seed``) and paints a varied subject (skin tone, underwear,
@@ -299,33 +301,7 @@ def scan(
             raise OutputExistsError(f"{img} is not empty; pass overwrite=True to write into it")
     rm: bool | dict[str, Any] = dict(room) if isinstance(room, Mapping) else bool(room)
     p, n, c, lab = _bsv.scan(m.vertices, m.faces, m.vertex_labels, m.face_labels, condition, int(seed), img, rm)
-    if img is not None:
-        _record_rig_covariance(Path(img) / "calibration.json", condition)
     return PointCloud(p, n, c, lab)
-
-
-def _record_rig_covariance(path: Path, condition: str) -> None:
-    """Writes the virtual rig's own calibration spread into its calibration.json (``extrinsics_covariance``
-    per camera, :mod:`bsv.uncertainty`): exact extrinsics in noer and l515, the paper's repeatability (the
-    model the rig draws its errors from) in cali and l5ca. Without it the intervals of a virtual capture
-    would assume the paper's spread even where the rig's calibration is exact."""
-    import json
-    import os
-
-    from .frontend.calibrate import covariance_json
-    from .uncertainty import paper_covariance
-
-    if not path.is_file():
-        return
-    doc = json.loads(path.read_text())
-    exact = condition in ("noer", "l515")
-    for cam, entry in (doc.get("cameras") or {}).items():
-        cov = np.zeros((6, 6)) if exact else paper_covariance(cam)
-        source = "virtual rig: exact extrinsics" if exact else "virtual rig: the paper's repeatability"
-        entry["extrinsics_covariance"] = covariance_json(cov, source)
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(json.dumps(doc, indent=1) + "\n")
-    os.replace(tmp, path)
 
 
 def surface_distances(points: Any, mesh: Any) -> npt.NDArray[np.float64]:

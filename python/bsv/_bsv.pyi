@@ -27,6 +27,13 @@ TRUNK_LIMBS: tuple[int, ...]
 EXTREMITIES: tuple[int, ...]
 #: Aggregate name -> member segment ids (empty for "whole": every segment present).
 AGGREGATES: dict[str, tuple[int, ...]]
+#: Names of the 6 extrinsic parameters of a covariance, from ``bsv_capture::scanner::COVARIANCE_PARAMETERS``.
+COVARIANCE_PARAMETERS: tuple[str, ...]
+#: Their parameterisation, from ``bsv_capture::scanner::COVARIANCE_FRAME``.
+COVARIANCE_FRAME: str
+#: Camera name -> the paper's calibration repeatability (6 standard deviations, metres and radians): the
+#: virtual rig's calibration sigmas (``bsv_capture::scanner::Rig::paper_default``).
+PAPER_CALIBRATION_STD: dict[str, tuple[float, ...]]
 
 class RegisterParams:
     # Registration parameters (``bsv_register::RegisterParams``); unknown names, wrong types and

@@ -40,14 +40,16 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping
-from dataclasses import fields
-from typing import Any
+from dataclasses import fields, replace
+from typing import Any, TypeVar
 
 import numpy as np
 
 from .errors import BsvWarning, InputError
 from .extras import require
 from .types import PALETTE, FloatArray, IndexArray, LabelArray, Mesh, PointCloud
+
+_Container = TypeVar("_Container", Mesh, PointCloud)
 
 #: The name of the label attribute in every library (and the PLY property).
 LABEL = "label"
@@ -71,6 +73,13 @@ def _library(obj: Any) -> str:
 
 def _is_open3d_tensor(obj: Any) -> bool:
     return _library(obj) == "open3d" and (hasattr(obj, "point") or hasattr(obj, "triangle"))
+
+
+def _keep_unless_given(obj: _Container, **given: Any) -> _Container:
+    """``obj`` with each field named in ``given`` replaced by its value unless that is None (explicit
+    arguments win over what the object carries); ``obj`` itself when nothing is given."""
+    new = {name: value for name, value in given.items() if value is not None}
+    return replace(obj, **new) if new else obj
 
 
 def _tensor_attr(tmap: Any, name: str) -> np.ndarray | None:
@@ -170,8 +179,6 @@ def as_mesh(
     if faces is not None:
         return Mesh(np.asarray(obj), np.asarray(faces), vertex_labels, face_labels, vertex_colors)
     if isinstance(obj, Mesh):
-        if vertex_labels is None and face_labels is None and vertex_colors is None:
-            return obj
         m = obj
     elif isinstance(obj, Mapping):
         d = _dict_fields(obj, Mesh, "mesh dict")
@@ -193,13 +200,7 @@ def as_mesh(
             f"cannot read a mesh from {type(obj).__name__}: pass (vertices, faces) arrays, a dict of them, a "
             "bsv.Mesh, a trimesh.Trimesh or an Open3D TriangleMesh (open3d.geometry or open3d.t.geometry)"
         )
-    return Mesh(
-        m.vertices,
-        m.faces,
-        m.vertex_labels if vertex_labels is None else vertex_labels,
-        m.face_labels if face_labels is None else face_labels,
-        m.vertex_colors if vertex_colors is None else vertex_colors,
-    )
+    return _keep_unless_given(m, vertex_labels=vertex_labels, face_labels=face_labels, vertex_colors=vertex_colors)
 
 
 def _trimesh_mesh(obj: Any) -> Mesh:
@@ -306,8 +307,6 @@ def as_cloud(obj: Any, labels: Any = None, normals: Any = None, colors: Any = No
     (or the vertices of a Trimesh) or an Open3D PointCloud (legacy or tensor), with the labels, normals
     and colours the object carries (module docstring); explicit arguments win."""
     if isinstance(obj, PointCloud):
-        if labels is None and normals is None and colors is None:
-            return obj
         c = obj
     elif isinstance(obj, Mapping):
         d = _dict_fields(obj, PointCloud, "cloud dict")
@@ -329,12 +328,7 @@ def as_cloud(obj: Any, labels: Any = None, normals: Any = None, colors: Any = No
         c = PointCloud(m.vertices, None, m.vertex_colors, m.vertex_labels)
     else:
         c = PointCloud(np.asarray(obj))
-    return PointCloud(
-        c.points,
-        c.normals if normals is None else normals,
-        c.colors if colors is None else colors,
-        c.labels if labels is None else labels,
-    )
+    return _keep_unless_given(c, normals=normals, colors=colors, labels=labels)
 
 
 def _trimesh_cloud(obj: Any) -> PointCloud:

@@ -37,6 +37,7 @@ from typing import Any
 
 import numpy as np
 
+from . import _bsv
 from .errors import UncertaintyError
 from .types import Mesh
 
@@ -44,18 +45,17 @@ from .types import Mesh
 LEVEL: float = 0.95
 Z95: float = 1.959963984540054
 
-#: Names of the 6 extrinsic parameters of a covariance (order of its rows and columns).
-PARAMETERS: tuple[str, ...] = ("tx_m", "ty_m", "tz_m", "rx_rad", "ry_rad", "rz_rad")
-#: The parameterisation, written next to every covariance in calibration.json.
-FRAME: str = ("delta in the camera frame (OpenCV: +X right, +Y down, +Z optical axis), composed on the right: "
-              "R' = R Rodrigues(r), t' = R t_delta + t (camera_to_world)")
+#: Names of the 6 extrinsic parameters of a covariance (order of its rows and columns): the Rust rig's.
+PARAMETERS: tuple[str, ...] = tuple(_bsv.COVARIANCE_PARAMETERS)
+#: The parameterisation, written next to every covariance in calibration.json: the Rust rig's
+#: ``"delta in the camera frame (OpenCV: +X right, +Y down, +Z optical axis), composed on the right:
+#: R' = R Rodrigues(r), t' = R t_delta + t (camera_to_world)"``.
+FRAME: str = _bsv.COVARIANCE_FRAME
 
 #: The paper's calibration repeatability (DESIGN.md "Cali"), one standard deviation per parameter of
-#: :data:`PARAMETERS` in our camera frame (paper x vertical -> our Y, paper y transversal -> our X).
-PAPER_STD: dict[str, tuple[float, ...]] = {
-    "front": (0.0003, 0.0011, 0.0006, math.radians(0.01), math.radians(0.03), math.radians(0.21)),
-    "back": (0.0002, 0.0015, 0.0034, math.radians(0.11), math.radians(0.28), math.radians(0.10)),
-}
+#: :data:`PARAMETERS` in our camera frame (paper x vertical -> our Y, paper y transversal -> our X):
+#: the virtual rig's calibration sigmas (``bsv_capture::scanner::Rig::paper_default``), its one source.
+PAPER_STD: dict[str, tuple[float, ...]] = {k: tuple(v) for k, v in _bsv.PAPER_CALIBRATION_STD.items()}
 
 #: The error model of real captures (an L515's depth noise).
 DEFAULT_DEPTH: str = "l515"

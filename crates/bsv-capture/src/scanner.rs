@@ -21,11 +21,11 @@ mod rig;
 mod room;
 
 pub use appearance::{Appearance, BodyHeights, Light, SurfacePixel, UnderwearStyle, SKIN_TONES};
-pub use capture::{write_capture, CaptureCamera, DEPTH_SCALE};
+pub use capture::{write_capture, CaptureCamera, ExtrinsicsCovariance, DEPTH_SCALE};
 pub use cast::SurfaceImage;
 pub use rig::{
-    Condition, DepthNoise, ExtrinsicError, ExtrinsicSigma, Rig, RigCamera, PAPER_CAMERA_DISTANCE, PAPER_CAMERA_HEIGHT,
-    PAPER_HEIGHT, PAPER_HFOV_DEG, PAPER_VFOV_DEG, PAPER_WIDTH,
+    Condition, DepthNoise, ExtrinsicError, ExtrinsicSigma, Rig, RigCamera, COVARIANCE_FRAME, COVARIANCE_PARAMETERS,
+    PAPER_CAMERA_DISTANCE, PAPER_CAMERA_HEIGHT, PAPER_HEIGHT, PAPER_HFOV_DEG, PAPER_VFOV_DEG, PAPER_WIDTH,
 };
 pub use room::{Room, RoomObject, SurfaceKind};
 
@@ -139,6 +139,9 @@ pub struct CameraView {
     pub estimated_extrinsics: Extrinsics,
     /// The applied calibration error (zero in noer/l515).
     pub error: ExtrinsicError,
+    /// The spread `error` was drawn from: the rig camera's calibration sigma in cali/l5ca, zero in
+    /// noer/l515 (exact extrinsics). `calibration.json` records it as the extrinsics covariance.
+    pub error_sigma: ExtrinsicSigma,
     /// Measured depth per pixel, metres, row-major; 0 = no return.
     pub depth: Vec<f32>,
     /// Segment label of the hit face per pixel (0 = none, or the room).
@@ -312,9 +315,10 @@ fn scan_camera(
     } else {
         rays.depth
     };
+    let error_sigma = if condition.has_calibration_error() { cam.calibration_sigma } else { ExtrinsicSigma::default() };
     let error = if condition.has_calibration_error() {
         let mut rng = rand::rngs::StdRng::seed_from_u64(mix_seed(seed, STREAM_CALIBRATION, ci as u64));
-        cam.calibration_sigma.draw(&mut rng)
+        error_sigma.draw(&mut rng)
     } else {
         ExtrinsicError::default()
     };
@@ -333,6 +337,7 @@ fn scan_camera(
         true_extrinsics: cam.camera_to_world,
         estimated_extrinsics: estimated,
         error,
+        error_sigma,
         depth: depth.iter().map(|&z| z as f32).collect(),
         labels: view_labels,
         shade: rays.shade,

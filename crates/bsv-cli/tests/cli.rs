@@ -119,3 +119,36 @@ fn scan_in_a_room_writes_the_room_into_the_images_not_the_cloud() {
     assert!(!o.status.success());
     assert!(text(&o).contains("--room"), "{}", text(&o));
 }
+
+#[test]
+fn scan_images_record_the_rigs_calibration_covariance() {
+    use bsv_capture::scanner::{Rig, COVARIANCE_FRAME, COVARIANCE_PARAMETERS};
+    let d = tmpdir("covariance");
+    let o = bsv(&["template", "-o", "t.ply"], &d);
+    assert!(o.status.success(), "{}", text(&o));
+    let rig = Rig::paper_default();
+    for (condition, exact) in [("l5ca", false), ("noer", true)] {
+        let cloud = format!("{condition}.ply");
+        let o = bsv(&["scan", "t.ply", "--condition", condition, "-o", &cloud, "--images", condition], &d);
+        assert!(o.status.success(), "{}", text(&o));
+        let cal: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(d.join(condition).join("calibration.json")).unwrap()).unwrap();
+        for cam in &rig.cameras {
+            let cov = &cal["cameras"][cam.name.as_str()]["extrinsics_covariance"];
+            assert_eq!(cov["parameters"], serde_json::json!(COVARIANCE_PARAMETERS), "{condition} {}", cam.name);
+            assert_eq!(cov["frame"], COVARIANCE_FRAME);
+            let source = if exact { "virtual rig: exact extrinsics" } else { "virtual rig: the paper's repeatability" };
+            assert_eq!(cov["source"], source);
+            // Diagonal: the variances of the sigmas the rig draws its calibration errors from (none in
+            // noer). serde_json's default float parsing may be 1 ulp off, hence the tolerance.
+            let std = cam.calibration_sigma.std();
+            for (i, row) in cov["matrix"].as_array().unwrap().iter().enumerate() {
+                for (j, v) in row.as_array().unwrap().iter().enumerate() {
+                    let (got, want) = (v.as_f64().unwrap(), if i == j && !exact { std[i] * std[i] } else { 0.0 });
+                    assert!((got - want).abs() <= 1e-15 * want, "{condition} {} [{i}][{j}]: {got} vs {want}", cam.name);
+                    assert!(exact || i != j || got > 0.0);
+                }
+            }
+        }
+    }
+}

@@ -247,8 +247,25 @@ fn vertex_normals<'py>(
     Ok(crate::convert::points_to(py, &bsv_core::geometry::vertex_normals(&mesh)))
 }
 
-/// Registers the functions on the module.
+/// Adds the virtual rig's calibration model as module constants (`bsv.uncertainty` builds its copies
+/// from these): `COVARIANCE_PARAMETERS` (names of the 6 extrinsic parameters), `COVARIANCE_FRAME`
+/// (their parameterisation) and `PAPER_CALIBRATION_STD` (camera name -> the paper's 6 standard
+/// deviations, the rig's calibration sigmas).
+fn register_calibration(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("COVARIANCE_PARAMETERS", PyTuple::new(py, scanner::COVARIANCE_PARAMETERS)?)?;
+    m.add("COVARIANCE_FRAME", scanner::COVARIANCE_FRAME)?;
+    let std = PyDict::new(py);
+    for cam in Rig::paper_default().cameras {
+        std.set_item(cam.name, PyTuple::new(py, cam.calibration_sigma.std())?)?;
+    }
+    m.add("PAPER_CALIBRATION_STD", std)?;
+    Ok(())
+}
+
+/// Registers the functions and the calibration constants on the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    register_calibration(m)?;
     m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(read_point_cloud, m)?)?;
     m.add_function(wrap_pyfunction!(write_mesh, m)?)?;

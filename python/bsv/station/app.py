@@ -68,6 +68,21 @@ class StationConfig:
         return not security.is_loopback(self.host)
 
 
+@dataclass
+class RigJobForm:
+    """The form of a rig job, a capture or a preview (one FastAPI dependency of both routes): the source
+    (:data:`bsv.station.rig.SOURCES`), the virtual rig's subject (``index``, ``seed``, ``swollen``
+    segment) and its seed, the segmentation ("camera" or "oracle") and a replay's recording folder."""
+
+    source: Annotated[str, Form()] = "virtual"
+    swollen: Annotated[str, Form()] = ""
+    index: Annotated[int, Form(ge=0, le=10_000)] = 0
+    seed: Annotated[int, Form(ge=0, le=2**31)] = 0
+    rig_seed: Annotated[int, Form(ge=0, le=2**31)] = 0
+    segmentation: Annotated[str, Form()] = "camera"
+    recording_dir: Annotated[str, Form()] = ""
+
+
 def _fmt(t: Any) -> str:
     return t.strftime("%Y-%m-%d %H:%M UTC") if t is not None else ""
 
@@ -130,6 +145,7 @@ def create_app(config: StationConfig) -> FastAPI:
     Who = Annotated[Principal, Depends(principal)]
     Op = Annotated[Principal, Depends(operator)]
     Csrf = Depends(csrf)
+    RigForm = Annotated[RigJobForm, Depends()]
 
     def page(request: Request, name: str, who: Principal | None, status: int = 200, **ctx: Any) -> HTMLResponse:
         ctx.update(who=who, csrf=security.csrf_token(request.session), login=config.require_login)
@@ -306,24 +322,24 @@ def create_app(config: StationConfig) -> FastAPI:
         runner.kick()
         return job
 
-    def rig_job(db: DbSession, who: Principal, subject_id: int, kind: str, source: str, swollen: str, index: int,
-                seed: int, rig_seed: int, segmentation: str, recording_dir: str) -> Response:
+    def rig_job(db: DbSession, who: Principal, subject_id: int, kind: str, form: RigJobForm) -> Response:
         subj: Subject = get_or_404(db, Subject, subject_id, "subject")
-        if source not in rig.SOURCES:
+        if form.source not in rig.SOURCES:
             raise HTTPException(400, f"source must be one of {', '.join(rig.SOURCES)}")
-        if swollen and swollen not in rig.SWELLINGS:
+        if form.swollen and form.swollen not in rig.SWELLINGS:
             raise HTTPException(400, f"swollen segment must be one of {', '.join(sorted(rig.SWELLINGS))}")
-        if segmentation not in ("camera", "oracle"):
+        if form.segmentation not in ("camera", "oracle"):
             raise HTTPException(400, "segmentation must be camera (MediaPipe) or oracle (virtual rig only)")
-        if segmentation == "oracle" and source != "virtual":
+        if form.segmentation == "oracle" and form.source != "virtual":
             raise HTTPException(400, "oracle segmentation exists only on the virtual rig")
-        if source == "replay" and not recording_dir:
+        if form.source == "replay" and not form.recording_dir:
             raise HTTPException(400, "a replay needs the folder of the recording (front/ and back/ recording.db3)")
-        params: dict[str, Any] = {"source": source, "segmentation": segmentation}
-        if source == "virtual":
-            params.update(index=index, seed=seed, rig_seed=rig_seed, swollen=swollen or None, condition="l515")
-        if source == "replay":
-            params["recording_dir"] = recording_dir
+        params: dict[str, Any] = {"source": form.source, "segmentation": form.segmentation}
+        if form.source == "virtual":
+            params.update(index=form.index, seed=form.seed, rig_seed=form.rig_seed, swollen=form.swollen or None,
+                          condition="l515")
+        if form.source == "replay":
+            params["recording_dir"] = form.recording_dir
         with submit_lock:
             busy = db.scalars(select(Job).where(Job.kind.in_(jobq.RIG_KINDS), Job.state.in_(jobq.CAPTURE_BUSY))).first()
             if busy is not None:
@@ -332,24 +348,12 @@ def create_app(config: StationConfig) -> FastAPI:
         return RedirectResponse(f"/jobs/{job.id}", status_code=303)
 
     @app.post("/subjects/{subject_id}/captures", dependencies=[Csrf])
-    def start_capture(db: Db, who: Op, subject_id: int, source: Annotated[str, Form()] = "virtual",
-                      swollen: Annotated[str, Form()] = "", index: Annotated[int, Form(ge=0, le=10_000)] = 0,
-                      seed: Annotated[int, Form(ge=0, le=2**31)] = 0,
-                      rig_seed: Annotated[int, Form(ge=0, le=2**31)] = 0,
-                      segmentation: Annotated[str, Form()] = "camera",
-                      recording_dir: Annotated[str, Form()] = "") -> Response:
-        return rig_job(db, who, subject_id, "capture", source, swollen, index, seed, rig_seed, segmentation,
-                       recording_dir)
+    def start_capture(db: Db, who: Op, subject_id: int, form: RigForm) -> Response:
+        return rig_job(db, who, subject_id, "capture", form)
 
     @app.post("/subjects/{subject_id}/previews", dependencies=[Csrf])
-    def start_preview(db: Db, who: Op, subject_id: int, source: Annotated[str, Form()] = "virtual",
-                      swollen: Annotated[str, Form()] = "", index: Annotated[int, Form(ge=0, le=10_000)] = 0,
-                      seed: Annotated[int, Form(ge=0, le=2**31)] = 0,
-                      rig_seed: Annotated[int, Form(ge=0, le=2**31)] = 0,
-                      segmentation: Annotated[str, Form()] = "camera",
-                      recording_dir: Annotated[str, Form()] = "") -> Response:
-        return rig_job(db, who, subject_id, "preview", source, swollen, index, seed, rig_seed, segmentation,
-                       recording_dir)
+    def start_preview(db: Db, who: Op, subject_id: int, form: RigForm) -> Response:
+        return rig_job(db, who, subject_id, "preview", form)
 
     @app.get("/jobs/{job_id}/preview/{camera}/{name}")
     def preview_file(db: Db, who: Who, job_id: int, camera: str, name: str) -> Response:

@@ -8,11 +8,15 @@
 //! - `<camera>/labels.png`: 8-bit grey, the segment id of each pixel (0 = background/unlabelled);
 //! - `<camera>/camera.json`: [`CaptureCamera`] (intrinsics, the estimated extrinsics a calibration
 //!   would give, the true ones, the applied error, the depth scale, file names);
-//! - `calibration.json`: `{"cameras": {"front": {"intrinsics", "camera_to_world"}, "back": ...}}`
-//!   with the estimated extrinsics;
+//! - `calibration.json`: `{"cameras": {"front": {"intrinsics", "camera_to_world",
+//!   "extrinsics_covariance"}, "back": ...}}` with the estimated extrinsics and their covariance
+//!   ([`ExtrinsicsCovariance`]: the spread the rig drew the calibration error from, zero in noer/l515);
 //! - `scan.json`: condition and seed.
 
-use super::{CameraView, ExtrinsicError, Scan, ScanError, SurfaceKind, SurfacePixel};
+use super::{
+    CameraView, ExtrinsicError, ExtrinsicSigma, Scan, ScanError, SurfaceKind, SurfacePixel, COVARIANCE_FRAME,
+    COVARIANCE_PARAMETERS,
+};
 use crate::camera::{CameraCalibration, Extrinsics, Intrinsics};
 use image::{ImageBuffer, Luma, Rgb};
 use serde::{Deserialize, Serialize};
@@ -50,9 +54,45 @@ pub struct CaptureCamera {
     pub labels: String,
 }
 
+/// The `extrinsics_covariance` entry of a camera in `calibration.json`: the 6 x 6 covariance of its
+/// extrinsics (the format `bsv.frontend.calibrate` writes and `bsv.uncertainty` reads).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ExtrinsicsCovariance {
+    /// Names of the rows and columns ([`COVARIANCE_PARAMETERS`]).
+    pub parameters: Vec<String>,
+    /// The parameterisation ([`COVARIANCE_FRAME`]).
+    pub frame: String,
+    /// The 6 x 6 covariance.
+    pub matrix: [[f64; 6]; 6],
+    /// Where it comes from.
+    pub source: String,
+}
+
+impl ExtrinsicsCovariance {
+    /// The covariance of an error drawn with `sigma`; `exact`: the extrinsics are exact (no error
+    /// drawn), else drawn from the paper's repeatability (the rig's calibration sigmas).
+    pub fn of_virtual_rig(sigma: &ExtrinsicSigma, exact: bool) -> Self {
+        let source = if exact { "virtual rig: exact extrinsics" } else { "virtual rig: the paper's repeatability" };
+        ExtrinsicsCovariance {
+            parameters: COVARIANCE_PARAMETERS.iter().map(|p| p.to_string()).collect(),
+            frame: COVARIANCE_FRAME.to_string(),
+            matrix: sigma.covariance(),
+            source: source.to_string(),
+        }
+    }
+}
+
+/// One camera of `calibration.json`.
+#[derive(Serialize)]
+struct CalibrationEntry {
+    #[serde(flatten)]
+    calibration: CameraCalibration,
+    extrinsics_covariance: ExtrinsicsCovariance,
+}
+
 #[derive(Serialize)]
 struct CalibrationFile {
-    cameras: BTreeMap<String, CameraCalibration>,
+    cameras: BTreeMap<String, CalibrationEntry>,
 }
 
 #[derive(Serialize)]
@@ -67,10 +107,15 @@ fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ScanError + '_ {
     move |source| ScanError::Io { path: path.to_path_buf(), source }
 }
 
+/// Writes `value` as pretty JSON to `path` atomically: a hidden temporary file beside it, renamed
+/// over it once complete.
 fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), ScanError> {
     let text = serde_json::to_string_pretty(value)
         .map_err(|e| ScanError::Io { path: path.to_path_buf(), source: std::io::Error::other(e) })?;
-    std::fs::write(path, text + "\n").map_err(io_err(path))
+    let name = path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{name}.tmp"));
+    std::fs::write(&tmp, text + "\n").map_err(io_err(&tmp))?;
+    std::fs::rename(&tmp, path).map_err(io_err(path))
 }
 
 fn image_err(path: &Path) -> impl FnOnce(image::ImageError) -> ScanError + '_ {
@@ -157,7 +202,16 @@ pub fn write_capture(scan: &Scan, dir: &Path) -> Result<(), ScanError> {
         write_json(&cdir.join("camera.json"), &cam)?;
         calibration.insert(
             view.name.clone(),
-            CameraCalibration { intrinsics: view.intrinsics, camera_to_world: view.estimated_extrinsics },
+            CalibrationEntry {
+                calibration: CameraCalibration {
+                    intrinsics: view.intrinsics,
+                    camera_to_world: view.estimated_extrinsics,
+                },
+                extrinsics_covariance: ExtrinsicsCovariance::of_virtual_rig(
+                    &view.error_sigma,
+                    !scan.condition.has_calibration_error(),
+                ),
+            },
         );
     }
     write_json(&dir.join("calibration.json"), &CalibrationFile { cameras: calibration })?;

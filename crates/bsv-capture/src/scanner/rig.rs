@@ -88,6 +88,15 @@ impl ExtrinsicError {
     }
 }
 
+/// Names of the 6 parameters of an extrinsics covariance, the order of its rows and columns: the
+/// translation (metres) and the rotation vector (radians) of an [`ExtrinsicError`], camera frame.
+pub const COVARIANCE_PARAMETERS: [&str; 6] = ["tx_m", "ty_m", "tz_m", "rx_rad", "ry_rad", "rz_rad"];
+
+/// The parameterisation of an extrinsics covariance (that of [`ExtrinsicError::apply`]), written
+/// next to every covariance in `calibration.json`.
+pub const COVARIANCE_FRAME: &str = "delta in the camera frame (OpenCV: +X right, +Y down, +Z optical axis), \
+composed on the right: R' = R Rodrigues(r), t' = R t_delta + t (camera_to_world)";
+
 /// Standard deviations of a zero-mean normal extrinsic error, in the camera (image) frame.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct ExtrinsicSigma {
@@ -101,9 +110,36 @@ impl ExtrinsicSigma {
     /// From the paper's table: centimetres and degrees in the portrait camera's physical axes
     /// (x vertical, y transversal, z longitudinal), mapped to the image frame (module docs).
     pub fn from_paper(translation_cm: [f64; 3], rotation_deg: [f64; 3]) -> Self {
-        let t = translation_cm.map(|c| c * 0.01);
+        Self::from_paper_axes(translation_cm.map(|c| c * 0.01), rotation_deg)
+    }
+
+    /// As [`ExtrinsicSigma::from_paper`] with the translations in millimetres: the metres are then the
+    /// table's decimals exactly (3.4 mm gives 0.0034 m; 0.34 cm gives 0.0034000000000000002 m).
+    pub fn from_paper_mm(translation_mm: [f64; 3], rotation_deg: [f64; 3]) -> Self {
+        Self::from_paper_axes(translation_mm.map(|c| c / 1000.0), rotation_deg)
+    }
+
+    /// Metres and degrees in the paper's axes (x vertical, y transversal) to the image frame.
+    fn from_paper_axes(t: [f64; 3], rotation_deg: [f64; 3]) -> Self {
         let r = rotation_deg.map(f64::to_radians);
         ExtrinsicSigma { translation_m: [t[1], t[0], t[2]], rotation_rad: [r[1], r[0], r[2]] }
+    }
+
+    /// The six standard deviations in [`COVARIANCE_PARAMETERS`] order.
+    pub fn std(&self) -> [f64; 6] {
+        let (t, r) = (self.translation_m, self.rotation_rad);
+        [t[0], t[1], t[2], r[0], r[1], r[2]]
+    }
+
+    /// The covariance of the drawn error: diagonal 6 x 6, the variances in [`COVARIANCE_PARAMETERS`]
+    /// order (every component is drawn independently).
+    pub fn covariance(&self) -> [[f64; 6]; 6] {
+        let std = self.std();
+        let mut cov = [[0.0; 6]; 6];
+        for (i, s) in std.iter().enumerate() {
+            cov[i][i] = s * s;
+        }
+        cov
     }
 
     /// Draws one error, each component independent normal with its std.
@@ -248,8 +284,9 @@ impl Rig {
         };
         Rig {
             cameras: vec![
-                cam("front", d, ExtrinsicSigma::from_paper([0.11, 0.03, 0.06], [0.03, 0.01, 0.21])),
-                cam("back", -d, ExtrinsicSigma::from_paper([0.15, 0.02, 0.34], [0.28, 0.11, 0.10])),
+                // DESIGN.md "Cali" (cm there), in mm so the metres are exact decimals.
+                cam("front", d, ExtrinsicSigma::from_paper_mm([1.1, 0.3, 0.6], [0.03, 0.01, 0.21])),
+                cam("back", -d, ExtrinsicSigma::from_paper_mm([1.5, 0.2, 3.4], [0.28, 0.11, 0.10])),
             ],
             noise: DepthNoise::default(),
             room: None,

@@ -56,8 +56,10 @@ def test_peer_prealignment_is_the_registration_similarity(body: bsv.Mesh) -> Non
     template = bsv.default_template()
     cloud = bsv.scan(body, "noer", seed=0)
     for mode in ("isotropic", "per_axis", "auto"):
+        # The port reproduces the pre-alignment of the cloud it is given: no cleaning step before it
+        # (extremities kept, no ray-parallel removal, which would change the box).
         fit = bsv.register(cloud, schedule="m2p:1", prealign=mode, prealign_yaw="off", articulate=False,
-                           drop_extremities=False)
+                           drop_extremities=False, ray_parallel_max_cos=0.0)
         sim = fit.volumes["registration"]["prealign"]
         rust = np.asarray(sim["cloud_center"]) + np.asarray(sim["scale"]) * (
             template.vertices - np.asarray(sim["template_center"]))

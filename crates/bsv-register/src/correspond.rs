@@ -162,6 +162,33 @@ pub fn pca_normal(c: &Matrix3<f64>) -> Option<[f64; 3]> {
     Some(normalize([v[0], v[1], v[2]]))
 }
 
+/// The PCA normal ([`pca_normal`]) of the `k` (at least 3) points of `tree` (over `points`) nearest
+/// to `q`, or `None` when they are degenerate.
+pub fn neighbourhood_normal(
+    tree: &ImmutableKdTree<f64, 3>,
+    points: &[[f64; 3]],
+    q: [f64; 3],
+    k: usize,
+) -> Option<[f64; 3]> {
+    let k = NonZeroUsize::new(k.max(3)).unwrap_or(NonZeroUsize::MIN);
+    let nb = tree.query(&q).nearest_n::<SquaredEuclidean<f64>>(k).execute();
+    let mut mean = [0.0; 3];
+    for r in &nb {
+        let p = points[r.item as usize];
+        for a in 0..3 {
+            mean[a] += p[a];
+        }
+    }
+    let m = nb.len().max(1) as f64;
+    mean = mean.map(|v| v / m);
+    let mut c = Matrix3::zeros();
+    for r in &nb {
+        let v = Vector3::from(sub(points[r.item as usize], mean));
+        c += v * v.transpose();
+    }
+    pca_normal(&c)
+}
+
 impl CloudIndex {
     /// Builds the tree; `normals` are used when given (unit, oriented); otherwise, with `k_normals`
     /// > 2, normals are estimated on demand.
@@ -304,24 +331,7 @@ impl CloudIndex {
         }
         let cell = self.estimated.get(i)?;
         let n = *cell.get_or_init(|| {
-            let k = NonZeroUsize::new(self.k_normals.max(3)).unwrap_or(NonZeroUsize::MIN);
-            let nb = self.tree.query(&self.points[i]).nearest_n::<SquaredEuclidean<f64>>(k).execute();
-            let mut mean = [0.0; 3];
-            for r in &nb {
-                let p = self.points[r.item as usize];
-                for a in 0..3 {
-                    mean[a] += p[a];
-                }
-            }
-            let m = nb.len().max(1) as f64;
-            mean = mean.map(|v| v / m);
-            let mut c = Matrix3::zeros();
-            for r in &nb {
-                let d = sub(self.points[r.item as usize], mean);
-                let v = Vector3::from(d);
-                c += v * v.transpose();
-            }
-            pca_normal(&c).unwrap_or([0.0; 3])
+            neighbourhood_normal(&self.tree, &self.points, self.points[i], self.k_normals).unwrap_or([0.0; 3])
         });
         (n != [0.0; 3]).then_some(n)
     }

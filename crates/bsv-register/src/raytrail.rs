@@ -17,12 +17,8 @@
 //! body's sides), so the filter stands down when more than [`MAX_FRACTION`] of the points would go:
 //! it is meant for two-view captures. A floor patch (normal along Y) goes too.
 
-use crate::correspond::{build_tree, pca_normal};
-use bsv_core::geometry::sub;
-use kiddo::SquaredEuclidean;
-use nalgebra::{Matrix3, Vector3};
+use crate::correspond::{build_tree, neighbourhood_normal};
 use rayon::prelude::*;
-use std::num::NonZeroUsize;
 
 /// Neighbours of the PCA normal.
 pub const NEIGHBOURS: usize = 16;
@@ -38,25 +34,11 @@ pub fn keep_not_ray_parallel(points: &[[f64; 3]], max_cos: f64) -> Result<Vec<bo
         return Ok(vec![true; n]);
     }
     let tree = build_tree(points)?;
-    let k = NonZeroUsize::new(NEIGHBOURS).unwrap_or(NonZeroUsize::MIN);
     let keep: Vec<bool> = points
         .par_iter()
-        .map(|p| {
-            let nb = tree.query(p).nearest_n::<SquaredEuclidean<f64>>(k).execute();
-            let mut mean = [0.0; 3];
-            for r in &nb {
-                let q = points[r.item as usize];
-                (0..3).for_each(|a| mean[a] += q[a]);
-            }
-            let m = nb.len().max(1) as f64;
-            mean = mean.map(|v| v / m);
-            let mut c = Matrix3::zeros();
-            for r in &nb {
-                let v = Vector3::from(sub(points[r.item as usize], mean));
-                c += v * v.transpose();
-            }
+        .map(|&p| {
             // A degenerate patch (a line, a few repeated points) is kept: nothing to judge it by.
-            pca_normal(&c).is_none_or(|nrm| nrm[2].abs() >= max_cos)
+            neighbourhood_normal(&tree, points, p, NEIGHBOURS).is_none_or(|nrm| nrm[2].abs() >= max_cos)
         })
         .collect();
     let removed = keep.iter().filter(|&&k| !k).count();

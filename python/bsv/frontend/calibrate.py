@@ -79,15 +79,21 @@ MAX_EDGE_WIDTH_PX = 4.0
 # Detection and pose of one frame
 
 
-def _gray(image: ImageLike) -> np.ndarray:
-    cv2 = require("cv2")
-
+def _read_unchanged(image: ImageLike, what: str) -> np.ndarray:
+    """The array itself, or the file read as stored (bit depth and channels kept); CalibrationFileError
+    names an unreadable file (``what``: "image", "depth image")."""
     if isinstance(image, (str, Path)):
+        cv2 = require("cv2")
         img = cv2.imread(str(image), cv2.IMREAD_UNCHANGED)
         if img is None:
-            raise CalibrationFileError(f"cannot read image {image}: missing file or not an image")
-    else:
-        img = np.asarray(image)
+            raise CalibrationFileError(f"cannot read {what} {image}: missing file or not an image")
+        return img
+    return np.asarray(image)
+
+
+def _gray(image: ImageLike) -> np.ndarray:
+    cv2 = require("cv2")
+    img = _read_unchanged(image, "image")
     if img.dtype != np.uint8:
         raise CalibrationError(f"expected an 8-bit image, got dtype {img.dtype}")
     if img.ndim == 3 and img.shape[2] == 4:
@@ -554,14 +560,7 @@ def calibrate_camera(
 def load_depth(depth: DepthLike, scale: float = DEFAULT_DEPTH_SCALE, name: str = "depth") -> np.ndarray:
     """A depth image in metres (float64, 0 = no depth): a float array is taken as metres, a uint16 array or
     a 16-bit PNG as units of ``scale`` metres. Raises CalibrationFileError for an unreadable or 8-bit file."""
-    cv2 = require("cv2")
-
-    if isinstance(depth, (str, Path)):
-        img = cv2.imread(str(depth), cv2.IMREAD_UNCHANGED)
-        if img is None:
-            raise CalibrationFileError(f"cannot read depth image {depth}: missing file or not an image")
-    else:
-        img = np.asarray(depth)
+    img = _read_unchanged(depth, "depth image")
     if img.ndim != 2:
         raise CalibrationFileError(f"{name}: a depth image has one channel, got shape {img.shape}")
     if img.dtype == np.uint16:

@@ -23,7 +23,8 @@
 //! edges of the gaps; their normals are about 90 degrees from the edge points' normals, which is
 //! what the angle test removes.
 
-use bsv_core::geometry::{dot, normalize, sub};
+use crate::curvature;
+use bsv_core::geometry::{add, dot, normalize, scale, sub};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use rayon::prelude::*;
@@ -52,6 +53,24 @@ struct Acc {
     s: [f64; 3],
     ss: [f64; 6],
     np: [f64; 3],
+}
+
+/// Adds `d` to a sum `s` and its outer product to the upper-triangle moments `m`.
+#[inline]
+fn add_moments(s: &mut [f64; 3], m: &mut [f64; 6], d: [f64; 3]) {
+    for k in 0..3 {
+        s[k] += d[k];
+    }
+    let q = moments_of(d);
+    for k in 0..6 {
+        m[k] += q[k];
+    }
+}
+
+/// The outer product `d d^T` as an upper triangle (xx, xy, xz, yy, yz, zz).
+#[inline]
+fn moments_of(d: [f64; 3]) -> [f64; 6] {
+    [d[0] * d[0], d[0] * d[1], d[0] * d[2], d[1] * d[1], d[1] * d[2], d[2] * d[2]]
 }
 
 /// A residual per vertex: `Some` with a data term, `None` without.
@@ -352,12 +371,15 @@ impl CloudIndex {
     /// m2p targets of `vertices` (with their current unit normals), pruned.
     /// Returns the targets and the RMS (m) of all nearest distances before pruning.
     /// With `vertex_labels` (and [`Self::with_labels`] called), matching is per segment.
+    /// With `curvature` (the mesh's form per vertex) the normal part is curvature-corrected
+    /// ([`curvature::Shape::correction`]).
     pub fn m2p(
         &self,
         vertices: &[[f64; 3]],
         normals: &[[f64; 3]],
         pruning: &Pruning,
         vertex_labels: Option<&[u8]>,
+        curvature: Option<&[curvature::Shape]>,
     ) -> (Targets, f64) {
         let nn = self.nearest_labelled(vertices, vertex_labels);
         let rms = rms_of(nn.iter().map(|r| r.1));
@@ -382,7 +404,12 @@ impl CloudIndex {
                     Some(cn) if self.given_normals.is_some() => cn,
                     _ => normals[v],
                 };
-                Some(Residual { offset, normal_part: project(n, offset) })
+                let mut normal_part = project(n, offset);
+                if let Some(h) = curvature {
+                    let c = h[v].correction(&moments_of(offset));
+                    normal_part = add(normal_part, scale(normals[v], c));
+                }
+                Some(Residual { offset, normal_part })
             })
             .collect();
         (targets, rms)
@@ -397,13 +424,14 @@ impl CloudIndex {
         normals: &[[f64; 3]],
         pruning: &Pruning,
         vertex_labels: Option<&[u8]>,
+        curvature: Option<&[curvature::Shape]>,
     ) -> Result<(Targets, f64), String> {
         let nn = self.points_to_vertices(vertices, vertex_labels)?;
         let rms = rms_of(nn.iter().map(|r| r.1));
         let mut d2: Vec<f64> = nn.iter().map(|r| r.1).collect();
         let lim2 = pruning.limit2(&mut d2);
         let accs = self.accumulate(&nn, vertices, lim2);
-        Ok((self.patch_targets(&accs, normals, pruning), rms))
+        Ok((self.patch_targets(&accs, normals, pruning, curvature), rms))
     }
 
     /// Per vertex, the count, sum, scatter (and with given normals, the sum of the normal parts)
@@ -451,15 +479,7 @@ impl CloudIndex {
                             *np += p;
                         }
                     }
-                    for (s, x) in a.s.iter_mut().zip(d) {
-                        *s += x;
-                    }
-                    a.ss[0] += d[0] * d[0];
-                    a.ss[1] += d[0] * d[1];
-                    a.ss[2] += d[0] * d[2];
-                    a.ss[3] += d[1] * d[1];
-                    a.ss[4] += d[1] * d[2];
-                    a.ss[5] += d[2] * d[2];
+                    add_moments(&mut a.s, &mut a.ss, d);
                 }
                 a
             })
@@ -467,8 +487,15 @@ impl CloudIndex {
     }
 
     /// The target of every vertex from its accumulated points (`None` without points or when the
-    /// patch normal fails the angle test against the vertex normal).
-    fn patch_targets(&self, accs: &[Acc], normals: &[[f64; 3]], pruning: &Pruning) -> Targets {
+    /// patch normal fails the angle test against the vertex normal); with `curvature` (the mean
+    /// curvature per vertex) the normal part is curvature-corrected ([`curvature::correction`]).
+    fn patch_targets(
+        &self,
+        accs: &[Acc],
+        normals: &[[f64; 3]],
+        pruning: &Pruning,
+        curvature: Option<&[curvature::Shape]>,
+    ) -> Targets {
         let given = self.given_normals.as_deref();
         let use_normals = pruning.min_cos > -1.0;
         accs.par_iter()
@@ -479,6 +506,7 @@ impl CloudIndex {
                 }
                 let m = a.n as f64;
                 let mean = a.s.map(|x| x / m);
+                let moments = a.ss.map(|x| x / m);
                 let patch_normal = if a.n >= 3 && (use_normals || given.is_none()) {
                     let s = &a.ss;
                     let c = Matrix3::new(s[0], s[1], s[2], s[1], s[3], s[4], s[2], s[4], s[5])
@@ -492,11 +520,15 @@ impl CloudIndex {
                         return None;
                     }
                 }
-                let normal_part = if given.is_some() {
+                let mut normal_part = if given.is_some() {
                     a.np.map(|x| x / m)
                 } else {
                     project(patch_normal.unwrap_or(normals[v]), mean)
                 };
+                if let Some(h) = curvature {
+                    let c = h[v].correction(&moments);
+                    normal_part = add(normal_part, scale(normals[v], c));
+                }
                 Some(Residual { offset: mean, normal_part })
             })
             .collect()

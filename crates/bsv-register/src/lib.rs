@@ -26,6 +26,7 @@
 mod articulate;
 mod correspond;
 mod cotan;
+mod curvature;
 mod detached;
 mod error;
 mod keypoints;

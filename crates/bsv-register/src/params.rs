@@ -115,6 +115,12 @@ pub struct EnergyParams {
     /// template's joints, then the cloud alone finishes the fit (a joint held against the cloud's
     /// pull stretches the limb and thins its unseen sides). Default 5 (the first stage).
     pub keypoint_iterations: usize,
+    /// Lift the normal part of every data target by the height of the surface under its points'
+    /// spread (`curvature.rs`): the mean of the points whose nearest vertex is this one (p2m) lies
+    /// under the surface on a convex limb, by 0.26 mm for 16 vertices around a 40 mm forearm
+    /// (-1.3 % of its volume). The form comes from the fitted mesh's 1-ring. Default true (measured:
+    /// benchmarks/BENCH.md, "Round 2, session 4").
+    pub curvature_correction: bool,
 }
 
 impl Default for EnergyParams {
@@ -129,6 +135,7 @@ impl Default for EnergyParams {
             keypoint_robust_m: 0.03,
             keypoint_axial: true,
             keypoint_iterations: 5,
+            curvature_correction: true,
         }
     }
 }
@@ -370,7 +377,7 @@ impl Default for RegisterParams {
 
 /// Every key of the serde form of [`RegisterParams`] (the flat parameter names), in the order of
 /// the serialised form. A unit test keeps it equal to the serialised keys.
-pub const PARAMETER_NAMES: [&str; 37] = [
+pub const PARAMETER_NAMES: [&str; 38] = [
     "alpha",
     "cell_weight",
     "data_weight",
@@ -380,6 +387,7 @@ pub const PARAMETER_NAMES: [&str; 37] = [
     "keypoint_robust_m",
     "keypoint_axial",
     "keypoint_iterations",
+    "curvature_correction",
     "schedule",
     "prune_distance_factor",
     "prune_distance_floor_m",

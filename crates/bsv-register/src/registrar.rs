@@ -14,6 +14,7 @@ mod finish;
 
 use crate::correspond::{CloudIndex, Pruning, Targets};
 use crate::cotan::CotanWeights;
+use crate::curvature::shapes;
 use crate::error::{NumericError, RegisterError};
 use crate::local::{CellMaps, LocalModel};
 use crate::log::{Energy, IterationLog, Timings};
@@ -270,21 +271,24 @@ impl<'a> Registrar<'a> {
         let f = &mut self.fit;
         f.work.vertices.copy_from_slice(&f.cur);
         let normals = vertex_normals(&f.work);
+        let e = &self.params.energy;
+        let h = e.curvature_correction.then(|| self.pool.install(|| shapes(&self.model.weights, &f.cur, &normals)));
         let (index, pruning, labels, cur) = (&self.index, &self.pruning, self.match_labels, &f.cur);
         let (targets, rms_m2p, rms_p2m) = match kind {
             CorrespondenceKind::M2p => {
-                let (t, rms) = self.pool.install(|| index.m2p(cur, &normals, pruning, labels));
+                let (t, rms) = self.pool.install(|| index.m2p(cur, &normals, pruning, labels, h.as_deref()));
                 (t, rms, None)
             }
             CorrespondenceKind::P2m => {
-                let (t, rms) =
-                    self.pool.install(|| index.p2m(cur, &normals, pruning, labels)).map_err(NumericError::index)?;
+                let (t, rms) = self
+                    .pool
+                    .install(|| index.p2m(cur, &normals, pruning, labels, h.as_deref()))
+                    .map_err(NumericError::index)?;
                 let m2p = self.pool.install(|| index.nearest(cur));
                 let rms_m2p = (m2p.iter().map(|r| r.1).sum::<f64>() / cur.len() as f64).sqrt();
                 (t, rms_m2p, Some(rms))
             }
         };
-        let e = &self.params.energy;
         let tw = match kind {
             CorrespondenceKind::M2p => e.tangential_weight,
             CorrespondenceKind::P2m => e.tangential_weight_p2m,

@@ -209,7 +209,7 @@ def test_coverage_rows_count_truth_inside_and_false_asymmetries(tmp_path):
     assert r["asymmetry_coverage_pct"] == pytest.approx(100 / 3)  # truth 0 / 0.5 / 10 vs centres -1 / 9 / 1
     assert r["symmetric_pairs"] == 2 and r["symmetric_false_pct"] == 50.0
     assert r["trunk_limbs_halfwidth_pct"] == pytest.approx((math.exp(0.0196) - math.exp(-0.0196)) / 2 * 100, rel=1e-3)
-    assert "| noer | exact | 3 |" in "\n".join(coverage_markdown(rows, models))
+    assert "| noer | exact | exact | 3 |" in "\n".join(coverage_markdown(rows, models))
     png = coverage_figure(rows, tmp_path / "coverage.png")
     assert png.read_bytes()[:4] == b"\x89PNG"
 

@@ -115,6 +115,7 @@ def test_coverage_rows_score_the_paper_and_the_refined_covariance_side_by_side()
     assert refined["asymmetry_halfwidth_pts"] < paper["asymmetry_halfwidth_pts"]
     md = "\n".join(coverage_markdown(rows, {"l515": model}))
     assert "| l5ca | paper | l515 | 2 |" in md and "| l5ca | refined | l515 | 2 |" in md and "| noer | exact |" in md
+    assert "| 0.0 (0/2) |" in md  # the false 'distinguishable' count beside its rate
     (ref,) = refinement_rows(runs)
     assert ref["condition"] == "l5ca" and ref["runs"] == 2 and ref["failed"] == 0
     assert ref["floor_tl_before_pct"] == pytest.approx(100 / 60) and ref["floor_tl_after_pct"] == pytest.approx(0.1 / 0.6)

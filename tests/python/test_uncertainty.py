@@ -420,3 +420,28 @@ def test_noisemodel_command_warns_on_few_subjects_and_keeps_its_cross_validation
     assert {r["held_out"] for r in cv} == {"seed1 (seed 1)", "seed3 (seed 3)"}
     assert all(r["derived_from_subjects"] == 12 for r in cv)
     assert unc.ErrorModel.from_json(doc["depth_models"]["exact"]).entries["trunk_limbs"][1] > 0
+
+
+def test_a_gross_failure_is_listed_not_spread_over_every_interval():
+    """One fit that misses its upper arm by 36 % among 40 normal ones (2 % SD) would double the SD: the
+    whole fit (its other quantities too) is left out and listed; normal fits are never left out."""
+    from bsv.bench.noisemodel import GROSS_SIGMAS, derive, gross_failures
+
+    rng = np.random.default_rng(8)
+    errs = list(rng.normal(-0.01, 0.02, 40))
+
+    def runs(es):
+        return [Run(f"s{i}", "noer", "bsv", True, info={"uncertainty": {
+            "estimate": {"upper_arm_r": 2.0 * math.exp(e), "torso": 30.0 * math.exp(0.01 * i % 0.03)},
+            "truth": {"upper_arm_r": 2.0, "torso": 30.0}}}) for i, e in enumerate(es)]
+
+    clean = derive(runs(errs))["depth_models"]["exact"]
+    bad = derive(runs([*errs, math.log(0.64)]))["depth_models"]["exact"]
+    assert clean["gross_failures"] == [] and clean["fits"] == 40
+    (g,) = bad["gross_failures"]
+    assert g["subject"] == "s40" and g["quantity"] == "upper_arm_r" and g["robust_sds"] > GROSS_SIGMAS
+    assert bad["fits"] == 41 and bad["quantities"]["upper_arm_r"]["n"] == bad["quantities"]["torso"]["n"] == 40
+    assert bad["quantities"]["upper_arm_r"]["sd"] == pytest.approx(clean["quantities"]["upper_arm_r"]["sd"])
+    normal = [(f"s{i}", {"a": float(x), "b": float(y)}) for i, (x, y) in enumerate(rng.normal(0.0, 1.0, (20_000, 2)))]
+    assert gross_failures(normal) == {}
+    assert gross_failures([("s", {"a": 1.0}), ("t", {"a": 1.0}), ("u", {"a": 1.0})]) == {}  # no spread: no flag

@@ -23,9 +23,9 @@ with its calibration refined as a user would and registered again (:class:`bsv.b
 its rows have ``calibration`` "refined" (:data:`CALIBRATIONS`), and :func:`refinement_rows` gives the
 floor before and after.
 
-The error model must come from other subjects than the ones scored (see :mod:`bsv.bench.noisemodel`:
-the packaged models were derived from cohort seed 1, and seed 3 for the camera path; the benchmark's
-default seed is 0).
+The error model must come from other subjects than the ones scored (see :mod:`bsv.bench.noisemodel` and
+``benchmarks/derive_noise_model.sh``: cohort seeds 1 and 3, and 4-7 for the camera path; the benchmark's
+default seed is 0, and 2 is the other held-out seed).
 """
 
 from __future__ import annotations

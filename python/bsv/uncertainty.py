@@ -17,6 +17,8 @@ Two independent sources are combined:
    model per depth sensor and segmentation (:func:`model_for`): ``l515`` (the L515's depth noise and
    flying pixels: what every real capture gets, :data:`DEFAULT_DEPTH`) and ``exact`` (noise-free depth,
    for the benchmark's noer and cali), each also as ``<depth>_camera`` for the MediaPipe segmentation.
+   Gross registration failures (a segment missed by tens of percent, :data:`bsv.bench.noisemodel.GROSS_SIGMAS`)
+   are left out of the model and counted in it: the intervals hold for fits without one.
 
 Quantities are compared in a transformed space where errors are close to additive and normal: the
 natural log of volumes, masses and ratios, the asymmetry itself (percentage points). With ``est`` the
@@ -363,7 +365,8 @@ def intervals(mesh: Mesh, volumes: Mapping[str, Any], cameras: Sequence[CameraSp
     sources = sorted({c.source for c in cameras})
     method = (f"calibration Monte Carlo ({samples} draws, seed {seed}, covariance: {', '.join(sources) or 'none'}) "
               f"+ depth-noise/registration error model ({m.description or 'bsv/data/noise_model.json'}), "
-              "combined in quadrature, normal" + (f"; {note}" if note else ""))
+              "combined in quadrature, normal; the error model leaves out gross registration failures (a "
+              "segment missed by tens of percent), which the intervals do not cover" + (f"; {note}" if note else ""))
     tl = both.get("trunk_limbs")
     mass = {} if tl is None else {"mass_trunk_limbs_kg": (tl[0] * density / 1000.0, tl[1] * density / 1000.0)}
     return Intervals(LEVEL, method, {k: v for k, v in both.items() if k in vol_keys},

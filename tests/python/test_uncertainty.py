@@ -209,7 +209,7 @@ def test_coverage_rows_count_truth_inside_and_false_asymmetries(tmp_path):
     assert r["asymmetry_coverage_pct"] == pytest.approx(100 / 3)  # truth 0 / 0.5 / 10 vs centres -1 / 9 / 1
     assert r["symmetric_pairs"] == 2 and r["symmetric_false_pct"] == 50.0
     assert r["trunk_limbs_halfwidth_pct"] == pytest.approx((math.exp(0.0196) - math.exp(-0.0196)) / 2 * 100, rel=1e-3)
-    assert "| noer | exact | 3 |" in "\n".join(coverage_markdown(rows, models))
+    assert "| noer | exact | exact | 3 |" in "\n".join(coverage_markdown(rows, models))
     png = coverage_figure(rows, tmp_path / "coverage.png")
     assert png.read_bytes()[:4] == b"\x89PNG"
 
@@ -373,3 +373,75 @@ def test_conditioning_on_the_floor_removes_height_pitch_and_roll_only():
         assert np.all(after_sd[[1, 3, 5]] <= np.asarray(unc.FLOOR_STD) * 1.01)
         np.testing.assert_allclose(after_sd[[0, 2, 4]], before_sd[[0, 2, 4]], rtol=1e-9)
         unc.check_covariance(after, c.name)
+
+
+def _noer_runs(n: int, rng: np.random.Generator, shift: float = 0.0, sd: float = 0.01) -> list[Run]:
+    out = []
+    for i in range(n):
+        e = float(rng.normal(shift, sd))
+        out.append(Run(f"s{i}", "noer", "bsv", True, info={"uncertainty": {
+            "estimate": {"trunk_limbs": 60.0 * math.exp(e), "asymmetry_thigh_pct": float(rng.normal(0.0, 1.0))},
+            "truth": {"trunk_limbs": 60.0, "asymmetry_thigh_pct": 0.0}, "calibration_sd": {}}}))
+    return out
+
+
+def test_cross_validation_scores_each_group_with_the_model_of_the_others():
+    from bsv.bench.noisemodel import cross_validate
+
+    rng = np.random.default_rng(4)
+    groups = {"a": _noer_runs(30, rng), "b": _noer_runs(30, rng), "c": _noer_runs(30, rng, shift=0.05)}
+    rows = {r["held_out"]: r for r in cross_validate(groups)}
+    assert set(rows) == {"a", "b", "c"}
+    assert rows["a"]["derived_from_subjects"] == 60 and rows["a"]["runs"] == 30
+    # c's volumes are 5 % off: the model of a and b (~1 % SD, pulled a little by nothing of c) misses them,
+    # while a and b, scored with a model that includes c's offset in its spread, hold their truth
+    assert rows["c"]["segment_coverage_pct"] < 20.0
+    assert rows["a"]["segment_coverage_pct"] == 100.0 and rows["b"]["segment_coverage_pct"] == 100.0
+    assert rows["a"]["symmetric_pairs"] == 30
+    assert cross_validate({"a": groups["a"]}) == []  # nothing to derive from
+
+
+def test_noisemodel_command_warns_on_few_subjects_and_keeps_its_cross_validation(tmp_path, capsys):
+    from bsv.bench.noisemodel import MIN_SUBJECTS, main
+
+    rng = np.random.default_rng(5)
+    paths = []
+    for seed, n in ((1, 12), (3, 12)):
+        p = tmp_path / f"seed{seed}" / "results.json"
+        p.parent.mkdir()
+        p.write_text(json.dumps({"config": {"seed": seed, "n": n}, "runs": [r.to_json() for r in _noer_runs(n, rng)]}))
+        paths.append(str(p))
+    out = tmp_path / "nm.json"
+    assert main([*paths, "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert f"rests on 24 subjects (fewer than {MIN_SUBJECTS})" in text and "leave-one-group-out" in text
+    doc = json.loads(out.read_text())
+    cv = doc["derivation"]["cross_validation"]
+    assert {r["held_out"] for r in cv} == {"seed1 (seed 1)", "seed3 (seed 3)"}
+    assert all(r["derived_from_subjects"] == 12 for r in cv)
+    assert unc.ErrorModel.from_json(doc["depth_models"]["exact"]).entries["trunk_limbs"][1] > 0
+
+
+def test_a_gross_failure_is_listed_not_spread_over_every_interval():
+    """One fit that misses its upper arm by 36 % among 40 normal ones (2 % SD) would double the SD: the
+    whole fit (its other quantities too) is left out and listed; normal fits are never left out."""
+    from bsv.bench.noisemodel import GROSS_SIGMAS, derive, gross_failures
+
+    rng = np.random.default_rng(8)
+    errs = list(rng.normal(-0.01, 0.02, 40))
+
+    def runs(es):
+        return [Run(f"s{i}", "noer", "bsv", True, info={"uncertainty": {
+            "estimate": {"upper_arm_r": 2.0 * math.exp(e), "torso": 30.0 * math.exp(0.01 * i % 0.03)},
+            "truth": {"upper_arm_r": 2.0, "torso": 30.0}}}) for i, e in enumerate(es)]
+
+    clean = derive(runs(errs))["depth_models"]["exact"]
+    bad = derive(runs([*errs, math.log(0.64)]))["depth_models"]["exact"]
+    assert clean["gross_failures"] == [] and clean["fits"] == 40
+    (g,) = bad["gross_failures"]
+    assert g["subject"] == "s40" and g["quantity"] == "upper_arm_r" and g["robust_sds"] > GROSS_SIGMAS
+    assert bad["fits"] == 41 and bad["quantities"]["upper_arm_r"]["n"] == bad["quantities"]["torso"]["n"] == 40
+    assert bad["quantities"]["upper_arm_r"]["sd"] == pytest.approx(clean["quantities"]["upper_arm_r"]["sd"])
+    normal = [(f"s{i}", {"a": float(x), "b": float(y)}) for i, (x, y) in enumerate(rng.normal(0.0, 1.0, (20_000, 2)))]
+    assert gross_failures(normal) == {}
+    assert gross_failures([("s", {"a": 1.0}), ("t", {"a": 1.0}), ("u", {"a": 1.0})]) == {}  # no spread: no flag

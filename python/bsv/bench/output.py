@@ -10,6 +10,7 @@ from typing import Any
 
 from ..errors import OutputExistsError
 from .common import Run
+from .coverage import refinement_rows
 from .figures import rve_bars, trunk_limbs_histogram
 from .joints import summarise as joint_summary
 from .tables import (
@@ -80,7 +81,8 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
         "bsv_version": __version__, "benchmark": title, "config": dict(config),
         "created": time.strftime("%Y-%m-%d %H:%M:%S"), "machine": platform.platform(),
         "wall_seconds": wall_seconds, "subjects": list(infos), "runs": [r.to_json() for r in runs],
-        "summary": summary, "failures": failures, "coverage": coverage, "joints": joint_summary(runs),
+        "summary": summary, "failures": failures, "coverage": coverage, "refinement": refinement_rows(runs),
+        "joints": joint_summary(runs),
         "targets": [{"target": n, "met": ok, "measured": ev} for n, ok, ev in checks],
     })
     write_csv(d / "results.csv", table)

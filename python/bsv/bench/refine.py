@@ -30,6 +30,7 @@ import json
 import math
 import tempfile
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -67,6 +68,68 @@ def board_mesh(board: Board | None = None) -> Mesh:
     f = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6],
                   [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
     return Mesh(v, f, np.full(8, _BOARD_LABEL, np.uint8), np.full(12, _BOARD_LABEL, np.uint8))
+
+
+def scan_board(condition: str, seed: int, images: str | Path, board: Board | None = None, *,
+               room: bool = True) -> Path:
+    """The virtual rig's view of the calibration board alone (:func:`board_mesh`) in ``condition`` under
+    scan ``seed``, written to ``images`` (a capture folder): the rig draws each camera's calibration error
+    from the seed and the camera only, so this is the board view (colour pose = the capture's estimated
+    extrinsics, depth with the condition's noise) of every capture of that seed. ``room``: also the clinic
+    room, whose floor each camera then sees around the board (what :func:`refine_calibration` refines
+    with)."""
+    from .. import scan
+
+    scan(board_mesh(board), condition, seed, images=images, overwrite=True, room=room)
+    return Path(images)
+
+
+@dataclass(frozen=True)
+class RefinedCamera:
+    """One camera of a virtual capture after :func:`refine_calibration`: its true and refined extrinsics,
+    the refined 6 x 6 covariance and its source, and the refinements' figures."""
+
+    pose: CameraPose
+    covariance: np.ndarray
+    source: str
+    board_depth: dict[str, Any]
+    floor: dict[str, Any]
+
+
+def refine_calibration(board_capture: str | Path, board: Board | None = None) -> list[RefinedCamera]:
+    """What a user does with a capture's calibration, run on a virtual board capture (:func:`scan_board`
+    with ``room=True``): ``bsv calibrate --depth`` (:func:`bsv.frontend.calibrate.refine_pose_with_depth`:
+    the board face's depth refines the colour pose, the paper's covariance as the prior since one virtual
+    view gives no frames' spread), then ``bsv process --refine-floor``
+    (:func:`bsv.frontend.floorplane.refine_extrinsics`: the floor around the board, the board's pixels
+    as the person mask). BenchError when the capture lacks its label images; the refinements' own typed
+    errors (BoardDepthError, CalibrationError) otherwise."""
+    import cv2
+
+    from ..frontend.calibrate import refine_pose_with_depth
+    from ..frontend.capture import read_capture
+    from ..frontend.floorplane import refine_extrinsics
+    from ..uncertainty import paper_covariance
+
+    b = board or Board()
+    out = []
+    for c in read_camera_poses(board_capture):
+        d = Path(board_capture) / c.name
+        cap = read_capture(d)
+        labels = cv2.imread(str(d / "labels.png"), cv2.IMREAD_UNCHANGED)
+        if labels is None:
+            raise BenchError(f"{d}/labels.png missing: the refinement needs the scanner's label image")
+        r, t, cov, source, board_depth = refine_pose_with_depth(
+            c.name, c.est_rotation, c.est_translation, paper_covariance(c.name), "paper default",
+            [np.asarray(cap["depth_m"], dtype=np.float64)], cap["intrinsics"], b)
+        ext, floor = refine_extrinsics(c.name, {"rotation": r, "translation": t, "covariance": cov,
+                                                "covariance_source": source}, cap["depth_m"], cap["intrinsics"],
+                                       labels > 0)
+        pose = CameraPose(c.name, c.true_rotation, c.true_translation, np.asarray(ext["rotation"]),
+                          np.asarray(ext["translation"]))
+        out.append(RefinedCamera(pose, np.asarray(ext["covariance"]), str(ext["covariance_source"]), board_depth,
+                                 {k: float(v) for k, v in floor.items()}))
+    return out
 
 
 def refine_capture(capture: str | Path) -> tuple[list[CameraPose], list[CameraPose], dict[str, Any]]:
@@ -185,7 +248,7 @@ def run_board(n: int = 10, seed: int = 0, condition: str = "l5ca", progress: boo
         with tempfile.TemporaryDirectory(prefix="bsv-refine-") as tmp:
             cap, bcap = Path(tmp) / "subject", Path(tmp) / "board"
             scan(mesh, condition, scan_seed(seed, i), images=cap, overwrite=True, room=True)
-            scan(board_mesh(b), condition, scan_seed(seed, i), images=bcap, overwrite=True)
+            scan_board(condition, scan_seed(seed, i), bcap, b, room=False)
             poses, covs, info = refine_variants(cap, bcap, b)
         row: dict[str, Any] = {"subject": i, "truth": {k: truth[k] for k in keys if k in truth}, "cameras": info}
         for v in VARIANTS:

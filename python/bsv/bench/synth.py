@@ -68,6 +68,10 @@ class SynthConfig:
     studio: bool = False
     #: ``standard`` or ``hard`` (:data:`COHORTS`).
     cohort: str = "standard"
+    #: In cali and l5ca, also refine each capture's calibration as a user would (``--refine-calibration``,
+    #: :func:`refine_condition`) and register the cloud built with it: a second registration per
+    #: calibrated condition and subject.
+    refine_calibration: bool = False
 
     def room_arg(self) -> bool | dict[str, Any]:
         """The ``room`` argument of :func:`bsv.scan` for this configuration."""
@@ -113,7 +117,7 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
                       params: dict[str, Any] | None = None, truth_mesh: Mesh | None = None,
                       cloud_mode: str = "raw", room: bool | dict[str, Any] = False,
                       cloud_params: dict[str, Any] | None = None,
-                      truth_joints: dict[str, Any] | None = None) -> list[Run]:
+                      truth_joints: dict[str, Any] | None = None, refine_calibration: bool = False) -> list[Run]:
     """Scan ``mesh`` in one condition, compute the floor if calibrated, register with every method.
 
     ``cloud_mode``: ``raw`` registers the scanner's cloud; ``lab`` (forced by camera segmentation) rebuilds
@@ -122,6 +126,8 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
     it must be closed and labelled like the truth); the cloud's far-point percentages are measured against it.
     ``truth_joints``: the rig's joint centres; with camera segmentation each run's ``info`` records the
     joint-centre errors (:mod:`bsv.bench.joints`).
+    ``refine_calibration`` (cali and l5ca): the bsv run's ``info["refined"]`` also holds the same capture
+    with its calibration refined as a user would (:func:`refine_condition`), registered again.
     Never raises for a failed registration: the Run carries ``ok=False`` and the error text."""
     from .. import scan
     from .common import cloud_far_pct
@@ -135,11 +141,14 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
     joints: dict[str, Any] | None = None
     lab = cloud_mode == "lab" or segmentation == "camera"
     need_files = condition in CALIBRATED or lab
+    refined: Refined | None = None
     with tempfile.TemporaryDirectory(prefix="bsv-bench-") as tmp:
         raw = scan(mesh, condition, seed, images=tmp if need_files else None, overwrite=True, room=room)
         cams = read_camera_poses(tmp) if condition in CALIBRATED else None
         if cams is not None:
             floor = floor_volumes(mesh if truth_mesh is None else truth_mesh, cams)
+            if refine_calibration:
+                refined = refine_condition(tmp, condition, seed, cams, truth_surface)
         if lab:
             from .camera import build_views_cloud, capture_views
 
@@ -152,9 +161,13 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
             else:
                 views = capture_views(tmp, segmentation)
             raw = build_views_cloud(views, tmp, **(cloud_params or {}))[0]
+            if refined is not None and refined.ok:  # the same views, deprojected with the refined extrinsics
+                refined.raw = build_views_cloud(refined.views(views), tmp, **(cloud_params or {}))[0]
             # The mask's own cloud, before any cleaning: what floor, wall and edge removal had to remove.
             uncleaned = build_views_cloud(views, tmp, sor=False, remove_floor=False, isolate_person=False)[0]
             unfiltered = cloud_far_pct(keep_trunk_limbs(uncleaned), truth_surface)
+        elif refined is not None and refined.ok:
+            refined.raw = refined.reexpress(raw, tmp)
     kinds, params = split_request(params)  # --param bench_outliers=floor,wall,mixed (bench/outliers.py)
     if segmentation == "camera" and "labels" not in params:  # the camera path's labels, as bsv process
         from ..pipeline import CAMERA_LABEL_SOURCE
@@ -173,6 +186,8 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
                 from .coverage import record
 
                 run.info["uncertainty"] = record(fit.mesh, truth_surface, cams, segmentation=segmentation)
+                if refined is not None:
+                    run.info["refined"] = refined.register(kinds, seed, template, params, joints, segmentation)
         except Exception as exc:  # a failed registration is reported, the run goes on
             run.error = f"{type(exc).__name__}: {exc}"
             run.info = {"traceback": traceback.format_exc(limit=3)}
@@ -180,6 +195,115 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
             run.info["joint_errors_mm"] = joint_errs
         runs.append(run)
     return runs
+
+
+@dataclass
+class Refined:
+    """One calibrated capture with its calibration refined as a user would (:func:`refine_condition`):
+    the refined cameras (or the refinement's ``error``), the floor with the refined extrinsics, and the
+    capture's cloud rebuilt with them (``raw``, set by :func:`measure_condition`)."""
+
+    cameras: list[Any] = field(default_factory=list)
+    floor_l: dict[str, float] = field(default_factory=dict)
+    error: str = ""
+    seconds: float = 0.0
+    raw: PointCloud | None = None
+    #: The true surface the floor and the intervals' truth are measured on.
+    truth: Mesh | None = None
+
+    @property
+    def ok(self) -> bool:
+        """Whether the refinement succeeded."""
+        return not self.error
+
+    def views(self, views: list[dict[str, Any]]) -> list[dict[str, Any]]:
+        """The lab path's per-camera views (:func:`bsv.bench.camera.capture_views`) with the refined extrinsics."""
+        by = {c.pose.name: c.pose for c in self.cameras}
+        return [{**v, "camera_to_world": {"rotation": by[v["name"]].est_rotation.tolist(),
+                                          "translation": by[v["name"]].est_translation.tolist()}} for v in views]
+
+    def reexpress(self, cloud: PointCloud, capture: str) -> PointCloud:
+        """The scanner's merged cloud with each camera's points (``scan.json``'s ``camera_points``) moved
+        from its calibrated to its refined extrinsics: the cloud the scanner would have deprojected with them."""
+        import json
+        from pathlib import Path
+
+        import numpy as np
+
+        from .floor import read_camera_poses
+
+        try:
+            ranges = json.loads((Path(capture) / "scan.json").read_text())["camera_points"]
+        except (OSError, ValueError, KeyError) as exc:
+            raise BenchError(f"{capture}/scan.json: no per-camera point ranges ({exc}); rebuild bsv") from exc
+        calibrated = {c.name: c for c in read_camera_poses(capture)}
+        pts = np.array(cloud.points, dtype=np.float64, copy=True)
+        for c in self.cameras:
+            lo, hi = (int(x) for x in ranges[c.pose.name])
+            e = calibrated[c.pose.name]
+            local = (pts[lo:hi] - e.est_translation) @ e.est_rotation  # camera frame
+            pts[lo:hi] = local @ c.pose.est_rotation.T + c.pose.est_translation
+        return PointCloud(pts, None, cloud.colors, cloud.labels)
+
+    def register(self, kinds: Any, seed: int, template: Mesh, params: dict[str, Any],
+                 joints: dict[str, Any] | None, segmentation: str) -> dict[str, Any]:
+        """The bsv registration of the refined cloud and what the refined intervals need (JSON-ready):
+        ``estimated_l``, ``floor_l``, ``seconds``, per camera the refinements' figures and the remaining
+        error in the paper's and in the posterior's SDs, ``uncertainty`` (:func:`bsv.bench.coverage.record`
+        with the refined covariances); or ``error``."""
+        import numpy as np
+
+        from ..uncertainty import PAPER_STD, pose_delta
+        from .coverage import record
+
+        if not self.ok or self.raw is None:
+            return {"error": self.error or "no refined cloud"}
+        cams: dict[str, Any] = {}
+        for c in self.cameras:
+            p = c.pose
+            err = pose_delta(p.true_rotation, p.true_translation, p.est_rotation, p.est_translation)
+            cams[p.name] = {"board_depth": c.board_depth, "floor": c.floor, "source": c.source,
+                            "error_paper_sd": (err / np.asarray(PAPER_STD.get(p.name, PAPER_STD["back"]))).tolist(),
+                            "error_posterior_sd": (err / np.sqrt(np.maximum(np.diag(c.covariance), 1e-30))).tolist()}
+        cloud = inject(keep_trunk_limbs(self.raw), kinds, seed)
+        try:
+            fit = register_method("bsv", cloud, template, params, keypoints=joints)
+        except Exception as exc:  # reported with the run, never raised
+            return {"error": f"{type(exc).__name__}: {exc}", "cameras": cams, "floor_l": self.floor_l}
+        if self.truth is None:
+            raise BenchError("refined capture without its true surface")
+        unc = record(fit.mesh, self.truth, [c.pose for c in self.cameras], segmentation=segmentation,
+                     covariances=[c.covariance for c in self.cameras], source=self.cameras[0].source)
+        return {"estimated_l": fit.volumes_l, "floor_l": self.floor_l, "seconds": fit.seconds,
+                "refine_seconds": self.seconds, "cameras": cams, "uncertainty": unc}
+
+
+def refine_condition(capture: str, condition: str, seed: int, cams: list[Any], truth: Mesh) -> Refined:
+    """The calibration of a calibrated capture (``capture``, scan ``seed``) refined as a user would: the
+    virtual rig's board view in the same condition and seed, in the clinic room
+    (:func:`bsv.bench.refine.scan_board`), refined by the board's depth and then the floor
+    (:func:`bsv.bench.refine.refine_calibration`); the floor of ``truth`` with the refined extrinsics.
+    A refinement that fails (its typed error) is recorded in ``error``, never raised."""
+    import numpy as np
+
+    from .floor import floor_volumes, read_camera_poses
+    from .refine import refine_calibration, scan_board
+
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="bsv-board-") as bdir:
+        scan_board(condition, seed, bdir, room=True)
+        by = {c.name: c for c in read_camera_poses(bdir)}
+        for c in cams:  # the rig draws the calibration error from the seed and the camera only
+            b = by.get(c.name)
+            if b is None or not (np.allclose(b.est_rotation, c.est_rotation) and
+                                 np.allclose(b.est_translation, c.est_translation)):
+                raise BenchError(f"{capture}: the board view's camera {c.name!r} is not calibrated as the capture's")
+        try:
+            cameras = refine_calibration(bdir)
+        except Exception as exc:  # BoardDepthError, CalibrationError: recorded with the run
+            return Refined(error=f"{type(exc).__name__}: {exc}", seconds=time.perf_counter() - t0)
+    return Refined(cameras, floor_volumes(truth, [c.pose for c in cameras]), seconds=time.perf_counter() - t0,
+                   truth=truth)
 
 
 def subject_name(index: int) -> str:
@@ -217,7 +341,8 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] |
         try:
             runs += measure_condition(name, mesh, truth, cond, scan_seed(cfg.seed, index), template,
                                       cfg.methods, cfg.segmentation, cfg.params, cloud_mode=cfg.cloud,
-                                      room=cfg.room_arg(), cloud_params=cfg.cloud_params, truth_joints=truth_joints)
+                                      room=cfg.room_arg(), cloud_params=cfg.cloud_params, truth_joints=truth_joints,
+                                      refine_calibration=cfg.refine_calibration)
         except Exception as exc:  # a failed scan/floor is reported, the run goes on
             runs += [Run(name, cond, m, False, truth_l=truth, error=f"{type(exc).__name__}: {exc}")
                      for m in cfg.methods]

@@ -344,8 +344,8 @@ def coverage_md(runs: Sequence[Run]) -> tuple[list[dict[str, Any]], list[str]]:
     """Coverage rows of the 95 % intervals per condition and their report section (:mod:`bsv.bench.coverage`,
     with the packaged error model); empty when no run kept the intervals' ingredients."""
     from ..uncertainty import error_models
-    from .coverage import coverage_markdown, coverage_rows
+    from .coverage import coverage_markdown, coverage_rows, refinement_markdown, refinement_rows
 
     models = error_models()
     table = coverage_rows(runs, models)
-    return table, coverage_markdown(table, models)
+    return table, coverage_markdown(table, models) + refinement_markdown(refinement_rows(runs))

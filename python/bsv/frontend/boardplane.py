@@ -8,7 +8,8 @@ one face in its depth image (RealSense depth aligned to colour), so:
 1. the board face's square (:meth:`bsv.frontend.marker.Board.face_corners`, moved :data:`EDGE_INSET_M`
    inward, clear of the edge's flying pixels) is projected with the colour pose into the depth image;
 2. a plane is fitted to the camera-frame points of the valid depth pixels inside it by total least
-   squares, refitted on the points within max(3 robust sigmas, :data:`MIN_THRESHOLD_M`) of the last fit
+   squares (started from the points near the region's median depth, :data:`START_BAND_MAD`), refitted
+   on the points within max(3 robust sigmas, :data:`MIN_THRESHOLD_M`) of the last fit
    (the marker's print, flying pixels and a hand holding the board drop out); its covariance (two tilts
    and the offset) comes from the residuals;
 3. the pose is updated so that the plane lands on the face's world plane (the face is ``thickness / 2``
@@ -47,6 +48,12 @@ MIN_BOARD_POINTS: int = 200
 MIN_VALID_FRACTION: float = 0.5
 #: Least inlier distance of the robust fit (metres): the L515's depth noise at 2 m is ~1-2 mm.
 MIN_THRESHOLD_M: float = 0.003
+#: The robust fit starts from the points within this many robust sigmas (1.4826 MAD) of the region's median
+#: depth, and never a narrower band than :data:`START_BAND_MIN_M`: clear of far outliers (flying pixels,
+#: the wall through a gap), wide enough for a noisy or tilted board (a 45 deg tilt spreads the face's depth
+#: over +-8 cm, MAD ~4 cm).
+START_BAND_MAD: float = 5.0
+START_BAND_MIN_M: float = 0.02
 #: Largest disagreement accepted between the depth plane and the colour (PnP) plane: a larger one means a
 #: wrong depth scale, depth not aligned to colour, or another scene (PnP is good to a few mm / tenths of
 #: a degree).
@@ -140,7 +147,13 @@ def fit_board_plane(depth_m: np.ndarray, intrinsics: Intrinsics, region: np.ndar
             f"{name}: only {len(p)} valid depth pixels on the board ({n_region} pixels in its region, need {need}): "
             "the depth image does not show the board; record depth aligned to colour, with the board in view "
             "and within the depth camera's range")
-    keep = np.ones(len(p), dtype=bool)
+    # A total-least-squares start on every point is not robust: a few flying pixels far behind the board
+    # (an L515's at the face's edge, toward a wall 2-3 m further) tilt the first plane by tens of degrees
+    # and the trimming, scaled by that plane's residuals, never recovers. Start from the points near the
+    # median depth instead (the board fills the region; its own depth spread, noise or tilt, sets the band).
+    z = p[:, 2]
+    med = float(np.median(z))
+    keep = np.abs(z - med) <= max(START_BAND_MAD * 1.4826 * float(np.median(np.abs(z - med))), START_BAND_MIN_M)
     n, e = np.array([0.0, 0.0, -1.0]), 0.0
     for _ in range(iterations):
         if keep.sum() < MIN_BOARD_POINTS:

@@ -538,23 +538,34 @@ def calibrate_camera(
     spread_deg = float(np.sqrt(np.mean([rotation_angle_deg(r, r_cm) ** 2 for r in rs])))
     board_depth = None
     if depth is not None:
-        from .boardplane import median_depth, refine_with_board
-
-        dm = median_depth([load_depth(d, depth_scale, f"{side} depth frame {i}") for i, d in enumerate(depth)])
-        # The frames' spread holds only the image noise, not the systematic errors of a colour pose that
-        # the depth is there to correct (intrinsics, print size, corner bias): the update's prior adds the
-        # paper's repeatability to it, which the directions the board does not measure then keep.
-        from ..uncertainty import paper_covariance
-
-        prior = cov + paper_covariance(side) if cov_source == "frames" else cov
-        ref = refine_with_board(r_wc, t_wc, prior, dm, intrinsics, board, side)
-        r_wc, t_wc, cov = ref.rotation, ref.translation, ref.covariance
-        cov_source += BOARD_DEPTH_SOURCE
-        board_depth = {"frames": len(depth), **ref.report()}
+        r_wc, t_wc, cov, cov_source, board_depth = refine_pose_with_depth(
+            side, r_wc, t_wc, cov, cov_source, depth, intrinsics, board, depth_scale)
     return CameraCalibration(side, intrinsics, r_wc, t_wc, serial=serial, frames=len(rs),
                              reprojection_rms_px=float(np.sqrt(np.mean(np.square(errs)))),
                              spread_mm=spread_mm, spread_deg=spread_deg, covariance=cov, covariance_source=cov_source,
                              board_depth=board_depth)
+
+
+def refine_pose_with_depth(side: str, rotation: np.ndarray, translation: np.ndarray, covariance: np.ndarray,
+                           covariance_source: str, depth: Sequence[DepthLike], intrinsics: Intrinsics,
+                           board: Board = _DEFAULT_BOARD, depth_scale: float = DEFAULT_DEPTH_SCALE
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, str, dict[str, Any]]:
+    """``bsv calibrate --depth`` for one camera whose colour calibration is done: the per-pixel median of
+    the ``depth`` frames of the still board refines the camera-to-world pose and its covariance
+    (:func:`bsv.frontend.boardplane.refine_with_board`). The update's prior is ``covariance`` plus the
+    paper's when ``covariance_source`` is "frames" (the frames' spread holds only the image noise, not the
+    systematic errors of a colour pose that the depth is there to correct: intrinsics, print size, corner
+    bias), else ``covariance`` itself. Returns (rotation, translation, covariance, source suffixed
+    :data:`BOARD_DEPTH_SOURCE`, the ``board_depth`` report). BoardDepthError when the depth does not show
+    the board."""
+    from ..uncertainty import paper_covariance
+    from .boardplane import median_depth, refine_with_board
+
+    dm = median_depth([load_depth(d, depth_scale, f"{side} depth frame {i}") for i, d in enumerate(depth)])
+    prior = covariance + paper_covariance(side) if covariance_source == "frames" else covariance
+    ref = refine_with_board(rotation, translation, prior, dm, intrinsics, board, side)
+    return (ref.rotation, ref.translation, ref.covariance, covariance_source + BOARD_DEPTH_SOURCE,
+            {"frames": len(depth), **ref.report()})
 
 
 def load_depth(depth: DepthLike, scale: float = DEFAULT_DEPTH_SCALE, name: str = "depth") -> np.ndarray:

@@ -11,7 +11,8 @@
 //! - `calibration.json`: `{"cameras": {"front": {"intrinsics", "camera_to_world",
 //!   "extrinsics_covariance"}, "back": ...}}` with the estimated extrinsics and their covariance
 //!   ([`ExtrinsicsCovariance`]: the spread the rig drew the calibration error from, zero in noer/l515);
-//! - `scan.json`: condition and seed.
+//! - `scan.json`: condition, seed, cameras, the cloud's size and each camera's range of it
+//!   (`camera_points`: name -> [start, end)).
 
 use super::{
     CameraView, ExtrinsicError, ExtrinsicSigma, Scan, ScanError, SurfaceKind, SurfacePixel, COVARIANCE_FRAME,
@@ -101,6 +102,10 @@ struct ScanInfo<'a> {
     seed: u64,
     cameras: Vec<&'a str>,
     n_points: usize,
+    /// Per camera, the half-open range `[start, end)` of its points in the scan's merged cloud (the
+    /// cloud is the cameras' points in this order): lets a consumer re-express each camera's points
+    /// with other extrinsics (a refined calibration) without re-scanning.
+    camera_points: BTreeMap<&'a str, [usize; 2]>,
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ScanError + '_ {
@@ -220,6 +225,7 @@ pub fn write_capture(scan: &Scan, dir: &Path) -> Result<(), ScanError> {
         seed: scan.seed,
         cameras: scan.views.iter().map(|v| v.name.as_str()).collect(),
         n_points: scan.cloud.len(),
+        camera_points: scan.views.iter().map(|v| (v.name.as_str(), [v.cloud_range.start, v.cloud_range.end])).collect(),
     };
     write_json(&dir.join("scan.json"), &info)
 }

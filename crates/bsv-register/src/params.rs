@@ -18,7 +18,8 @@ pub enum PrealignMode {
     /// One scale per axis, the ratio of the bounding-box sides.
     PerAxis,
     /// Per-axis when the box proportions differ by more than [`PrealignParams::auto_aspect_threshold`],
-    /// isotropic otherwise.
+    /// isotropic otherwise; always isotropic for a labelled human template
+    /// ([`PrealignParams::for_template`]).
     Auto,
 }
 
@@ -200,6 +201,22 @@ pub struct PrealignParams {
     /// it stretched the box and the template with it (torso +160 % with 0.5 % of such points).
     /// Default 0.3: the virtual L515's flying pixels reach 0.27-0.28 m.
     pub bbox_max_outlier_distance_m: f64,
+}
+
+impl PrealignParams {
+    /// The settings for a template: [`PrealignMode::Auto`] becomes [`PrealignMode::Isotropic`] for a
+    /// labelled human template (`human`). A body's box proportions say little about its shape: the
+    /// arms' abduction sets its width, and a depth camera's flying pixels trail behind every
+    /// silhouette and stretch its depth (L515-like scans: by 50-70 %, enough for Auto to scale the
+    /// template 1.5-1.7 times in depth; wide-armed subjects then fold their upper arms, -10 to -21 %).
+    /// The articulated initialisation fits each limb instead. Explicit modes are kept.
+    pub fn for_template(&self, human: bool) -> PrealignParams {
+        let mut p = self.clone();
+        if human && p.prealign == PrealignMode::Auto {
+            p.prealign = PrealignMode::Isotropic;
+        }
+        p
+    }
 }
 
 impl Default for PrealignParams {

@@ -133,9 +133,9 @@ pub fn prepare<'a>(
     if params.labels == LabelSource::Template && template.vertex_labels.is_none() {
         return Err(InputError::TemplateWithoutLabels.into());
     }
-    let similarity =
-        prealign::prealign(&template.vertices, &template_box, &cloud.points, &cloud_box, &params.prealignment)
-            .map_err(NumericError::index)?;
+    let prealignment = params.prealignment.for_template(crate::plausible::is_human_template(template));
+    let similarity = prealign::prealign(&template.vertices, &template_box, &cloud.points, &cloud_box, &prealignment)
+        .map_err(NumericError::index)?;
     let rest: Vec<[f64; 3]> = template.vertices.iter().map(|&p| similarity.apply(p)).collect();
     let (rest, articulation) = articulate_limbs(rest, template, &cloud, &params.articulation);
     Ok(Prepared {

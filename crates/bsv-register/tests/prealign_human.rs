@@ -29,8 +29,7 @@ fn person_with_trails() -> PointCloud {
 }
 
 fn fit_mode(template: &bsv_core::TriMesh, cloud: &PointCloud) -> (PrealignMode, [f64; 3]) {
-    let mut params = RegisterParams::default();
-    params.schedule = bsv_register::Schedule::parse("m2p:1").unwrap();
+    let mut params = RegisterParams { schedule: bsv_register::Schedule::parse("m2p:1").unwrap(), ..Default::default() };
     params.outliers.ray_parallel_max_cos = 0.0; // keep the trails: the box sees them
     params.outliers.outlier_voxel_m = 0.0;
     params.outliers.detached_voxel_m = 0.0;

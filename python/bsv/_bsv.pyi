@@ -34,6 +34,9 @@ COVARIANCE_FRAME: str
 #: Camera name -> the paper's calibration repeatability (6 standard deviations, metres and radians): the
 #: virtual rig's calibration sigmas (``bsv_capture::scanner::Rig::paper_default``).
 PAPER_CALIBRATION_STD: dict[str, tuple[float, ...]]
+#: The limits beyond which a fitted segment is doubtful (``bsv_register::DOUBT_*``): ``rms_mm`` (above),
+#: ``exposed_uncovered`` (above), ``coverage`` (below), ``folded`` (above).
+QUALITY_LIMITS: dict[str, float]
 
 class RegisterParams:
     # Registration parameters (``bsv_register::RegisterParams``); unknown names, wrong types and

@@ -228,13 +228,20 @@ def quality_html(registration: dict[str, Any]) -> str:
     quality: dict[str, dict[str, Any]] = registration.get("quality") or {}
     if not quality:
         return ""
+    from . import _bsv
+
+    lim = _bsv.QUALITY_LIMITS
     rows = [[_swatch(name), _fmt(q.get("rms_mm"), 1), _fmt(100 * q.get("coverage", math.nan), 0),
              _fmt(100 * q.get("gap_fraction", math.nan), 0), _fmt(100 * q.get("exposed_uncovered", math.nan), 0),
+             _fmt(100 * q.get("folded", math.nan), 0),
              '<span class="warn">doubtful</span>' if q.get("doubtful") else "ok"] for name, q in quality.items()]
     return ("<h2>Fit quality</h2>" + _table(["Segment", "Fit distance, RMS (mm)", "Surface with points near (%)",
-                                              "In gaps (%)", "Seen by a camera, no points near (%)", "Fit"], rows)
-            + '<p class="note">Points near: a measured point within 10 mm. A fit is doubtful with an RMS above 10 mm, more than 20 % '
-              "seen without points near, or less than 50 % with points near: check the measured points of that "
+                                              "In gaps (%)", "Seen by a camera, no points near (%)", "Folded (%)", "Fit"],
+                                             rows)
+            + f'<p class="note">Points near: a measured point within 10 mm. Folded: the fitted surface turned over '
+              f"itself. A fit is doubtful with an RMS above {lim['rms_mm']:.0f} mm, more than "
+              f"{100 * lim['exposed_uncovered']:.0f} % seen without points near, less than {100 * lim['coverage']:.0f} % "
+              f"with points near, or more than {100 * lim['folded']:.0f} % folded: check the measured points of that "
               "segment before using its volume.</p>")
 
 

@@ -6,6 +6,8 @@ raises :class:`bsv.InputError` naming the argument."""
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -126,7 +128,9 @@ class SegmentQuality:
     """How well one segment was fitted (``bsv_register::SegmentQuality``, rule in ``quality.rs``):
     ``rms_mm`` RMS distance to the cloud of the vertices not in a lateral gap and within 30 mm of it, ``coverage`` fraction of
     vertices with a cloud point within 10 mm, ``gap_fraction`` fraction in the lateral gaps,
-    ``exposed_uncovered`` fraction facing a camera yet far from the cloud, ``doubtful`` the flag."""
+    ``exposed_uncovered`` fraction facing a camera yet far from the cloud, ``folded`` fraction on a fold
+    (the fit turned over itself where the template is smooth; NaN in results written before it was
+    measured), ``doubtful`` the flag."""
 
     vertices: int
     rms_mm: float
@@ -134,6 +138,7 @@ class SegmentQuality:
     gap_fraction: float
     exposed_uncovered: float
     doubtful: bool
+    folded: float = math.nan
 
 
 @dataclass(repr=False)

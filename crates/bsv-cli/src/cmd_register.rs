@@ -168,10 +168,11 @@ fn print_summary(reg: &Registration, timings: bool) {
     );
     for (name, q) in reg.quality.iter().filter(|(_, q)| q.doubtful) {
         say!(
-            "warning: the fit of {name} is doubtful (RMS {:.1} mm, covered {:.0} %, seen but uncovered {:.0} %): check its cloud before using its volume",
+            "warning: the fit of {name} is doubtful (RMS {:.1} mm, covered {:.0} %, seen but uncovered {:.0} %, folded {:.0} %): check its cloud before using its volume",
             q.rms_mm,
             q.coverage * 100.0,
-            q.exposed_uncovered * 100.0
+            q.exposed_uncovered * 100.0,
+            q.folded * 100.0
         );
     }
     if timings {

@@ -263,9 +263,22 @@ fn register_calibration(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-/// Registers the functions and the calibration constants on the module.
+/// Adds `QUALITY_LIMITS`: the limits beyond which a fitted segment is doubtful
+/// (`bsv_register::DOUBT_*`; the report explains them from this dict).
+fn register_quality(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let limits = PyDict::new(m.py());
+    limits.set_item("rms_mm", bsv_register::DOUBT_RMS_MM)?;
+    limits.set_item("exposed_uncovered", bsv_register::DOUBT_EXPOSED)?;
+    limits.set_item("coverage", bsv_register::DOUBT_COVERAGE)?;
+    limits.set_item("folded", bsv_register::DOUBT_FOLDED)?;
+    m.add("QUALITY_LIMITS", limits)?;
+    Ok(())
+}
+
+/// Registers the functions and the calibration and quality constants on the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     register_calibration(m)?;
+    register_quality(m)?;
     m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(read_point_cloud, m)?)?;
     m.add_function(wrap_pyfunction!(write_mesh, m)?)?;

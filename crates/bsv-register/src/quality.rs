@@ -10,14 +10,21 @@
 //!   within 60 degrees of +-x): the sides that neither the front nor the back camera sees;
 //! - exposed-uncovered otherwise: it faces a camera but no cloud point lies near it.
 //!
+//! A vertex is on a fold when one of its edges joins two faces that turned more than 90 degrees
+//! against each other (`cos < FOLD_COS`) where the template's surface was smooth (`cos >=
+//! SMOOTH_COS`: the caps' sharp rims at the neck, wrists and ankles do not count): the fit crossed
+//! the surface over itself, which no cloud distance shows (a folded upper arm keeps its RMS and
+//! coverage) but which loses volume (-10 to -21 % on the upper arms folded by the depth-stretched
+//! pre-alignment of round 2, session 4).
+//!
 //! Per segment (the fitted mesh's vertex labels; `whole` when it has none): `rms_mm` is the RMS of
 //! `d` over the vertices not in a gap with `d <= RMS_CAP_M` (30 mm: the part the data hold; the caps
 //! at the neck, wrists and ankles and the crotch have no cloud and are counted by the fractions
 //! instead), `coverage` the fraction covered, `gap_fraction` the fraction in gaps,
 //! `exposed_uncovered` the fraction exposed-uncovered. The fit of a segment is `doubtful` when
 //! `rms_mm > DOUBT_RMS_MM` (10 mm), or `exposed_uncovered > DOUBT_EXPOSED` (0.2), or
-//! `coverage < DOUBT_COVERAGE` (0.65): the segment left the data where the cameras saw it, or the
-//! cloud hardly holds it. (0.5 until the ray-parallel removal, which thins the grazing edges: a
+//! `coverage < DOUBT_COVERAGE` (0.65), or `folded > DOUBT_FOLDED`: the segment left the data where
+//! the cameras saw it, the cloud hardly holds it, or it folded over itself. (0.5 until the ray-parallel removal, which thins the grazing edges: a
 //! one-iteration fit with its shin 27 % off kept coverage 0.53; good fits of 6 subjects in noer,
 //! l515 and l5ca: 0.76 at least, camera path 0.82.)
 //!
@@ -28,7 +35,7 @@
 //! 5-9 segments flagged. Unlabelled clouds (template labels, no label-aware correspondences) leave
 //! the arms with coverage 0.21-0.38: their arms are flagged.
 
-use bsv_core::geometry::vertex_normals;
+use bsv_core::geometry::{dot, face_normals, vertex_normals};
 use bsv_core::{Segment, TriMesh};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -45,6 +52,15 @@ pub const DOUBT_RMS_MM: f64 = 10.0;
 pub const DOUBT_EXPOSED: f64 = 0.2;
 /// A segment with less than this fraction of covered vertices is doubtful.
 pub const DOUBT_COVERAGE: f64 = 0.65;
+/// Two adjacent fitted faces whose normals' cosine is below this are folded against each other.
+pub const FOLD_COS: f64 = 0.0;
+/// An edge counts for folds only where the template's faces' cosine is at least this (smooth).
+pub const SMOOTH_COS: f64 = 0.5;
+/// A segment with more than this fraction of its vertices on a fold is doubtful. Measured (L515-like
+/// oracle clouds of 7 subjects): good fits 0-4.7 % (torso, forearms, shins: the template's own creases
+/// near the caps); upper arms folded by the depth-stretched pre-alignment 6-29 %, the catastrophic
+/// ones (-10 to -21 % volume) 14-29 %.
+pub const DOUBT_FOLDED: f64 = 0.08;
 
 /// The quality figures of one fitted segment (see the module).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -60,19 +76,42 @@ pub struct SegmentQuality {
     pub gap_fraction: f64,
     /// Fraction of the vertices facing a camera with no cloud point within [`COVER_M`].
     pub exposed_uncovered: f64,
+    /// Fraction of the vertices on a fold (an edge turned beyond 90 degrees where the template was
+    /// smooth; see the module).
+    pub folded: f64,
     /// The fit of this segment is doubtful (see the module for the rule).
     pub doubtful: bool,
 }
 
+/// Per vertex of `mesh`: whether it is on a fold against `template` (same triangles; see the module).
+fn on_fold(mesh: &TriMesh, template: &TriMesh) -> Vec<bool> {
+    let fitted = face_normals(mesh);
+    let rest = face_normals(template);
+    let mut folded = vec![false; mesh.vertices.len()];
+    for (&(a, b), e) in bsv_core::topology::edge_map(&mesh.triangles).iter() {
+        if let [(f, _), (g, _)] = e.faces[..] {
+            let (f, g) = (f as usize, g as usize);
+            if dot(fitted[f], fitted[g]) < FOLD_COS && dot(rest[f], rest[g]) >= SMOOTH_COS {
+                folded[a as usize] = true;
+                folded[b as usize] = true;
+            }
+        }
+    }
+    folded
+}
+
 /// The quality of every segment of the fitted `mesh`, keyed by segment name (`whole` for an
-/// unlabelled mesh); `nearest[i].1` is the squared distance of vertex `i` to its nearest cloud point.
-pub fn segment_quality(mesh: &TriMesh, nearest: &[(u32, f64)]) -> BTreeMap<String, SegmentQuality> {
+/// unlabelled mesh); `nearest[i].1` is the squared distance of vertex `i` to its nearest cloud point;
+/// `template` is the mesh it was fitted from (same triangles), for the folds.
+pub fn segment_quality(mesh: &TriMesh, nearest: &[(u32, f64)], template: &TriMesh) -> BTreeMap<String, SegmentQuality> {
     let normals = vertex_normals(mesh);
+    let folds = on_fold(mesh, template);
     let mut acc: BTreeMap<u8, Tally> = BTreeMap::new();
     for (i, &(_, d2)) in nearest.iter().enumerate() {
         let label = mesh.vertex_labels.as_ref().map_or(0, |l| l.get(i).copied().unwrap_or(0));
         let a = acc.entry(label).or_default();
         a.vertices += 1;
+        a.folded += usize::from(folds.get(i).copied().unwrap_or(false));
         let covered = d2 <= COVER_M * COVER_M;
         let lateral = normals.get(i).is_some_and(|n| n[0].abs() >= GAP_NORMAL_X);
         if covered {
@@ -104,6 +143,7 @@ pub fn segment_quality(mesh: &TriMesh, nearest: &[(u32, f64)]) -> BTreeMap<Strin
 #[derive(Default)]
 struct Tally {
     vertices: usize,
+    folded: usize,
     covered: usize,
     gap: usize,
     exposed: usize,
@@ -117,13 +157,53 @@ impl Tally {
         let n = self.vertices.max(1) as f64;
         let rms_mm = if self.rms_count > 0 { (self.rms_sum / self.rms_count as f64).sqrt() * 1e3 } else { 0.0 };
         let (coverage, exposed_uncovered) = (self.covered as f64 / n, self.exposed as f64 / n);
+        let folded = self.folded as f64 / n;
         SegmentQuality {
             vertices: self.vertices,
             rms_mm,
             coverage,
             gap_fraction: self.gap as f64 / n,
             exposed_uncovered,
-            doubtful: rms_mm > DOUBT_RMS_MM || exposed_uncovered > DOUBT_EXPOSED || coverage < DOUBT_COVERAGE,
+            folded,
+            doubtful: rms_mm > DOUBT_RMS_MM
+                || exposed_uncovered > DOUBT_EXPOSED
+                || coverage < DOUBT_COVERAGE
+                || folded > DOUBT_FOLDED,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bsv_core::shapes::icosphere;
+
+    /// Every vertex at distance 0 from the cloud (the folds alone decide).
+    fn on_cloud(mesh: &TriMesh) -> Vec<(u32, f64)> {
+        (0..mesh.vertices.len() as u32).map(|i| (i, 0.0)).collect()
+    }
+
+    #[test]
+    fn a_cap_pushed_through_the_surface_is_a_fold_and_the_template_is_not() {
+        // A sphere whose top (z > 0.025) is the upper arm, the rest the torso.
+        let mut template = icosphere(0.05, 3);
+        let arm = Segment::UpperArmL.id();
+        let torso = Segment::Torso.id();
+        template.vertex_labels =
+            Some(template.vertices.iter().map(|p| if p[2] > 0.025 { arm } else { torso }).collect());
+        let q = segment_quality(&template, &on_cloud(&template), &template);
+        assert!(q.values().all(|s| s.folded == 0.0 && !s.doubtful));
+        // Push the top cap (z > 0.03) down through the sphere: its rim turns over.
+        let mut folded = template.clone();
+        for p in &mut folded.vertices {
+            if p[2] > 0.03 {
+                p[2] = 0.03 - 3.0 * (p[2] - 0.03);
+            }
+        }
+        let q = segment_quality(&folded, &on_cloud(&folded), &template);
+        let a = q["upper_arm_l"];
+        assert!(a.folded > DOUBT_FOLDED, "folded {}", a.folded);
+        assert!(a.doubtful);
+        assert!(!q["torso"].doubtful, "the torso below is intact: {:?}", q["torso"]);
     }
 }

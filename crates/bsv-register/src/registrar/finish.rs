@@ -27,7 +27,7 @@ impl Registrar<'_> {
         let rms_p2m = pool.install(|| index.rms_points_to_mesh(&cur)).map_err(NumericError::index)?;
         let mut mesh = TriMesh::new(cur, template.triangles.clone());
         let labels_from = set_labels(&mut mesh, &nearest, params.labels, &self.input.cloud, template);
-        let quality = crate::quality::segment_quality(&mesh, &nearest);
+        let quality = crate::quality::segment_quality(&mesh, &nearest, template);
         let input = self.input;
         Ok(Registration {
             mesh,

@@ -7,7 +7,6 @@ raises :class:`bsv.InputError` naming the argument."""
 from __future__ import annotations
 
 import math
-
 from dataclasses import dataclass, field
 from typing import Any
 

@@ -22,6 +22,9 @@
 //! scatter) is used, so no per-point normal is ever needed. m2p pulls gap-side vertices onto the
 //! edges of the gaps; their normals are about 90 degrees from the edge points' normals, which is
 //! what the angle test removes.
+//!
+//! With the curvature correction (`curvature.rs`) the normal part of every target is lifted by the
+//! height of the surface under its points' spread (the mean of a p2m patch lies under a convex limb).
 
 use crate::curvature;
 use bsv_core::geometry::{add, dot, normalize, scale, sub};
@@ -487,8 +490,8 @@ impl CloudIndex {
     }
 
     /// The target of every vertex from its accumulated points (`None` without points or when the
-    /// patch normal fails the angle test against the vertex normal); with `curvature` (the mean
-    /// curvature per vertex) the normal part is curvature-corrected ([`curvature::correction`]).
+    /// patch normal fails the angle test against the vertex normal); with `curvature` (the mesh's
+    /// form per vertex) the normal part is curvature-corrected ([`curvature::Shape::correction`]).
     fn patch_targets(
         &self,
         accs: &[Acc],

@@ -719,10 +719,16 @@ def asymmetry_lines(volumes: dict[str, Any]) -> list[str]:
 def _print_process(res: Any) -> None:
     v = res.volumes.get("volumes_l", {})
     iv = res.intervals
+    outside = False
     for name in (*TRUNK_LIMBS, "trunk_limbs"):
         if name in v:
             b = iv.get(name) if iv else None
-            print(f"{name:<14}{v[name]:>9.3f} L" + (f"  (95 % {b[0]:.3f} to {b[1]:.3f})" if b else ""))
+            mark = "*" if b and not b[0] <= v[name] <= b[1] else ""
+            outside = outside or bool(mark)
+            print(f"{name:<14}{v[name]:>9.3f} L" + (f"  (95 % {b[0]:.3f} to {b[1]:.3f}){mark}" if b else ""))
+    if outside:
+        print("* the interval is corrected for the fit's known bias on the synthetic cohort, so the measured value "
+              "lies outside it: the true volume is more likely inside the interval than at the measured value")
     print("\n".join(asymmetry_lines(res.volumes)))
     if res.bsip is not None:
         print(res.bsip.table())

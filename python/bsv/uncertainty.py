@@ -365,7 +365,9 @@ def intervals(mesh: Mesh, volumes: Mapping[str, Any], cameras: Sequence[CameraSp
     sources = sorted({c.source for c in cameras})
     method = (f"calibration Monte Carlo ({samples} draws, seed {seed}, covariance: {', '.join(sources) or 'none'}) "
               f"+ depth-noise/registration error model ({m.description or 'bsv/data/noise_model.json'}), "
-              "combined in quadrature, normal; the error model leaves out gross registration failures (a "
+              "combined in quadrature, normal, centred on the measured value corrected for the error model's mean "
+              "bias (a value the fit measures low on the cohort gets an interval above it, and may lie just outside "
+              "its own interval); the error model leaves out gross registration failures (a "
               "segment missed by tens of percent), which the intervals do not cover" + (f"; {note}" if note else ""))
     tl = both.get("trunk_limbs")
     mass = {} if tl is None else {"mass_trunk_limbs_kg": (tl[0] * density / 1000.0, tl[1] * density / 1000.0)}

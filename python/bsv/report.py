@@ -228,8 +228,6 @@ def quality_html(registration: dict[str, Any]) -> str:
     quality: dict[str, dict[str, Any]] = registration.get("quality") or {}
     if not quality:
         return ""
-    from . import _bsv
-
     lim = _bsv.QUALITY_LIMITS
     rows = [[_swatch(name), _fmt(q.get("rms_mm"), 1), _fmt(100 * q.get("coverage", math.nan), 0),
              _fmt(100 * q.get("gap_fraction", math.nan), 0), _fmt(100 * q.get("exposed_uncovered", math.nan), 0),

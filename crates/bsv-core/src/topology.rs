@@ -9,6 +9,25 @@ pub struct EdgeFaces {
     pub faces: Vec<(u32, bool)>,
 }
 
+/// Per vertex (of `n_vertices`): whether it ends an edge shared by two faces `f`, `g` (face indices)
+/// for which `crease(f, g)` holds, e.g. a sharp or folded edge judged by the faces' normals.
+pub fn vertices_on_edges(
+    n_vertices: usize,
+    triangles: &[[u32; 3]],
+    mut crease: impl FnMut(usize, usize) -> bool,
+) -> Vec<bool> {
+    let mut on = vec![false; n_vertices];
+    for (&(a, b), e) in edge_map(triangles).iter() {
+        if let [(f, _), (g, _)] = e.faces[..] {
+            if crease(f as usize, g as usize) {
+                on[a as usize] = true;
+                on[b as usize] = true;
+            }
+        }
+    }
+    on
+}
+
 /// The undirected edge map of a triangle list: key `(min, max)` vertex ids.
 pub fn edge_map(triangles: &[[u32; 3]]) -> HashMap<(u32, u32), EdgeFaces> {
     let mut map: HashMap<(u32, u32), EdgeFaces> = HashMap::with_capacity(triangles.len() * 3 / 2 + 1);

@@ -87,17 +87,9 @@ pub struct SegmentQuality {
 fn on_fold(mesh: &TriMesh, template: &TriMesh) -> Vec<bool> {
     let fitted = face_normals(mesh);
     let rest = face_normals(template);
-    let mut folded = vec![false; mesh.vertices.len()];
-    for (&(a, b), e) in bsv_core::topology::edge_map(&mesh.triangles).iter() {
-        if let [(f, _), (g, _)] = e.faces[..] {
-            let (f, g) = (f as usize, g as usize);
-            if dot(fitted[f], fitted[g]) < FOLD_COS && dot(rest[f], rest[g]) >= SMOOTH_COS {
-                folded[a as usize] = true;
-                folded[b as usize] = true;
-            }
-        }
-    }
-    folded
+    bsv_core::topology::vertices_on_edges(mesh.vertices.len(), &mesh.triangles, |f, g| {
+        dot(fitted[f], fitted[g]) < FOLD_COS && dot(rest[f], rest[g]) >= SMOOTH_COS
+    })
 }
 
 /// The quality of every segment of the fitted `mesh`, keyed by segment name (`whole` for an

@@ -26,15 +26,8 @@ pub fn surface_correction(vertices: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<
         })
         .collect();
     let min_cos = 40f64.to_radians().cos();
-    let mut sharp = vec![false; vertices.len()];
-    for (&(a, b), e) in bsv_core::topology::edge_map(triangles).iter() {
-        if let [(f, _), (g, _)] = e.faces[..] {
-            if dot(fnorm[f as usize], fnorm[g as usize]) < min_cos {
-                sharp[a as usize] = true;
-                sharp[b as usize] = true;
-            }
-        }
-    }
+    let sharp =
+        bsv_core::topology::vertices_on_edges(vertices.len(), triangles, |f, g| dot(fnorm[f], fnorm[g]) < min_cos);
     let c = 1.0 / (8.0 * 3f64.sqrt());
     (0..vertices.len())
         .map(|i| {

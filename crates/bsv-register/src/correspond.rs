@@ -29,7 +29,7 @@
 use crate::curvature;
 use bsv_core::geometry::{add, dot, normalize, scale, sub};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
-use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 use std::num::NonZeroUsize;
 use std::sync::OnceLock;
@@ -162,26 +162,14 @@ pub fn build_tree(points: &[[f64; 3]]) -> Result<ImmutableKdTree<f64, 3>, String
     ImmutableKdTree::new_from_slice(points).map_err(|e| format!("k-d tree construction failed: {e:?}"))
 }
 
-/// Unit normal (smallest-eigenvalue eigenvector) of the scatter matrix `c` (centred), or `None`
-/// when the patch is degenerate (fewer than 3 independent points).
+/// Unit normal (smallest-eigenvalue eigenvector, closed form: [`crate::sym3`]) of the scatter matrix
+/// `c` (centred), or `None` when the patch is degenerate (fewer than 3 independent points: the middle
+/// eigenvalue is not above 1e-6 of the largest).
 #[allow(clippy::neg_cmp_op_on_partial_ord, reason = "a NaN eigenvalue must count as degenerate")]
 pub fn pca_normal(c: &Matrix3<f64>) -> Option<[f64; 3]> {
-    let e = SymmetricEigen::new(*c);
-    let (mut kmin, mut kmax) = (0, 0);
-    for k in 1..3 {
-        if e.eigenvalues[k] < e.eigenvalues[kmin] {
-            kmin = k;
-        }
-        if e.eigenvalues[k] > e.eigenvalues[kmax] {
-            kmax = k;
-        }
-    }
-    let mid = 3 - kmin - kmax;
-    if kmin == kmax || !(e.eigenvalues[mid] > 1e-6 * e.eigenvalues[kmax]) {
-        return None;
-    }
-    let v = e.eigenvectors.column(kmin);
-    Some(normalize([v[0], v[1], v[2]]))
+    let a: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| c[(i, j)]));
+    let (v, l) = crate::sym3::smallest_eigenvector(&a)?;
+    (l[1] > 1e-6 * l[2]).then_some(v)
 }
 
 /// The PCA normal ([`pca_normal`]) of the `k` (at least 3) points of `tree` (over `points`) nearest
@@ -193,7 +181,8 @@ pub fn neighbourhood_normal(
     k: usize,
 ) -> Option<[f64; 3]> {
     let k = NonZeroUsize::new(k.max(3)).unwrap_or(NonZeroUsize::MIN);
-    let nb = tree.query(&q).nearest_n::<SquaredEuclidean<f64>>(k).execute();
+    // Unsorted: the scatter matrix does not depend on their order.
+    let nb = tree.query(&q).nearest_n::<SquaredEuclidean<f64>>(k).unsorted().execute();
     let mut mean = [0.0; 3];
     for r in &nb {
         let p = points[r.item as usize];

@@ -45,6 +45,7 @@ mod schedule;
 mod section;
 mod solver;
 mod surface;
+mod sym3;
 
 pub use error::{ImplausibleError, InputError, NumericError, ParameterError, RegisterError, ResourceError};
 pub use keypoints::{Keypoint, KeypointResidual, Keypoints};

@@ -22,7 +22,7 @@ pub const MAX_KEY: f64 = 4_503_599_627_370_496.0;
 
 /// The voxel key of `p`, or `None` when a coordinate is non-finite or beyond [`MAX_KEY`] voxels.
 #[inline]
-fn key(p: &[f64; 3], inv: f64) -> Option<[i64; 3]> {
+pub(crate) fn key(p: &[f64; 3], inv: f64) -> Option<[i64; 3]> {
     let mut k = [0i64; 3];
     for (ka, &x) in k.iter_mut().zip(p) {
         let v = (x * inv).floor();

@@ -34,6 +34,7 @@ from .argtypes import seed as seed_type
 from .errors import BsipError, InputError, OutputExistsError, PersonIsolationError
 from .extras import require
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
+from .keypoints import confine_cloud_upper_arms
 from .types import SEGMENT_IDS, TRUNK_LIMBS, Mesh, PointCloud, Registration
 
 PathLike = str | Path
@@ -464,6 +465,8 @@ def process(
     if progress:
         _print_cloud(len(cloud), cloud_report)
 
+    # Camera labels: an upper-arm patch far from the measured arm is the torso a hanging arm covers in one view.
+    cloud, arm_relabelled = confine_cloud_upper_arms(cloud, joints if segmentation == "camera" else None)
     label_source = register_params.pop("labels", CAMERA_LABEL_SOURCE if segmentation == "camera" else None)
     measured = joints if keypoints and joints else None
     reg: Registration = steps.run(
@@ -484,7 +487,8 @@ def process(
         lambda: _intervals(reg, [_camera_spread(c, extrinsics[c]) for c in cameras], segmentation, density)).to_json()
     if refined:
         vols["calibration_refinement"] = {"method": "floor plane (pitch, roll, height)", "cameras": refined}
-    vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report}
+    vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report,
+                     "upper_arm_points_relabelled_torso": arm_relabelled}
     vols["joints_m"] = {name: j.to_json() for name, j in joints.items()}
     vols["warnings"] = landmark_warnings
     out.mkdir(parents=True, exist_ok=True)

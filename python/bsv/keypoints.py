@@ -5,7 +5,7 @@ and the template joints they pull (the joint rings the embedded templates carry,
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from functools import lru_cache
 from typing import Any
 
@@ -85,6 +85,20 @@ def as_keypoints(keypoints: Mapping[str, Any]) -> list[tuple[str, list[float], f
     return [_one(name, value) for name, value in keypoints.items()]
 
 
+#: The joint kinds the camera path lets pull the template by default (``bsv process``, ``bench synth
+#: --segmentation camera``): the arms'. Measured on the synthetic cohort (seeds 0, 2, 4; noer and l515;
+#: benchmarks/BENCH.md): the arms' joints lower the mean segment error on every seed (upper arms by 0.3 to
+#: 0.6 points); the hips' and knees' help on seeds 0 and 2 but hurt on seed 4, whose measured hips lie
+#: 12-31 mm low (thighs 3.6 -> 4.2 %).
+ARM_JOINT_KINDS: tuple[str, ...] = ("shoulder", "elbow", "wrist")
+
+
+def select_joints(joints: Mapping[str, Any], kinds: Sequence[str] | None) -> dict[str, Any]:
+    """The entries of ``joints`` whose kind (the name without ``_l`` / ``_r``) is in ``kinds``
+    (all of them when ``kinds`` is None)."""
+    return {k: v for k, v in joints.items() if kinds is None or k.rsplit("_", 1)[0] in kinds}
+
+
 #: Default of :func:`confine_upper_arms`: an upper-arm point farther than this (m) from the measured
 #: shoulder-elbow segment is torso. The 99th percentile of the true upper-arm points' distances from
 #: that segment (joints as measured) is 64-96 mm on the synthetic cohort (seeds 0, 2, 6); the torso patch
@@ -147,4 +161,4 @@ def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray
     return np.asarray(np.linalg.norm(p - (a + t[:, None] * ab), axis=1))
 
 
-__all__ = ["JOINT_NAMES", "UPPER_ARM_MAX_DISTANCE_M", "as_keypoints", "confine_cloud_upper_arms", "confine_upper_arms", "joint_rings", "template_kind"]
+__all__ = ["ARM_JOINT_KINDS", "JOINT_NAMES", "UPPER_ARM_MAX_DISTANCE_M", "as_keypoints", "confine_cloud_upper_arms", "confine_upper_arms", "joint_rings", "select_joints", "template_kind"]

@@ -144,3 +144,30 @@ def test_confine_upper_arms_refuses_bad_input() -> None:
         confine_upper_arms(pts[:, :2], lab, joints)
     with pytest.raises(InputError, match="3 finite coordinates"):
         confine_upper_arms(pts, lab, {"shoulder_l": [np.nan, 0, 0], "elbow_l": joints["elbow_l"]})
+
+
+def test_select_joints_and_the_camera_paths_default_of_arm_joints(monkeypatch) -> None:
+    """The camera path lets the arms' joints pull by default; ``keypoints=true`` every joint, ``false`` none."""
+    from bsv.bench import common
+    from bsv.keypoints import ARM_JOINT_KINDS, JOINT_NAMES, select_joints
+
+    joints = {n: [0.0, 1.0, 0.0] for n in JOINT_NAMES}
+    arms = select_joints(joints, ARM_JOINT_KINDS)
+    assert sorted(arms) == sorted(f"{j}_{s}" for j in ("shoulder", "elbow", "wrist") for s in "lr")
+    assert select_joints(joints, None) == joints and select_joints(joints, ()) == {}
+    seen: list[object] = []
+
+    class Stop(Exception):
+        pass
+
+    def fake_register(*args: object, keypoints: object = None, **kw: object) -> None:
+        seen.append(keypoints)
+        raise Stop
+
+    monkeypatch.setattr(bsv, "register", fake_register)
+    cloud = bsv.PointCloud(np.zeros((3, 3)), None, None, np.ones(3, dtype=np.uint8))
+    for params in ({}, {"keypoints": "true"}, {"keypoints": "false"}, {"keypoint_joints": "knee"}):
+        with pytest.raises(Stop):
+            common.register_bsv(cloud, bsv.default_template(), params, keypoints=joints)
+    assert seen[0] == arms and seen[1] == joints and seen[2] is None
+    assert sorted(seen[3]) == ["knee_l", "knee_r"]  # type: ignore[arg-type]

@@ -34,7 +34,7 @@ from .argtypes import seed as seed_type
 from .errors import BsipError, InputError, OutputExistsError, PersonIsolationError
 from .extras import require
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
-from .keypoints import ARM_JOINT_KINDS, confine_cloud_upper_arms, select_joints
+from .keypoints import CAMERA_KEYPOINT_KINDS, confine_cloud_upper_arms, select_joints
 from .types import SEGMENT_IDS, TRUNK_LIMBS, Mesh, PointCloud, Registration
 
 PathLike = str | Path
@@ -394,9 +394,9 @@ def process(
     measured shoulder-elbow segment are relabelled torso before the registration
     (:func:`bsv.keypoints.confine_upper_arms`; counted in volumes.json's ``cloud``).
     ``keypoints`` (camera segmentation): the joint centres lifted from both views pull the template's
-    joints in the first iterations (``bsv.register``'s keypoint term): None (the default) the arms' joints
-    only (:data:`bsv.keypoints.ARM_JOINT_KINDS`, measured better on every seed of the synthetic cohort;
-    the hips' and knees' were not), True (``--keypoints``) every joint, False (``--no-keypoints``) none."""
+    joints in the first iterations (``bsv.register``'s keypoint term): None (the default) the shoulders and
+    wrists only (:data:`bsv.keypoints.CAMERA_KEYPOINT_KINDS`, where the measurements on the synthetic cohort
+    say why), True (``--keypoints``) every joint, False (``--no-keypoints``) none."""
     from . import register as bsv_register
     from . import write_mesh, write_point_cloud
     from .frontend.capture import read_capture
@@ -472,7 +472,7 @@ def process(
     # Camera labels: an upper-arm patch far from the measured arm is the torso a hanging arm covers in one view.
     cloud, arm_relabelled = confine_cloud_upper_arms(cloud, joints if segmentation == "camera" else None)
     label_source = register_params.pop("labels", CAMERA_LABEL_SOURCE if segmentation == "camera" else None)
-    measured = (select_joints(joints, None if keypoints else ARM_JOINT_KINDS)
+    measured = (select_joints(joints, None if keypoints else CAMERA_KEYPOINT_KINDS)
                 if joints and keypoints is not False else None)
     reg: Registration = steps.run(
         "register", "registering the template (ARAP)",
@@ -656,7 +656,7 @@ def main_process(argv: Sequence[str] | None = None) -> int:
                     help="correct each camera's pitch, roll and height with the floor it sees (the cameras must see it)")
     ap.add_argument("--keypoints", action=argparse.BooleanOptionalAction, default=None,
                     help="camera segmentation: let the joint centres lifted from both views pull the template's "
-                         "joints; default: the arms' joints only (shoulders, elbows, wrists), --keypoints: every "
+                         "joints; default: the shoulders and wrists only, --keypoints: every "
                          "joint, --no-keypoints: none")
     ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT")
     _add_bsip_options(ap)

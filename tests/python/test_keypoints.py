@@ -147,13 +147,13 @@ def test_confine_upper_arms_refuses_bad_input() -> None:
 
 
 def test_select_joints_and_the_camera_paths_default_of_arm_joints(monkeypatch) -> None:
-    """The camera path lets the arms' joints pull by default; ``keypoints=true`` every joint, ``false`` none."""
+    """The camera path lets the shoulders and wrists pull by default; ``keypoints=true`` every joint, ``false`` none."""
     from bsv.bench import common
-    from bsv.keypoints import ARM_JOINT_KINDS, JOINT_NAMES, select_joints
+    from bsv.keypoints import CAMERA_KEYPOINT_KINDS, JOINT_NAMES, select_joints
 
     joints = {n: [0.0, 1.0, 0.0] for n in JOINT_NAMES}
-    arms = select_joints(joints, ARM_JOINT_KINDS)
-    assert sorted(arms) == sorted(f"{j}_{s}" for j in ("shoulder", "elbow", "wrist") for s in "lr")
+    arms = select_joints(joints, CAMERA_KEYPOINT_KINDS)
+    assert sorted(arms) == sorted(f"{j}_{s}" for j in ("shoulder", "wrist") for s in "lr")
     assert select_joints(joints, None) == joints and select_joints(joints, ()) == {}
     seen: list[object] = []
 

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import BenchError
-from ..keypoints import ARM_JOINT_KINDS, select_joints
+from ..keypoints import CAMERA_KEYPOINT_KINDS, select_joints
 from ..types import SEGMENT_IDS, TRUNK_LIMBS, Mesh, PointCloud
 
 #: Segment ids a lab's cloud keeps (DESIGN.md data flow step 4 drops head, hands and feet).
@@ -93,8 +93,8 @@ class Fit:
 
 
 #: ``--param`` keys the bench itself reads (not registration parameters): the camera path's measured
-#: joints pull the template's as in ``bsv process``: by default the arms' only
-#: (:data:`bsv.keypoints.ARM_JOINT_KINDS`), ``keypoints=true`` every joint (``--keypoints``),
+#: joints pull the template's as in ``bsv process``: by default the shoulders and wrists only
+#: (:data:`bsv.keypoints.CAMERA_KEYPOINT_KINDS`), ``keypoints=true`` every joint (``--keypoints``),
 #: ``keypoints=false`` none (``--no-keypoints``); ``keypoint_joints=elbow+knee`` keeps only those joints.
 BENCH_ONLY_PARAMS: tuple[str, ...] = ("keypoints", "keypoint_joints")
 
@@ -102,7 +102,7 @@ BENCH_ONLY_PARAMS: tuple[str, ...] = ("keypoints", "keypoint_joints")
 def register_bsv(cloud: PointCloud, template: Mesh, params: Mapping[str, Any] | None = None,
                  keypoints: Mapping[str, Any] | None = None) -> Fit:
     """BSV's regularized ARAP registration (:func:`bsv.register`) of ``template`` to the labelled cloud,
-    with the measured joint centres ``keypoints`` when given (the arms' by default, every joint with
+    with the measured joint centres ``keypoints`` when given (the shoulders' and wrists' by default, every joint with
     ``--param keypoints=true``, none with ``keypoints=false``)."""
     from .. import register
 
@@ -110,13 +110,13 @@ def register_bsv(cloud: PointCloud, template: Mesh, params: Mapping[str, Any] | 
     kw = dict(params or {})
     # `--param labels:template` is the registration's label source, not the cloud's per-point labels
     label_source = kw.pop("labels", None)
-    which = str(kw.pop("keypoints", "arms")).lower()
+    which = str(kw.pop("keypoints", "default")).lower()
     kinds = kw.pop("keypoint_joints", None)  # e.g. --param keypoint_joints=elbow+knee
     if keypoints is not None and which in ("false", "0", "no", "off"):
         keypoints = None
     elif keypoints is not None:
         keep = (str(kinds).replace("+", ",").split(",") if kinds else
-                None if which in ("true", "1", "yes", "on") else list(ARM_JOINT_KINDS))
+                None if which in ("true", "1", "yes", "on") else list(CAMERA_KEYPOINT_KINDS))
         keypoints = select_joints(keypoints, keep)
     reg = register(cloud.points, cloud.labels, template, label_source=label_source, keypoints=keypoints, **kw)
     wall = time.perf_counter() - t0

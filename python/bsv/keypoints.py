@@ -5,7 +5,7 @@ and the template joints they pull (the joint rings the embedded templates carry,
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from functools import lru_cache
 from typing import Any
 
@@ -13,7 +13,7 @@ import numpy as np
 
 from . import _bsv
 from .errors import InputError
-from .types import Mesh
+from .types import SEGMENT_IDS, Mesh, PointCloud
 
 #: Every joint a template may carry (the names of :data:`bsv.frontend.landmarks.JOINTS`).
 JOINT_NAMES: tuple[str, ...] = tuple(f"{j}_{s}" for s in ("l", "r")
@@ -85,4 +85,82 @@ def as_keypoints(keypoints: Mapping[str, Any]) -> list[tuple[str, list[float], f
     return [_one(name, value) for name, value in keypoints.items()]
 
 
-__all__ = ["JOINT_NAMES", "as_keypoints", "joint_rings", "template_kind"]
+#: The joint kinds the camera path lets pull the template by default (``bsv process``, ``bench synth
+#: --segmentation camera``): the shoulders and the wrists. Measured on the synthetic cohort (seeds 0, 2,
+#: 4; noer and l515; benchmarks/BENCH.md): they lower the upper arms' mean error on five of the six runs
+#: (by 0.3-0.6 points) and change the other segments by less than 0.4. Left out: the hips and knees (better
+#: on seeds 0 and 2, worse on seed 4, whose measured hips lie 12-31 mm low on five subjects: thighs
+#: 3.6 -> 4.2 %) and the elbows (a little better on average, but where one view's elbow cut lies 5 cm up the
+#: arm, seed 6 subject 9, the elbow's pull against the mislabelled points collapses the forearm: -11 -> -40 %).
+CAMERA_KEYPOINT_KINDS: tuple[str, ...] = ("shoulder", "wrist")
+
+
+def select_joints(joints: Mapping[str, Any], kinds: Sequence[str] | None) -> dict[str, Any]:
+    """The entries of ``joints`` whose kind (the name without ``_l`` / ``_r``) is in ``kinds``
+    (all of them when ``kinds`` is None)."""
+    return {k: v for k, v in joints.items() if kinds is None or k.rsplit("_", 1)[0] in kinds}
+
+
+#: Default of :func:`confine_upper_arms`: an upper-arm point farther than this (m) from the measured
+#: shoulder-elbow segment is torso. The 99th percentile of the true upper-arm points' distances from
+#: that segment (joints as measured) is 64-96 mm on the synthetic cohort (seeds 0, 2, 6); the torso patch
+#: a hanging arm's view mislabels lies mostly beyond 100 mm (median 112 mm on seed 6 subject 9).
+UPPER_ARM_MAX_DISTANCE_M = 0.1
+
+
+def confine_upper_arms(points: Any, labels: Any, joints: Mapping[str, Any],
+                       max_distance_m: float = UPPER_ARM_MAX_DISTANCE_M) -> tuple[np.ndarray, int]:
+    """Cloud labels with every upper-arm point farther than ``max_distance_m`` from its side's measured
+    shoulder-elbow segment relabelled torso, and how many points changed.
+
+    Why: the colour segmentation labels each pixel by the nearest bone in 2-D, so where a hanging arm
+    covers the torso's side in one view, that view can label a large patch of torso as upper arm (seed 6
+    subject 9 of the synthetic cohort: 45 % of the right upper arm's points were torso). The articulated
+    initialisation and the label-aware fit then pull the template's upper arm onto the torso and its
+    shoulder boundary far down the arm (-34 % upper arm). The 3-D joint centres come from both views
+    together and are not fooled by one view's overlap. ``joints``: ``{name: joint}`` as
+    :func:`as_keypoints` reads them (a :class:`bsv.frontend.landmarks.JointCentre`, a ``{"xyz", ...}``
+    dict, ``(xyz, confidence)`` or xyz); a side without both its shoulder and elbow is left as it is.
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    lab = np.array(labels, dtype=np.uint8, copy=True)
+    if pts.ndim != 2 or pts.shape[1] != 3 or len(lab) != len(pts):
+        raise _bad(f"confine_upper_arms: points must be (N, 3) with N labels, got {pts.shape} and {lab.shape}")
+    if not (math.isfinite(max_distance_m) and max_distance_m > 0):
+        raise _bad(f"confine_upper_arms: max_distance_m must be positive, got {max_distance_m!r}")
+    measured = {name: np.asarray(xyz) for name, xyz, _ in as_keypoints(joints)}
+    torso = SEGMENT_IDS["torso"]
+    changed = 0
+    for side in ("l", "r"):
+        a, b = measured.get(f"shoulder_{side}"), measured.get(f"elbow_{side}")
+        arm = lab == SEGMENT_IDS[f"upper_arm_{side}"]
+        if a is None or b is None or not arm.any():
+            continue
+        far = _segment_distance(pts[arm], a, b) > max_distance_m
+        idx = np.nonzero(arm)[0][far]
+        lab[idx] = torso
+        changed += len(idx)
+    return lab, changed
+
+
+def confine_cloud_upper_arms(cloud: PointCloud, joints: Mapping[str, Any] | None,
+                             max_distance_m: float = UPPER_ARM_MAX_DISTANCE_M) -> tuple[PointCloud, int]:
+    """:func:`confine_upper_arms` on a labelled cloud: the cloud with its labels confined (the same
+    cloud when it has no labels, no joints are given or nothing changes) and how many points changed."""
+    if cloud.labels is None or not joints:
+        return cloud, 0
+    labels, changed = confine_upper_arms(cloud.points, cloud.labels, joints, max_distance_m)
+    if changed == 0:
+        return cloud, 0
+    return PointCloud(cloud.points, cloud.normals, cloud.colors, labels), changed
+
+
+def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance of each point of ``p`` (N, 3) from the segment ``a``-``b`` (a point when they coincide)."""
+    ab = b - a
+    den = float(ab @ ab)
+    t = np.zeros(len(p)) if den == 0.0 else np.clip((p - a) @ ab / den, 0.0, 1.0)
+    return np.asarray(np.linalg.norm(p - (a + t[:, None] * ab), axis=1))
+
+
+__all__ = ["CAMERA_KEYPOINT_KINDS", "JOINT_NAMES", "UPPER_ARM_MAX_DISTANCE_M", "as_keypoints", "confine_cloud_upper_arms", "confine_upper_arms", "joint_rings", "select_joints", "template_kind"]

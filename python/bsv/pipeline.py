@@ -34,6 +34,7 @@ from .argtypes import seed as seed_type
 from .errors import BsipError, InputError, OutputExistsError, PersonIsolationError
 from .extras import require
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
+from .keypoints import CAMERA_KEYPOINT_KINDS, confine_cloud_upper_arms, select_joints
 from .types import SEGMENT_IDS, TRUNK_LIMBS, Mesh, PointCloud, Registration
 
 PathLike = str | Path
@@ -362,7 +363,7 @@ def process(
     bsip_density: float | dict[str, float] | None = None,
     bsip_sex: str = "male",
     refine_floor: bool = False,
-    keypoints: bool = False,
+    keypoints: bool | None = None,
     **register_params: Any,
 ) -> ProcessResult:
     """Segmentation, cloud, registration and volumes of a capture folder (``CAPTURE_DIR/<camera>/`` with
@@ -389,9 +390,13 @@ def process(
 
     Labels of the fitted mesh: with camera segmentation the template's own segments
     (:data:`CAMERA_LABEL_SOURCE`), with oracle labels the cloud's; ``labels="cloud"`` or
-    ``labels="template"`` chooses. ``keypoints`` (``--keypoints``, camera segmentation): the joint centres
-    lifted from both views pull the template's joints in the first iterations (``bsv.register``'s keypoint
-    term; measured neutral on the synthetic cohort, benchmarks/BENCH.md)."""
+    ``labels="template"`` chooses. With camera segmentation, upper-arm points farther than 10 cm from the
+    measured shoulder-elbow segment are relabelled torso before the registration
+    (:func:`bsv.keypoints.confine_upper_arms`; counted in volumes.json's ``cloud``).
+    ``keypoints`` (camera segmentation): the joint centres lifted from both views pull the template's
+    joints in the first iterations (``bsv.register``'s keypoint term): None (the default) the shoulders and
+    wrists only (:data:`bsv.keypoints.CAMERA_KEYPOINT_KINDS`, where the measurements on the synthetic cohort
+    say why), True (``--keypoints``) every joint, False (``--no-keypoints``) none."""
     from . import register as bsv_register
     from . import write_mesh, write_point_cloud
     from .frontend.capture import read_capture
@@ -464,8 +469,11 @@ def process(
     if progress:
         _print_cloud(len(cloud), cloud_report)
 
+    # Camera labels: an upper-arm patch far from the measured arm is the torso a hanging arm covers in one view.
+    cloud, arm_relabelled = confine_cloud_upper_arms(cloud, joints if segmentation == "camera" else None)
     label_source = register_params.pop("labels", CAMERA_LABEL_SOURCE if segmentation == "camera" else None)
-    measured = joints if keypoints and joints else None
+    measured = (select_joints(joints, None if keypoints else CAMERA_KEYPOINT_KINDS)
+                if joints and keypoints is not False else None)
     reg: Registration = steps.run(
         "register", "registering the template (ARAP)",
         lambda: bsv_register(cloud, template=template, progress=False, density=density, label_source=label_source,
@@ -484,7 +492,8 @@ def process(
         lambda: _intervals(reg, [_camera_spread(c, extrinsics[c]) for c in cameras], segmentation, density)).to_json()
     if refined:
         vols["calibration_refinement"] = {"method": "floor plane (pitch, roll, height)", "cameras": refined}
-    vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report}
+    vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report,
+                     "upper_arm_points_relabelled_torso": arm_relabelled}
     vols["joints_m"] = {name: j.to_json() for name, j in joints.items()}
     vols["warnings"] = landmark_warnings
     out.mkdir(parents=True, exist_ok=True)
@@ -645,8 +654,10 @@ def main_process(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="registration parameter (repeatable)")
     ap.add_argument("--refine-floor", action="store_true",
                     help="correct each camera's pitch, roll and height with the floor it sees (the cameras must see it)")
-    ap.add_argument("--keypoints", action="store_true",
-                    help="let the joint centres lifted from both views pull the template's joints (camera segmentation)")
+    ap.add_argument("--keypoints", action=argparse.BooleanOptionalAction, default=None,
+                    help="camera segmentation: let the joint centres lifted from both views pull the template's "
+                         "joints; default: the shoulders and wrists only, --keypoints: every "
+                         "joint, --no-keypoints: none")
     ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT")
     _add_bsip_options(ap)
     ap.add_argument("--quiet", action="store_true", help="no progress output")

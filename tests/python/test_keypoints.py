@@ -90,3 +90,84 @@ def test_bad_keypoints_are_typed_errors(template_scan: bsv.PointCloud) -> None:
         bsv.register(template_scan, template=other, keypoints={"knee_l": [0.1, 0.5, 0.0]})
     with pytest.raises(bsv.RegistrationParameterError, match="keypoint_weight"):
         bsv.register(template_scan, keypoint_weight=-1.0)
+
+
+def _arm_patch() -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """A left upper arm (a 45 mm tube about shoulder-elbow) and a torso patch 111-167 mm to its side, all
+    labelled upper_arm_l as a view that sees the arm over the torso would; a right arm without joints."""
+    from bsv.types import SEGMENT_IDS
+
+    rng = np.random.default_rng(0)
+    shoulder, elbow = np.array([0.2, 1.4, 0.0]), np.array([0.3, 1.15, 0.0])
+    t = rng.uniform(0, 1, 400)
+    ang = rng.uniform(0, 2 * np.pi, 400)
+    axis = (elbow - shoulder) / np.linalg.norm(elbow - shoulder)
+    u = np.cross(axis, [0.0, 0.0, 1.0])
+    u /= np.linalg.norm(u)
+    v = np.cross(axis, u)
+    arm = shoulder + t[:, None] * (elbow - shoulder) + 0.045 * (np.cos(ang)[:, None] * u + np.sin(ang)[:, None] * v)
+    # 111-167 mm medial of the arm's axis
+    torso = np.column_stack([np.full(100, 0.1), rng.uniform(1.2, 1.35, 100), rng.uniform(-0.05, 0.05, 100)])
+    right = arm * np.array([-1.0, 1.0, 1.0]) + np.array([0.0, 0.0, 0.3])  # far from everything, no joints
+    pts = np.vstack([arm, torso, right])
+    lab = np.concatenate([np.full(500, SEGMENT_IDS["upper_arm_l"]), np.full(400, SEGMENT_IDS["upper_arm_r"])])
+    return pts, lab.astype(np.uint8), {"shoulder_l": shoulder, "elbow_l": elbow}
+
+
+def test_confine_upper_arms_relabels_the_torso_a_view_called_arm() -> None:
+    from bsv.keypoints import confine_cloud_upper_arms, confine_upper_arms
+    from bsv.types import SEGMENT_IDS
+
+    pts, lab, joints = _arm_patch()
+    out, changed = confine_upper_arms(pts, lab, joints)
+    assert changed == 100
+    assert (out[:400] == SEGMENT_IDS["upper_arm_l"]).all()  # the arm itself stays
+    assert (out[400:500] == SEGMENT_IDS["torso"]).all()
+    assert (out[500:] == SEGMENT_IDS["upper_arm_r"]).all()  # no right joints: untouched
+    assert (lab[400:500] == SEGMENT_IDS["upper_arm_l"]).all()  # the input is not modified
+    cloud = bsv.PointCloud(pts, None, None, lab)
+    confined, n = confine_cloud_upper_arms(cloud, {k: {"xyz": v.tolist(), "confidence": 0.9} for k, v in joints.items()})
+    assert n == 100 and np.array_equal(confined.labels, out) and confined.points is cloud.points
+    assert confine_cloud_upper_arms(cloud, None) == (cloud, 0)
+    bare = bsv.PointCloud(pts)
+    assert confine_cloud_upper_arms(bare, joints)[0] is bare
+
+
+def test_confine_upper_arms_refuses_bad_input() -> None:
+    from bsv.errors import InputError
+    from bsv.keypoints import confine_upper_arms
+
+    pts, lab, joints = _arm_patch()
+    with pytest.raises(InputError, match="max_distance_m"):
+        confine_upper_arms(pts, lab, joints, max_distance_m=0.0)
+    with pytest.raises(InputError, match="points must be"):
+        confine_upper_arms(pts[:, :2], lab, joints)
+    with pytest.raises(InputError, match="3 finite coordinates"):
+        confine_upper_arms(pts, lab, {"shoulder_l": [np.nan, 0, 0], "elbow_l": joints["elbow_l"]})
+
+
+def test_select_joints_and_the_camera_paths_default_of_arm_joints(monkeypatch) -> None:
+    """The camera path lets the shoulders and wrists pull by default; ``keypoints=true`` every joint, ``false`` none."""
+    from bsv.bench import common
+    from bsv.keypoints import CAMERA_KEYPOINT_KINDS, JOINT_NAMES, select_joints
+
+    joints = {n: [0.0, 1.0, 0.0] for n in JOINT_NAMES}
+    arms = select_joints(joints, CAMERA_KEYPOINT_KINDS)
+    assert sorted(arms) == sorted(f"{j}_{s}" for j in ("shoulder", "wrist") for s in "lr")
+    assert select_joints(joints, None) == joints and select_joints(joints, ()) == {}
+    seen: list[object] = []
+
+    class Stop(Exception):
+        pass
+
+    def fake_register(*args: object, keypoints: object = None, **kw: object) -> None:
+        seen.append(keypoints)
+        raise Stop
+
+    monkeypatch.setattr(bsv, "register", fake_register)
+    cloud = bsv.PointCloud(np.zeros((3, 3)), None, None, np.ones(3, dtype=np.uint8))
+    for params in ({}, {"keypoints": "true"}, {"keypoints": "false"}, {"keypoint_joints": "knee"}):
+        with pytest.raises(Stop):
+            common.register_bsv(cloud, bsv.default_template(), params, keypoints=joints)
+    assert seen[0] == arms and seen[1] == joints and seen[2] is None
+    assert sorted(seen[3]) == ["knee_l", "knee_r"]  # type: ignore[arg-type]

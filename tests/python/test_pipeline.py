@@ -304,6 +304,8 @@ def test_a_failed_camera_run_leaves_nothing_and_can_be_rerun(capture, tmp_path):
     assert not out.exists() or not any(out.rglob("*")), sorted(out.rglob("*"))
     pipeline.process(cap, cap / "calibration.json", out, segmentation="camera", progress=False)
     assert (out / "segmentation" / "front" / "mask.png").exists() and (out / "volumes.json").exists()
+    relabelled = json.loads((out / "volumes.json").read_text())["cloud"]["upper_arm_points_relabelled_torso"]
+    assert isinstance(relabelled, int) and relabelled >= 0  # keypoints.confine_upper_arms ran on the camera labels
 
 
 # ----------------------------------------------------------------------------------------------------

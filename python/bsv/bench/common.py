@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import BenchError
+from ..keypoints import CAMERA_KEYPOINT_KINDS, select_joints
 from ..types import SEGMENT_IDS, TRUNK_LIMBS, Mesh, PointCloud
 
 #: Segment ids a lab's cloud keeps (DESIGN.md data flow step 4 drops head, hands and feet).
@@ -91,28 +92,32 @@ class Fit:
     info: dict[str, Any] = field(default_factory=dict)
 
 
-#: ``--param`` keys the bench itself reads (not registration parameters): ``keypoints=true`` lets the
-#: camera path's measured joints pull the template's (``bsv process --keypoints``);
-#: ``keypoint_joints=elbow+knee`` keeps only those joints.
+#: ``--param`` keys the bench itself reads (not registration parameters): the camera path's measured
+#: joints pull the template's as in ``bsv process``: by default the shoulders and wrists only
+#: (:data:`bsv.keypoints.CAMERA_KEYPOINT_KINDS`), ``keypoints=true`` every joint (``--keypoints``),
+#: ``keypoints=false`` none (``--no-keypoints``); ``keypoint_joints=elbow+knee`` keeps only those joints.
 BENCH_ONLY_PARAMS: tuple[str, ...] = ("keypoints", "keypoint_joints")
 
 
 def register_bsv(cloud: PointCloud, template: Mesh, params: Mapping[str, Any] | None = None,
                  keypoints: Mapping[str, Any] | None = None) -> Fit:
     """BSV's regularized ARAP registration (:func:`bsv.register`) of ``template`` to the labelled cloud,
-    with the measured joint centres ``keypoints`` when given and ``--param keypoints=true``."""
+    with the measured joint centres ``keypoints`` when given (the shoulders' and wrists' by default, every joint with
+    ``--param keypoints=true``, none with ``keypoints=false``)."""
     from .. import register
 
     t0 = time.perf_counter()
     kw = dict(params or {})
     # `--param labels:template` is the registration's label source, not the cloud's per-point labels
     label_source = kw.pop("labels", None)
-    if str(kw.pop("keypoints", "false")).lower() not in ("true", "1", "yes", "on"):
-        keypoints = None
+    which = str(kw.pop("keypoints", "default")).lower()
     kinds = kw.pop("keypoint_joints", None)  # e.g. --param keypoint_joints=elbow+knee
-    if keypoints is not None and kinds:
-        keep = str(kinds).replace("+", ",").split(",")
-        keypoints = {k: v for k, v in keypoints.items() if k.rsplit("_", 1)[0] in keep}
+    if keypoints is not None and which in ("false", "0", "no", "off"):
+        keypoints = None
+    elif keypoints is not None:
+        keep = (str(kinds).replace("+", ",").split(",") if kinds else
+                None if which in ("true", "1", "yes", "on") else list(CAMERA_KEYPOINT_KINDS))
+        keypoints = select_joints(keypoints, keep)
     reg = register(cloud.points, cloud.labels, template, label_source=label_source, keypoints=keypoints, **kw)
     wall = time.perf_counter() - t0
     summary = dict(reg.volumes.get("registration", {}) or {})

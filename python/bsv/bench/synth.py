@@ -174,6 +174,10 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
 
         params = {**params, "labels": CAMERA_LABEL_SOURCE}
     cloud: PointCloud = inject(keep_trunk_limbs(raw), kinds, seed)
+    if segmentation == "camera":  # as bsv process: the measured joints confine the upper arms' labels
+        from ..keypoints import confine_cloud_upper_arms
+
+        cloud = confine_cloud_upper_arms(cloud, joints)[0]
     far2, far10 = cloud_far_pct(cloud, truth_surface)
     for method in methods:
         run = Run(name, condition, method, False, truth_l=dict(truth), floor_l=dict(floor), n_points=len(cloud),
@@ -266,6 +270,10 @@ class Refined:
                             "error_paper_sd": (err / np.asarray(PAPER_STD.get(p.name, PAPER_STD["back"]))).tolist(),
                             "error_posterior_sd": (err / np.sqrt(np.maximum(np.diag(c.covariance), 1e-30))).tolist()}
         cloud = inject(keep_trunk_limbs(self.raw), kinds, seed)
+        if segmentation == "camera":
+            from ..keypoints import confine_cloud_upper_arms
+
+            cloud = confine_cloud_upper_arms(cloud, joints)[0]
         try:
             fit = register_method("bsv", cloud, template, params, keypoints=joints)
         except Exception as exc:  # reported with the run, never raised

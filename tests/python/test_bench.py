@@ -436,3 +436,19 @@ def test_reduced_camera_path_regression_guard(tmp_path: Path) -> None:
     assert max(s[k]["rve_mean"] for k in segs) < BOUND_CAMERA_SEGMENT_NOER
     runs = [Run(**{k: v for k, v in r.items() if k in Run.__dataclass_fields__}) for r in doc["runs"]]
     assert summarise(runs)["noer"]["all"]["median_mm"] < BOUND_CAMERA_JOINT_MEDIAN_MM
+
+
+def test_timing_table_gives_the_median_and_the_peer_ratio_per_subject() -> None:
+    from bsv.bench.tables import timing_table
+
+    runs = [
+        Run("s0", "noer", "bsv", True, seconds=0.5), Run("s0", "noer", "trimesh", True, seconds=10.0),
+        Run("s1", "noer", "bsv", True, seconds=1.0), Run("s1", "noer", "trimesh", True, seconds=12.0),
+        Run("s2", "noer", "bsv", True, seconds=0.4), Run("s2", "noer", "trimesh", False),
+    ]
+    lines = timing_table(runs).splitlines()
+    median = next(line for line in lines if line.startswith("| **median**"))
+    assert median.split("|")[2].strip() == "0.50" and median.split("|")[3].strip() == "11.00"
+    ratio = next(line for line in lines if "trimesh / bsv" in line)
+    # Subject s2's peer failed: the ratio is the median of 20x and 12x only.
+    assert ratio.split("|")[3].strip() == "16.0x"

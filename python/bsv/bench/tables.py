@@ -234,7 +234,9 @@ def worst_table(table: Sequence[Mapping[str, Any]], method: str = "bsv") -> str:
 
 
 def timing_table(runs: Sequence[Run]) -> str:
-    """Markdown: registration seconds per subject (rows) and condition x method, with the mean."""
+    """Markdown: registration seconds per subject (rows) and condition x method, with the mean and the
+    median; with the peer, the median over subjects of each subject's peer / bsv time ratio (the same
+    cloud, the same run: the speed-up that machine load does not move)."""
     conds = [c for c in CONDITIONS if any(r.condition == c for r in runs)]
     methods = [m for m in ("bsv", "trimesh") if any(r.method == m for r in runs)]
     cols = [(c, m) for c in conds for m in methods]
@@ -253,6 +255,18 @@ def timing_table(runs: Sequence[Run]) -> str:
         v = [r.seconds for r in runs if r.condition == c and r.method == m and r.ok]
         means.append(f"{np.mean(v):.2f}" if v else EMPTY_CELL)
     lines.append("| " + " | ".join(means) + " |")
+    medians = ["**median**"]
+    for c, m in cols:
+        v = [r.seconds for r in runs if r.condition == c and r.method == m and r.ok]
+        medians.append(f"{np.median(v):.2f}" if v else EMPTY_CELL)
+    lines.append("| " + " | ".join(medians) + " |")
+    if "trimesh" in methods and "bsv" in methods:
+        ratios = ["**trimesh / bsv** (median of per-subject ratios)"]
+        for c, m in cols:
+            q = [by[(s, c, "trimesh")].seconds / by[(s, c, "bsv")].seconds for s in subjects
+                 if all((s, c, k) in by and by[(s, c, k)].ok and by[(s, c, k)].seconds > 0 for k in ("bsv", "trimesh"))]
+            ratios.append(f"{np.median(q):.1f}x" if m == "trimesh" and q else "")
+        lines.append("| " + " | ".join(ratios) + " |")
     return "\n".join(lines)
 
 

@@ -21,9 +21,10 @@ pub struct Energy {
 pub struct Timings {
     /// Correspondences (k-d tree queries, pruning, normals).
     pub correspond: f64,
-    /// Local step (per-cell maps).
+    /// Local step (per-cell maps), with the numeric refactorization of the global system (when the
+    /// data weights changed) running alongside it.
     pub local: f64,
-    /// Global step (numeric refactorization when needed, right-hand side, solve).
+    /// Global step: right-hand side and triangular solves.
     pub solve: f64,
 }
 

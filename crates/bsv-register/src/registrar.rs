@@ -233,9 +233,9 @@ impl<'a> Registrar<'a> {
         let f = &self.fit;
         let energy_start = f.arap + f.reg + data_energy(&f.cur, &f.d, &f.q);
         let t1 = Instant::now();
-        let energy_after_local = self.local_step();
+        let (energy_after_local, refactorized) = self.local_step_and_factorization()?;
         let t2 = Instant::now();
-        let refactorized = self.global_step(iteration)?;
+        self.global_solve(iteration)?;
         let t3 = Instant::now();
         let (model, f) = (&self.model, &mut self.fit);
         (f.arap, f.reg) = self.pool.install(|| model.energy(&f.cur, &f.maps));
@@ -310,18 +310,24 @@ impl<'a> Registrar<'a> {
         Ok((n_corr, rms_m2p, rms_p2m))
     }
 
-    /// The local step (new cell maps); returns the total energy after it.
-    fn local_step(&mut self) -> f64 {
-        let (model, f) = (&self.model, &mut self.fit);
-        let (a_loc, r_loc) = self.pool.install(|| model.local_step(&f.cur, &mut f.maps));
-        a_loc + r_loc + data_energy(&f.cur, &f.d, &f.q)
+    /// The local step (new cell maps) and, alongside it on the pool's other threads, the numeric
+    /// refactorization of the global system for this iteration's data weights (it depends on the
+    /// weights only, which the correspondences have set; the solver is sequential, so the two overlap
+    /// without changing a bit of either). Returns the total energy after the local step and whether
+    /// the system was refactorized.
+    fn local_step_and_factorization(&mut self) -> Result<(f64, bool), RegisterError> {
+        let (model, f, solver) = (&self.model, &mut self.fit, &mut self.solver);
+        let (maps, cur, d) = (&mut f.maps, &f.cur, &f.d);
+        let ((a_loc, r_loc), refactorized) =
+            self.pool.install(|| rayon::join(|| model.local_step(cur, maps), || solver.set_data_weights(d)));
+        let refactorized = refactorized.map_err(NumericError::solver)?;
+        Ok((a_loc + r_loc + data_energy(&f.cur, &f.d, &f.q), refactorized))
     }
 
-    /// The global step: refactorizes when the data weights changed, solves for the new vertex
-    /// positions. Returns whether it refactorized.
-    fn global_step(&mut self, iteration: usize) -> Result<bool, RegisterError> {
+    /// The global solve for the new vertex positions (the system factorized for this iteration's
+    /// data weights by [`Self::local_step_and_factorization`]).
+    fn global_solve(&mut self, iteration: usize) -> Result<(), RegisterError> {
         let (model, f) = (&self.model, &mut self.fit);
-        let refactorized = self.solver.set_data_weights(&f.d).map_err(NumericError::solver)?;
         self.pool.install(|| model.rhs(&f.maps, &mut f.rhs));
         for v in 0..f.cur.len() {
             for k in 0..3 {
@@ -335,7 +341,7 @@ impl<'a> Registrar<'a> {
         if f.cur.iter().any(|p| p.iter().any(|x| !x.is_finite())) {
             return Err(NumericError::Diverged { iteration }.into());
         }
-        Ok(refactorized)
+        Ok(())
     }
 
     /// The current vertex positions (the rest shape before the first step), metres.

@@ -101,6 +101,17 @@ def select_joints(joints: Mapping[str, Any], kinds: Sequence[str] | None) -> dic
     return {k: v for k, v in joints.items() if kinds is None or k.rsplit("_", 1)[0] in kinds}
 
 
+def camera_joints(joints: Mapping[str, Any] | None, which: bool | None,
+                  kinds: Sequence[str] | None = None) -> dict[str, Any] | None:
+    """The measured joints that pull the template on the camera path (``bsv process``, ``bench synth``):
+    ``which`` None (the default) the :data:`CAMERA_KEYPOINT_KINDS`, True every joint, False none (None is
+    returned); ``kinds``, when given, overrides the choice of kinds. None also without ``joints``."""
+    if not joints or which is False:
+        return None
+    keep = list(kinds) if kinds else None if which else list(CAMERA_KEYPOINT_KINDS)
+    return select_joints(joints, keep)
+
+
 #: Default of :func:`confine_upper_arms`: an upper-arm point farther than this (m) from the measured
 #: shoulder-elbow segment is torso. The 99th percentile of the true upper-arm points' distances from
 #: that segment (joints as measured) is 64-96 mm on the synthetic cohort (seeds 0, 2, 6); the torso patch
@@ -163,4 +174,4 @@ def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray
     return np.asarray(np.linalg.norm(p - (a + t[:, None] * ab), axis=1))
 
 
-__all__ = ["CAMERA_KEYPOINT_KINDS", "JOINT_NAMES", "UPPER_ARM_MAX_DISTANCE_M", "as_keypoints", "confine_cloud_upper_arms", "confine_upper_arms", "joint_rings", "select_joints", "template_kind"]
+__all__ = ["CAMERA_KEYPOINT_KINDS", "JOINT_NAMES", "UPPER_ARM_MAX_DISTANCE_M", "as_keypoints", "camera_joints", "confine_cloud_upper_arms", "confine_upper_arms", "joint_rings", "select_joints", "template_kind"]

@@ -34,7 +34,7 @@ from .argtypes import seed as seed_type
 from .errors import BsipError, InputError, OutputExistsError, PersonIsolationError
 from .extras import require
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
-from .keypoints import CAMERA_KEYPOINT_KINDS, confine_cloud_upper_arms, select_joints
+from .keypoints import camera_joints, confine_cloud_upper_arms
 from .types import SEGMENT_IDS, TRUNK_LIMBS, Mesh, PointCloud, Registration
 
 PathLike = str | Path
@@ -472,8 +472,7 @@ def process(
     # Camera labels: an upper-arm patch far from the measured arm is the torso a hanging arm covers in one view.
     cloud, arm_relabelled = confine_cloud_upper_arms(cloud, joints if segmentation == "camera" else None)
     label_source = register_params.pop("labels", CAMERA_LABEL_SOURCE if segmentation == "camera" else None)
-    measured = (select_joints(joints, None if keypoints else CAMERA_KEYPOINT_KINDS)
-                if joints and keypoints is not False else None)
+    measured = camera_joints(joints, keypoints)
     reg: Registration = steps.run(
         "register", "registering the template (ARAP)",
         lambda: bsv_register(cloud, template=template, progress=False, density=density, label_source=label_source,

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import BenchError
-from ..keypoints import CAMERA_KEYPOINT_KINDS, select_joints
+from ..keypoints import camera_joints
 from ..types import SEGMENT_IDS, TRUNK_LIMBS, Mesh, PointCloud
 
 #: Segment ids a lab's cloud keeps (DESIGN.md data flow step 4 drops head, hands and feet).
@@ -112,12 +112,8 @@ def register_bsv(cloud: PointCloud, template: Mesh, params: Mapping[str, Any] | 
     label_source = kw.pop("labels", None)
     which = str(kw.pop("keypoints", "default")).lower()
     kinds = kw.pop("keypoint_joints", None)  # e.g. --param keypoint_joints=elbow+knee
-    if keypoints is not None and which in ("false", "0", "no", "off"):
-        keypoints = None
-    elif keypoints is not None:
-        keep = (str(kinds).replace("+", ",").split(",") if kinds else
-                None if which in ("true", "1", "yes", "on") else list(CAMERA_KEYPOINT_KINDS))
-        keypoints = select_joints(keypoints, keep)
+    choice = False if which in ("false", "0", "no", "off") else True if which in ("true", "1", "yes", "on") else None
+    keypoints = camera_joints(keypoints, choice, str(kinds).replace("+", ",").split(",") if kinds else None)
     reg = register(cloud.points, cloud.labels, template, label_source=label_source, keypoints=keypoints, **kw)
     wall = time.perf_counter() - t0
     summary = dict(reg.volumes.get("registration", {}) or {})

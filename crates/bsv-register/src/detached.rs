@@ -26,20 +26,8 @@
 //! of a small segment's largest piece (a shin seen by one camera holds ~4 % of the cloud) that
 //! forms ONE piece is kept.
 
+use crate::voxels::key;
 use rustc_hash::FxHashMap as HashMap;
-
-/// Voxel key of `p` (side `1 / inv`), or `None` when it cannot be keyed (see `outliers.rs`).
-fn key(p: &[f64; 3], inv: f64) -> Option<[i64; 3]> {
-    let mut k = [0i64; 3];
-    for (ka, &x) in k.iter_mut().zip(p) {
-        let v = (x * inv).floor();
-        if v.is_nan() || v.abs() > crate::outliers::MAX_KEY {
-            return None;
-        }
-        *ka = v as i64;
-    }
-    Some(k)
-}
 
 /// Union-find over voxel ids with path halving.
 struct Forest(Vec<u32>);

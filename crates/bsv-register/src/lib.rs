@@ -46,6 +46,7 @@ mod section;
 mod solver;
 mod surface;
 mod sym3;
+mod voxels;
 
 pub use error::{ImplausibleError, InputError, NumericError, ParameterError, RegisterError, ResourceError};
 pub use keypoints::{Keypoint, KeypointResidual, Keypoints};

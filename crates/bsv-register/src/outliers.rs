@@ -10,29 +10,11 @@
 //! scan, like statistical outlier removal with 8 neighbours and 1 std, at a tenth of its cost
 //! (one hash pass, no k-d tree queries).
 //!
-//! A point more than [`MAX_KEY`] voxels from the origin (or with a non-finite coordinate) cannot be
-//! keyed without overflow; it is always dropped (it is nowhere near a body).
+//! A point more than [`crate::voxels::MAX_KEY`] voxels from the origin (or with a non-finite
+//! coordinate) cannot be keyed without overflow; it is always dropped (it is nowhere near a body).
 
+use crate::voxels::Voxels;
 use rayon::prelude::*;
-use rustc_hash::FxHashMap as HashMap;
-
-/// Largest voxel key magnitude (2^52): keys and their +-1 neighbours never overflow an `i64`, and
-/// every integer up to it is exact in an `f64`.
-pub const MAX_KEY: f64 = 4_503_599_627_370_496.0;
-
-/// The voxel key of `p`, or `None` when a coordinate is non-finite or beyond [`MAX_KEY`] voxels.
-#[inline]
-pub(crate) fn key(p: &[f64; 3], inv: f64) -> Option<[i64; 3]> {
-    let mut k = [0i64; 3];
-    for (ka, &x) in k.iter_mut().zip(p) {
-        let v = (x * inv).floor();
-        if v.is_nan() || v.abs() > MAX_KEY {
-            return None;
-        }
-        *ka = v as i64;
-    }
-    Some(k)
-}
 
 /// Per point: whether it is kept (see the module docs). All points are kept when `voxel` is not
 /// positive and finite or the cloud is empty.
@@ -40,31 +22,18 @@ pub fn sparse_points(points: &[[f64; 3]], voxel: f64, min_fraction: f64) -> Vec<
     if !(voxel > 0.0 && voxel.is_finite()) || points.is_empty() {
         return vec![true; points.len()];
     }
-    let inv = 1.0 / voxel;
-    let keys: Vec<Option<[i64; 3]>> = points.par_iter().map(|p| key(p, inv)).collect();
-    let mut counts: HashMap<[i64; 3], u32> = HashMap::with_capacity_and_hasher(points.len() / 4, Default::default());
-    for k in keys.iter().flatten() {
-        *counts.entry(*k).or_insert(0) += 1;
+    // The block count of a point is its voxel's: counted once per voxel.
+    let voxels = Voxels::new(points, 1.0 / voxel);
+    let mut counts = vec![0u32; voxels.len()];
+    for id in voxels.of_point.iter().flatten() {
+        counts[*id as usize] += 1;
     }
-    let totals: Vec<u32> = keys
-        .par_iter()
-        .map(|k| {
-            // Unkeyable (absurdly far) points count nothing around them and are dropped below.
-            let Some(k) = k else { return 0 };
-            let mut t = 0;
-            for dx in -1..=1 {
-                for dy in -1..=1 {
-                    for dz in -1..=1 {
-                        // |k| <= 2^52, so k + 1 cannot overflow.
-                        if let Some(c) = counts.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
-                            t += c;
-                        }
-                    }
-                }
-            }
-            t
-        })
+    let block_counts: Vec<u32> = (0..voxels.len() as u32)
+        .into_par_iter()
+        .map(|id| voxels.block(id).map(|(b, _)| counts[b as usize]).sum())
         .collect();
+    // Unkeyable (absurdly far) points count nothing around them and are dropped below.
+    let totals: Vec<u32> = voxels.of_point.par_iter().map(|v| v.map_or(0, |id| block_counts[id as usize])).collect();
     let mut sorted = totals.clone();
     let mid = sorted.len() / 2;
     let (_, &mut median, _) = sorted.select_nth_unstable(mid);

@@ -18,9 +18,8 @@
 //! it is meant for two-view captures. A floor patch (normal along Y) goes too.
 
 use crate::correspond::{build_tree, neighbourhood_normal};
-use crate::outliers::key;
+use crate::voxels::Voxels;
 use rayon::prelude::*;
-use rustc_hash::FxHashMap as HashMap;
 
 /// Neighbours of the PCA normal.
 pub const NEIGHBOURS: usize = 16;
@@ -131,36 +130,27 @@ impl Moments {
 /// Per point: whether its cell (side `cell`) and the 26 around it hold at least
 /// [`SCREEN_MIN_POINTS`] points whose PCA normal has |n_z| >= `min_cos`.
 fn facing_cells(points: &[[f64; 3]], cell: f64, min_cos: f64) -> Vec<bool> {
-    let inv = 1.0 / cell;
-    let keys: Vec<Option<[i64; 3]>> = points.par_iter().map(|p| key(p, inv)).collect();
-    let mut cells: HashMap<[i64; 3], Moments> = HashMap::with_capacity_and_hasher(points.len() / 4, Default::default());
-    for (p, k) in points.iter().zip(&keys) {
-        if let Some(k) = k {
-            let corner = k.map(|v| v as f64 * cell);
-            cells.entry(*k).or_default().add([p[0] - corner[0], p[1] - corner[1], p[2] - corner[2]]);
+    let voxels = Voxels::new(points, 1.0 / cell);
+    let mut cells = vec![Moments::default(); voxels.len()];
+    for (p, id) in points.iter().zip(&voxels.of_point) {
+        if let Some(id) = *id {
+            let corner = voxels.keys[id as usize].map(|v| v as f64 * cell);
+            cells[id as usize].add([p[0] - corner[0], p[1] - corner[1], p[2] - corner[2]]);
         }
     }
-    let facing: HashMap<[i64; 3], bool> = cells
-        .par_iter()
-        .map(|(k, _)| {
+    let facing: Vec<bool> = (0..voxels.len() as u32)
+        .into_par_iter()
+        .map(|id| {
             let mut block = Moments::default();
-            for dx in -1..=1i64 {
-                for dy in -1..=1i64 {
-                    for dz in -1..=1i64 {
-                        // |k| <= 2^52 (outliers::MAX_KEY), so k + 1 cannot overflow.
-                        if let Some(o) = cells.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
-                            block.add_shifted(o, [dx as f64 * cell, dy as f64 * cell, dz as f64 * cell]);
-                        }
-                    }
-                }
+            for (b, o) in voxels.block(id) {
+                block.add_shifted(&cells[b as usize], o.map(|v| v as f64 * cell));
             }
-            let ok = block.n >= SCREEN_MIN_POINTS
+            block.n >= SCREEN_MIN_POINTS
                 && crate::sym3::smallest_eigenvector(&block.scatter())
-                    .is_some_and(|(v, l)| l[1] > 1e-6 * l[2] && v[2].abs() >= min_cos);
-            (*k, ok)
+                    .is_some_and(|(v, l)| l[1] > 1e-6 * l[2] && v[2].abs() >= min_cos)
         })
         .collect();
-    keys.iter().map(|k| k.is_some_and(|k| facing.get(&k).copied().unwrap_or(false))).collect()
+    voxels.of_point.iter().map(|v| v.is_some_and(|id| facing[id as usize])).collect()
 }
 
 #[cfg(test)]

@@ -49,6 +49,9 @@ pub struct IterationLog {
     /// RMS distance from the cloud points to their nearest vertex entering this iteration, mm
     /// (p2m iterations only: the query costs as much as the rest of an iteration).
     pub rms_points_to_mesh_mm: Option<f64>,
+    /// RMS displacement of the vertices in this iteration's global step, mm (how far the fit still
+    /// moves: the convergence measure of `stop_motion_mm`).
+    pub motion_mm: f64,
     /// Correspondences kept after pruning (vertices with a data term).
     pub n_correspondences: usize,
     /// Whether the system was refactorized (the data weights changed).

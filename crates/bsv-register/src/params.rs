@@ -346,6 +346,12 @@ pub struct RegisterParams {
     pub energy: EnergyParams,
     /// Correspondence schedule. Default `m2p:5,p2m:5,m2p:10`.
     pub schedule: Schedule,
+    /// The schedule's last stage ends early, after at least [`MIN_FINAL_ITERATIONS`] of its
+    /// iterations, at the first iteration that moves the vertices by less than this RMS distance
+    /// (mm; 0 = always run every iteration). Default 0.2: by then an iteration changes no segment's
+    /// volume by more than the correspondences' own jitter (measured: benchmarks/BENCH.md, "Round 2,
+    /// session 6").
+    pub stop_motion_mm: f64,
     /// Correspondence pruning.
     #[serde(flatten)]
     pub pruning: PruningParams,
@@ -380,6 +386,7 @@ impl Default for RegisterParams {
         RegisterParams {
             energy: EnergyParams::default(),
             schedule: Schedule::default(),
+            stop_motion_mm: 0.2,
             pruning: PruningParams::default(),
             prealignment: PrealignParams::default(),
             checks: CheckParams::default(),
@@ -394,7 +401,7 @@ impl Default for RegisterParams {
 
 /// Every key of the serde form of [`RegisterParams`] (the flat parameter names), in the order of
 /// the serialised form. A unit test keeps it equal to the serialised keys.
-pub const PARAMETER_NAMES: [&str; 38] = [
+pub const PARAMETER_NAMES: [&str; 39] = [
     "alpha",
     "cell_weight",
     "data_weight",
@@ -406,6 +413,7 @@ pub const PARAMETER_NAMES: [&str; 38] = [
     "keypoint_iterations",
     "curvature_correction",
     "schedule",
+    "stop_motion_mm",
     "prune_distance_factor",
     "prune_distance_floor_m",
     "prune_normal_angle_deg",
@@ -446,6 +454,7 @@ struct ParamsRepr {
     #[serde(flatten)]
     energy: EnergyParams,
     schedule: Schedule,
+    stop_motion_mm: f64,
     #[serde(flatten)]
     pruning: PruningParams,
     #[serde(flatten)]
@@ -470,6 +479,7 @@ impl Default for ParamsRepr {
         ParamsRepr {
             energy: d.energy,
             schedule: d.schedule,
+            stop_motion_mm: d.stop_motion_mm,
             pruning: d.pruning,
             prealignment: d.prealignment,
             checks: d.checks,
@@ -493,6 +503,7 @@ impl TryFrom<ParamsRepr> for RegisterParams {
         Ok(RegisterParams {
             energy: r.energy,
             schedule: r.schedule,
+            stop_motion_mm: r.stop_motion_mm,
             pruning: r.pruning,
             prealignment: r.prealignment,
             checks: r.checks,
@@ -504,6 +515,9 @@ impl TryFrom<ParamsRepr> for RegisterParams {
         })
     }
 }
+
+/// Fewest iterations the schedule's last stage runs before `stop_motion_mm` may end it.
+pub const MIN_FINAL_ITERATIONS: usize = 3;
 
 /// Largest `estimate_normals_k`.
 pub const MAX_NORMAL_NEIGHBOURS: usize = 1000;
@@ -525,6 +539,12 @@ impl RegisterParams {
     /// Checks every numeric parameter's range and that the schedule has an iteration.
     pub fn validate(&self) -> Result<(), ParameterError> {
         self.energy.validate()?;
+        check(
+            "stop_motion_mm",
+            self.stop_motion_mm,
+            self.stop_motion_mm.is_finite() && self.stop_motion_mm >= 0.0,
+            "must be finite and >= 0 (mm; 0 = run every iteration of the schedule)",
+        )?;
         let p = &self.pruning;
         check(
             "prune_distance_factor",

@@ -18,7 +18,7 @@ use crate::curvature::shapes;
 use crate::error::{NumericError, RegisterError};
 use crate::local::{CellMaps, LocalModel};
 use crate::log::{Energy, IterationLog, Timings};
-use crate::params::{PruningParams, RegisterParams};
+use crate::params::{PruningParams, RegisterParams, MIN_FINAL_ITERATIONS};
 use crate::prepare::Prepared;
 use crate::schedule::{CorrespondenceKind, Schedule};
 use crate::solver::GlobalSolver;
@@ -103,6 +103,11 @@ struct Cursor {
 }
 
 impl Cursor {
+    /// Moves past the schedule's end: no iteration is left.
+    fn finish(&mut self, schedule: &Schedule) {
+        (self.stage, self.done) = (schedule.0.len(), 0);
+    }
+
     /// The stage of the next iteration (skipping stages of 0 iterations), `None` at the end.
     fn next(&mut self, schedule: &Schedule) -> Option<(usize, CorrespondenceKind)> {
         while let Some(stage) = schedule.0.get(self.stage) {
@@ -235,7 +240,7 @@ impl<'a> Registrar<'a> {
         let t1 = Instant::now();
         let (energy_after_local, refactorized) = self.local_step_and_factorization()?;
         let t2 = Instant::now();
-        self.global_solve(iteration)?;
+        let motion = self.global_solve(iteration)?;
         let t3 = Instant::now();
         let (model, f) = (&self.model, &mut self.fit);
         (f.arap, f.reg) = self.pool.install(|| model.energy(&f.cur, &f.maps));
@@ -249,6 +254,7 @@ impl<'a> Registrar<'a> {
             energy: Energy { arap: f.arap, reg: f.reg, data, total: f.arap + f.reg + data },
             rms_mesh_to_points_mm: rms_m2p * 1e3,
             rms_points_to_mesh_mm: rms_p2m.map(|r| r * 1e3),
+            motion_mm: motion * 1e3,
             n_correspondences,
             refactorized,
             timings: Timings {
@@ -258,6 +264,9 @@ impl<'a> Registrar<'a> {
             },
         });
         self.cursor.done += 1;
+        if self.converged(stage, motion) {
+            self.cursor.finish(&self.params.schedule);
+        }
         Ok(self.log.last())
     }
 
@@ -325,8 +334,9 @@ impl<'a> Registrar<'a> {
     }
 
     /// The global solve for the new vertex positions (the system factorized for this iteration's
-    /// data weights by [`Self::local_step_and_factorization`]).
-    fn global_solve(&mut self, iteration: usize) -> Result<(), RegisterError> {
+    /// data weights by [`Self::local_step_and_factorization`]). Returns the RMS displacement of the
+    /// vertices (m).
+    fn global_solve(&mut self, iteration: usize) -> Result<f64, RegisterError> {
         let (model, f) = (&self.model, &mut self.fit);
         self.pool.install(|| model.rhs(&f.maps, &mut f.rhs));
         for v in 0..f.cur.len() {
@@ -335,13 +345,25 @@ impl<'a> Registrar<'a> {
             }
         }
         self.solver.solve_in_place(f.sol.as_mut()).map_err(NumericError::solver)?;
+        let mut moved2 = 0.0;
         for (v, p) in f.cur.iter_mut().enumerate() {
-            *p = [f.sol[(v, 0)], f.sol[(v, 1)], f.sol[(v, 2)]];
+            let new = [f.sol[(v, 0)], f.sol[(v, 1)], f.sol[(v, 2)]];
+            let d = sub(new, *p);
+            moved2 += dot(d, d);
+            *p = new;
         }
         if f.cur.iter().any(|p| p.iter().any(|x| !x.is_finite())) {
             return Err(NumericError::Diverged { iteration }.into());
         }
-        Ok(())
+        Ok((moved2 / f.cur.len().max(1) as f64).sqrt())
+    }
+
+    /// Whether the fit has converged after an iteration of `stage` that moved the vertices by
+    /// `motion` (RMS, m): in the schedule's last stage, after at least [`MIN_FINAL_ITERATIONS`] of
+    /// its iterations, less than `stop_motion_mm`.
+    fn converged(&self, stage: usize, motion: f64) -> bool {
+        let last = self.params.schedule.0.len().saturating_sub(1);
+        stage == last && self.cursor.done >= MIN_FINAL_ITERATIONS && motion * 1e3 < self.params.stop_motion_mm
     }
 
     /// The current vertex positions (the rest shape before the first step), metres.

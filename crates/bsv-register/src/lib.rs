@@ -53,7 +53,7 @@ pub use keypoints::{Keypoint, KeypointResidual, Keypoints};
 pub use log::{Energy, IterationLog, Timings};
 pub use params::{
     ArticulationParams, CheckParams, EnergyParams, LabelSource, OutlierParams, PrealignMode, PrealignParams,
-    PruningParams, RegisterParams, YawMode, PARAMETER_NAMES,
+    PruningParams, RegisterParams, YawMode, MIN_FINAL_ITERATIONS, PARAMETER_NAMES,
 };
 pub use plausible::{check_person, is_human_template};
 pub use prealign::Similarity;

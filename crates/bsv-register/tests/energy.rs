@@ -17,6 +17,7 @@ fn energy_monotone_within_every_iteration() {
             let params = RegisterParams {
                 energy: EnergyParams { alpha, tangential_weight: tw, tangential_weight_p2m: tw, ..Default::default() },
                 schedule: Schedule::parse("m2p:4,p2m:4,m2p:4").unwrap(),
+                stop_motion_mm: 0.0,
                 ..Default::default()
             };
             let mut logs: Vec<IterationLog> = Vec::new();

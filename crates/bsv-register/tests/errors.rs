@@ -237,7 +237,9 @@ fn the_stages_compose_to_register_in_the_callers_pool() {
         assert_eq!(entry.iteration, steps);
         steps += 1;
     }
-    assert!(fit.is_done() && steps == params.schedule.total_iterations() && fit.log().len() == steps);
+    // The last stage may stop early on convergence (`stop_motion_mm`), as in the whole run.
+    assert!(fit.is_done() && steps <= params.schedule.total_iterations() && fit.log().len() == steps);
+    assert_eq!(steps, whole.log.len());
     let staged = fit.finish().unwrap();
     assert_eq!(staged.mesh.vertices, whole.mesh.vertices);
     assert_eq!(staged.rms_points_to_mesh_mm, whole.rms_points_to_mesh_mm);

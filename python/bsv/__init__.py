@@ -258,7 +258,7 @@ def _print_iteration(it: dict[str, Any]) -> None:
     p2m_text = "" if p2m is None else f"  p->m {p2m:.2f} mm"
     print(
         f"  [{it['stage']}:{it['kind']} {it['iteration']:>2}] m->p {it['rms_mesh_to_points_mm']:.2f} mm"
-        f"{p2m_text}  E={it['energy']['total']:.4g}",
+        f"{p2m_text}  E={it['energy']['total']:.4g}  moved {it['motion_mm']:.2f} mm",
         flush=True,
     )
 

@@ -29,6 +29,10 @@ pub struct Args {
     /// Correspondence schedule: comma-separated kind:iterations, kind = m2p (mesh to points) or p2m.
     #[arg(long, default_value = bsv_register::DEFAULT_SCHEDULE)]
     schedule: String,
+    /// End the schedule's last stage once an iteration moves the vertices by less than this RMS
+    /// distance, mm (0 = run every iteration of the schedule).
+    #[arg(long, value_name = "MM")]
+    stop_motion_mm: Option<f64>,
     /// Regularization strength: how much a cell may leave its nearest rotation (0 = free affine cells).
     #[arg(long)]
     alpha: Option<f64>,
@@ -77,6 +81,9 @@ fn params_from(a: &Args, cloud_labelled: bool) -> Result<RegisterParams, CliErro
     if let Some(alpha) = a.alpha {
         p.energy.alpha = alpha;
     }
+    if let Some(mm) = a.stop_motion_mm {
+        p.stop_motion_mm = mm;
+    }
     p.labels = match a.labels.as_deref() {
         Some("template") => LabelSource::Template,
         Some(_) => LabelSource::Cloud,
@@ -98,6 +105,7 @@ fn flag_of(parameter: &str) -> Option<&'static str> {
     Some(match parameter {
         "alpha" => "--alpha",
         "schedule" => "--schedule",
+        "stop_motion_mm" => "--stop-motion-mm",
         "labels" => "--labels",
         "prealign" => "--prealign",
         "threads" => "--threads",
@@ -133,13 +141,14 @@ fn with_flags(e: &RegisterError) -> String {
 fn print_iteration(it: &IterationLog, timings: bool) {
     let p2m = it.rms_points_to_mesh_mm.map_or_else(String::new, |v| format!("  p->m {v:6.2} mm"));
     say_inline!(
-        "  [{}:{:<3} {:>2}] m->p {:6.2} mm{p2m}  E {:.4e}  corr {:>6}",
+        "  [{}:{:<3} {:>2}] m->p {:6.2} mm{p2m}  E {:.4e}  corr {:>6}  moved {:5.2} mm",
         it.stage,
         format!("{:?}", it.kind).to_lowercase(),
         it.iteration,
         it.rms_mesh_to_points_mm,
         it.energy.total,
-        it.n_correspondences
+        it.n_correspondences,
+        it.motion_mm
     );
     if timings {
         let t = &it.timings;

@@ -68,6 +68,9 @@ fn bad_inputs_fail_with_clear_messages() {
     let o = bsv(&["register", "mm.ply", "--schedule", "m2p:x"], &d);
     assert!(!o.status.success());
     assert!(text(&o).to_lowercase().contains("schedule"), "{}", text(&o));
+    let o = bsv(&["register", "mm.ply", "--stop-motion-mm=-1"], &d);
+    assert!(!o.status.success());
+    assert!(text(&o).contains("--stop-motion-mm"), "{}", text(&o));
     let o = bsv(&["scan", "mm.ply", "--condition", "foggy"], &d);
     assert!(!o.status.success());
     assert!(text(&o).contains("foggy"), "{}", text(&o));

@@ -172,8 +172,10 @@ def test_a_task_past_the_timeout_is_cancelled_and_recorded(inputs: dict[str, Any
                                                            tmp_path: Path) -> None:
     items = collect_items(inputs["inputs"][:2])
     pids = set(client.run(os.getpid).values())
-    # 400 iterations take far longer than 1 s: the item is cancelled and its worker process restarted.
-    res = run_batch(items[:1], tmp_path / "slow", Spec(params={"schedule": "m2p:400"}), client=client,
+    # 400 iterations (no convergence stop) take far longer than 1 s: the item is cancelled and its worker
+    # process restarted.
+    res = run_batch(items[:1], tmp_path / "slow", Spec(params={"schedule": "m2p:400", "stop_motion_mm": 0}),
+                    client=client,
                     timeout=1.0, progress=False)
     assert res.exit_code == 1
     rec = res.records[items[0].name]

@@ -17,7 +17,7 @@ def tick(it):
     if it["iteration"] == 0:
         print("started", flush=True)
 try:
-    bsv.register(c, progress=tick, schedule="m2p:100000")
+    bsv.register(c, progress=tick, schedule="m2p:100000", stop_motion_mm=0)
 except KeyboardInterrupt:
     print("interrupted", flush=True)
     sys.exit(42)

@@ -287,9 +287,12 @@ def nearest_rotation(m: np.ndarray) -> np.ndarray:
 
 
 def rotation_angle_deg(a: np.ndarray, b: np.ndarray) -> float:
-    """Angle (degrees) of the relative rotation a^T b."""
-    c = (np.trace(np.asarray(a).T @ np.asarray(b)) - 1.0) / 2.0
-    return math.degrees(math.acos(float(np.clip(c, -1.0, 1.0))))
+    """Angle (degrees) of the relative rotation a^T b: atan2 of its sine (the skew part) and cosine (the
+    trace), exact to rounding at small angles too, where acos of the trace loses half the digits."""
+    r = np.asarray(a).T @ np.asarray(b)
+    c = (float(np.trace(r)) - 1.0) / 2.0
+    s = float(np.linalg.norm([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])) / 2.0
+    return math.degrees(math.atan2(s, c))
 
 
 def average_poses(rotations: Sequence[np.ndarray], translations: Sequence[np.ndarray]

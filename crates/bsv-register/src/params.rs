@@ -285,7 +285,11 @@ pub struct OutlierParams {
     /// Ray-parallel point removal before the fit (`raytrail.rs`): a point whose PCA normal makes
     /// an angle with the viewing axis Z whose cosine is below this (it lies on a sheet that contains
     /// the cameras' rays: a flying-pixel trail beside a silhouette, or a grazing point) is dropped;
-    /// skipped when more than 7 % of the cloud would go (an all-round scan). 0 = off. Default 0.2.
+    /// skipped when more than 7 % of the cloud would go (an all-round scan). 0 = off. Default 0
+    /// (off since round 2 session 7): with the sparse-point filter, the detached-piece test and the
+    /// box's far-point rule in place, dropping the grazing points too widened the lateral gaps and
+    /// shrank L515-like fits (oracle seed 0 l515 trunk_limbs -0.57 -> -0.47 % signed; camera path
+    /// neutral; `benchmarks/BENCH.md`). 0.2 is the value it had when on.
     pub ray_parallel_max_cos: f64,
 }
 
@@ -297,7 +301,7 @@ impl Default for OutlierParams {
             outlier_min_fraction: 0.1,
             detached_voxel_m: 0.015,
             detached_min_fraction: 0.25,
-            ray_parallel_max_cos: 0.2,
+            ray_parallel_max_cos: 0.0,
         }
     }
 }

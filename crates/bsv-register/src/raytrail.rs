@@ -16,6 +16,9 @@
 //! two-camera capture (exact / L515-like) but 12.5 % of an all-round sample of the template (the
 //! body's sides), so the filter stands down when more than [`MAX_FRACTION`] of the points would go:
 //! it is meant for two-view captures. A floor patch (normal along Y) goes too.
+//!
+//! Off by default (`ray_parallel_max_cos` = 0, round 2 session 7): the other cloud filters now take the
+//! trails, and dropping the flanks' grazing points as well shrank L515-like fits (`benchmarks/BENCH.md`).
 
 use crate::correspond::{build_tree, neighbourhood_normal};
 use crate::voxels::Voxels;

@@ -7,7 +7,7 @@
 //!   no point gets no data term.
 //!
 //! Label-aware matching (when the cloud and the template both carry segment labels, see
-//! [`CloudIndex::with_labels`]): m2p matches a template vertex of segment L only to cloud points of
+//! [`CloudIndex::set_label_trees`]): m2p matches a template vertex of segment L only to cloud points of
 //! segment L (one tree per segment, built once), p2m sends a cloud point of segment L only to the
 //! current template vertices of segment L (one tree per segment, rebuilt every iteration). A label
 //! present on one side only falls back to unrestricted matching. This keeps a limb that the pose
@@ -135,6 +135,37 @@ struct LabelTree {
     index: Vec<u32>,
 }
 
+/// The per-segment k-d trees of label-aware matching ([`CloudIndex::set_label_trees`]): one per
+/// label present on both sides with at least 4 points and 4 vertices, built in parallel over labels.
+pub struct LabelTrees {
+    trees: Vec<Option<LabelTree>>,
+    labels: Vec<u8>,
+}
+
+impl LabelTrees {
+    /// Builds the trees over `points` for the cloud's `labels` (one per point) and the template's
+    /// `vertex_labels`.
+    pub fn build(points: &[[f64; 3]], labels: &[u8], vertex_labels: &[u8]) -> Result<LabelTrees, String> {
+        if labels.len() != points.len() {
+            return Err(format!("{} cloud labels for {} points", labels.len(), points.len()));
+        }
+        let groups = group_by_label(labels);
+        let vgroups = group_by_label(vertex_labels);
+        let trees: Vec<Option<LabelTree>> = groups
+            .into_par_iter()
+            .zip(vgroups.par_iter())
+            .map(|(g, vg)| {
+                if g.len() < MIN_LABEL_ITEMS || vg.len() < MIN_LABEL_ITEMS {
+                    return Ok(None);
+                }
+                let pts: Vec<[f64; 3]> = g.iter().map(|&i| points[i as usize]).collect();
+                Ok(Some(LabelTree { tree: build_tree(&pts)?, index: g }))
+            })
+            .collect::<Result<_, String>>()?;
+        Ok(LabelTrees { trees, labels: labels.to_vec() })
+    }
+}
+
 /// Groups `0..labels.len()` by label: `groups[l]` lists the items with label `l`.
 fn group_by_label(labels: &[u8]) -> Vec<Vec<u32>> {
     let mut groups = vec![Vec::new(); 256];
@@ -221,30 +252,14 @@ impl CloudIndex {
         })
     }
 
-    /// Enables label-aware matching: `labels` (one per point) are the cloud's segment labels and
-    /// `vertex_labels` the template's; one tree is built per label present on both sides (with at
-    /// least 4 points and 4 vertices). Returns the number of labels matched that way.
-    pub fn with_labels(&mut self, labels: &[u8], vertex_labels: &[u8]) -> Result<usize, String> {
-        if labels.len() != self.points.len() {
-            return Err(format!("{} cloud labels for {} points", labels.len(), self.points.len()));
-        }
-        let groups = group_by_label(labels);
-        let vgroups = group_by_label(vertex_labels);
-        let built: Vec<Option<LabelTree>> = groups
-            .into_par_iter()
-            .zip(vgroups.par_iter())
-            .map(|(g, vg)| {
-                if g.len() < MIN_LABEL_ITEMS || vg.len() < MIN_LABEL_ITEMS {
-                    return Ok(None);
-                }
-                let pts: Vec<[f64; 3]> = g.iter().map(|&i| self.points[i as usize]).collect();
-                Ok(Some(LabelTree { tree: build_tree(&pts)?, index: g }))
-            })
-            .collect::<Result<_, String>>()?;
-        let count = built.iter().filter(|b| b.is_some()).count();
-        self.by_label = built;
-        self.labels = Some(labels.to_vec());
-        Ok(count)
+    /// Enables label-aware matching: `trees` ([`LabelTrees::build`], possibly alongside [`Self::new`])
+    /// over the same points; m2p and p2m then match per segment. Returns the number of labels matched
+    /// that way.
+    pub fn set_label_trees(&mut self, trees: LabelTrees) -> usize {
+        let count = trees.trees.iter().filter(|b| b.is_some()).count();
+        self.by_label = trees.trees;
+        self.labels = Some(trees.labels);
+        count
     }
 
     /// Nearest cloud point of each vertex, restricted to the vertex's segment when label-aware
@@ -362,7 +377,7 @@ impl CloudIndex {
 
     /// m2p targets of `vertices` (with their current unit normals), pruned.
     /// Returns the targets and the RMS (m) of all nearest distances before pruning.
-    /// With `vertex_labels` (and [`Self::with_labels`] called), matching is per segment.
+    /// With `vertex_labels` (and [`Self::set_label_trees`] called), matching is per segment.
     /// With `curvature` (the mesh's form per vertex) the normal part is curvature-corrected
     /// ([`curvature::Shape::correction`]).
     pub fn m2p(
@@ -409,7 +424,7 @@ impl CloudIndex {
 
     /// p2m targets: the mean of the (pruned) cloud points whose nearest vertex is each vertex.
     /// Returns the targets and the RMS (m) of all point-to-vertex distances before pruning.
-    /// With `vertex_labels` (and [`Self::with_labels`] called), matching is per segment.
+    /// With `vertex_labels` (and [`Self::set_label_trees`] called), matching is per segment.
     pub fn p2m(
         &self,
         vertices: &[[f64; 3]],

@@ -254,7 +254,7 @@ fn mark_far(
     // diagonal exceeds `far` (never a point within `far` of the cloud).
     let inv = 20.0 / far;
     let limit = far * (1.0 + 3f64.sqrt() / 20.0);
-    let mut seen = std::collections::HashSet::new();
+    let mut seen = rustc_hash::FxHashSet::default();
     let body: Vec<[f64; 3]> = points
         .iter()
         .zip(kept)

@@ -12,7 +12,7 @@
 
 mod finish;
 
-use crate::correspond::{CloudIndex, Pruning, Targets};
+use crate::correspond::{CloudIndex, LabelTrees, Pruning, Targets};
 use crate::cotan::CotanWeights;
 use crate::curvature::shapes;
 use crate::error::{NumericError, RegisterError};
@@ -192,20 +192,28 @@ impl<'a> Registrar<'a> {
         let lambda = e.alpha * 1e-6 * e.cell_weight * area / n as f64;
         let weights = CotanWeights::new(&rest, &template.triangles);
         let cloud = &*prepared.cloud;
-        let (solver, index) = pool.install(|| {
+        // Label-aware matching when both sides are labelled: the per-segment trees are built
+        // alongside the cloud's tree and the symbolic factorization.
+        let labelled: Option<(&[u8], &'a [u8])> = match (&cloud.labels, &template.vertex_labels) {
+            (Some(cl), Some(tl)) if params.pruning.label_aware => Some((cl.as_slice(), tl.as_slice())),
+            _ => None,
+        };
+        let (solver, (index, trees)) = pool.install(|| {
             rayon::join(
                 || GlobalSolver::new(&weights, e.cell_weight),
-                || CloudIndex::new(&cloud.points, cloud.normals.as_deref(), params.pruning.estimate_normals_k),
+                || {
+                    rayon::join(
+                        || CloudIndex::new(&cloud.points, cloud.normals.as_deref(), params.pruning.estimate_normals_k),
+                        || labelled.map(|(cl, tl)| LabelTrees::build(&cloud.points, cl, tl)).transpose(),
+                    )
+                },
             )
         });
         let solver = solver.map_err(NumericError::solver)?;
         let mut index = index.map_err(NumericError::index)?;
-        // Label-aware matching when both sides are labelled.
-        let match_labels: Option<&'a [u8]> = match (&cloud.labels, &template.vertex_labels) {
-            (Some(cl), Some(tl)) if params.pruning.label_aware => {
-                let matched = index.with_labels(cl, tl).map_err(NumericError::index)?;
-                (matched > 0).then_some(tl.as_slice())
-            }
+        let trees = trees.map_err(NumericError::index)?;
+        let match_labels: Option<&'a [u8]> = match (trees, labelled) {
+            (Some(trees), Some((_, tl))) => (index.set_label_trees(trees) > 0).then_some(tl),
             _ => None,
         };
         let model = pool.install(|| LocalModel::new(rest.clone(), weights, e.cell_weight, lambda));

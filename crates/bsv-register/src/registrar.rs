@@ -178,7 +178,8 @@ fn set_targets(
 impl<'a> Registrar<'a> {
     /// The set-up of the fit of `prepared` with `params` (the same parameters it was prepared
     /// with): cotangent weights of the rest shape, the symbolic factorization of the global
-    /// system, the k-d tree over the cloud (both in parallel), the label trees, the local model.
+    /// system, the k-d tree over the cloud and the per-segment trees (the three in parallel), the
+    /// local model.
     pub fn new(
         pool: &'a rayon::ThreadPool,
         mut prepared: Prepared<'a>,

@@ -26,7 +26,9 @@
 //! With the curvature correction (`curvature.rs`) the normal part of every target is lifted by the
 //! height of the surface under its points' spread (the mean of a p2m patch lies under a convex limb).
 
+use crate::cotan::CotanWeights;
 use crate::curvature;
+use crate::walk::{walk_to_nearest, Allowed};
 use bsv_core::geometry::{add, dot, normalize, scale, sub};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nalgebra::{Matrix3, Vector3};
@@ -296,11 +298,22 @@ impl CloudIndex {
 
     /// Nearest vertex of every cloud point, restricted to the vertices of the point's segment when
     /// label-aware matching is on and `vertex_labels` is given: (vertex index, squared distance).
+    /// With `warm` (the mesh's edges and every point's vertex of the previous p2m iteration) the
+    /// search is the warm-started walk of [`crate::walk`] instead of k-d trees over the vertices.
     fn points_to_vertices(
         &self,
         vertices: &[[f64; 3]],
         vertex_labels: Option<&[u8]>,
+        warm: Option<(&CotanWeights, &[u32])>,
     ) -> Result<Vec<(u32, f64)>, String> {
+        if let Some((graph, start)) = warm.filter(|(_, s)| s.len() == self.points.len()) {
+            let restricted: Vec<bool> = self.by_label.iter().map(Option::is_some).collect();
+            let allowed = match (vertex_labels.filter(|_| !self.by_label.is_empty()), &self.labels) {
+                (Some(vl), Some(pl)) => Some(Allowed { point_labels: pl, vertex_labels: vl, restricted: &restricted }),
+                _ => None,
+            };
+            return Ok(walk_to_nearest(graph, vertices, &self.points, start, allowed));
+        }
         let (Some(vl), Some(labels)) = (vertex_labels.filter(|_| !self.by_label.is_empty()), &self.labels) else {
             let tree = build_tree(vertices)?;
             return Ok(nearest_batch(&tree, &self.points));
@@ -423,7 +436,9 @@ impl CloudIndex {
     }
 
     /// p2m targets: the mean of the (pruned) cloud points whose nearest vertex is each vertex.
-    /// Returns the targets and the RMS (m) of all point-to-vertex distances before pruning.
+    /// Returns the targets, the RMS (m) of all point-to-vertex distances before pruning and every
+    /// point's vertex (the `warm` start of the next p2m iteration: with it, the nearest vertices are
+    /// found by the walk of [`crate::walk`] over the mesh's edges `CotanWeights`).
     /// With `vertex_labels` (and [`Self::set_label_trees`] called), matching is per segment.
     pub fn p2m(
         &self,
@@ -432,13 +447,15 @@ impl CloudIndex {
         pruning: &Pruning,
         vertex_labels: Option<&[u8]>,
         curvature: Option<&[curvature::Shape]>,
-    ) -> Result<(Targets, f64), String> {
-        let nn = self.points_to_vertices(vertices, vertex_labels)?;
+        warm: Option<(&CotanWeights, &[u32])>,
+    ) -> Result<(Targets, f64, Vec<u32>), String> {
+        let nn = self.points_to_vertices(vertices, vertex_labels, warm)?;
         let rms = rms_of(nn.iter().map(|r| r.1));
         let mut d2: Vec<f64> = nn.iter().map(|r| r.1).collect();
         let lim2 = pruning.limit2(&mut d2);
         let accs = self.accumulate(&nn, vertices, lim2);
-        Ok((self.patch_targets(&accs, normals, pruning, curvature), rms))
+        let assigned = nn.iter().map(|r| r.0).collect();
+        Ok((self.patch_targets(&accs, normals, pruning, curvature), rms, assigned))
     }
 
     /// Per vertex, the count, sum, scatter (and with given normals, the sum of the normal parts)

@@ -47,6 +47,7 @@ mod solver;
 mod surface;
 mod sym3;
 mod voxels;
+mod walk;
 
 pub use error::{ImplausibleError, InputError, NumericError, ParameterError, RegisterError, ResourceError};
 pub use keypoints::{Keypoint, KeypointResidual, Keypoints};

@@ -71,6 +71,9 @@ struct FitState {
     rhs: Vec<[f64; 3]>,
     /// The global system's right-hand side / solution, n x 3.
     sol: faer::Mat<f64>,
+    /// Every cloud point's vertex in the last p2m iteration (empty before one): the warm start of
+    /// the next.
+    p2m_vertex: Vec<u32>,
     /// ARAP and regularization energies at the end of the last iteration.
     arap: f64,
     reg: f64,
@@ -89,6 +92,7 @@ impl FitState {
             q: vec![[0.0; 3]; n],
             rhs: vec![[0.0; 3]; n],
             sol: faer::Mat::<f64>::zeros(n, 3),
+            p2m_vertex: Vec::new(),
             arap: 0.0,
             reg: 0.0,
         }
@@ -298,10 +302,15 @@ impl<'a> Registrar<'a> {
                 (t, rms, None)
             }
             CorrespondenceKind::P2m => {
-                let (t, rms) = self
+                // Warm start from the previous iteration when it was p2m too.
+                let after_p2m = self.log.last().is_some_and(|l| l.kind == CorrespondenceKind::P2m);
+                let warm =
+                    (self.params.p2m_warm_start && after_p2m).then_some((&self.model.weights, f.p2m_vertex.as_slice()));
+                let (t, rms, assigned) = self
                     .pool
-                    .install(|| index.p2m(cur, &normals, pruning, labels, h.as_deref()))
+                    .install(|| index.p2m(cur, &normals, pruning, labels, h.as_deref(), warm))
                     .map_err(NumericError::index)?;
+                f.p2m_vertex = assigned;
                 let m2p = self.pool.install(|| index.nearest(cur));
                 let rms_m2p = (m2p.iter().map(|r| r.1).sum::<f64>() / cur.len() as f64).sqrt();
                 (t, rms_m2p, Some(rms))

@@ -558,8 +558,18 @@ impl CloudIndex {
             .collect()
     }
 
-    /// RMS (m) of the distances from each cloud point to its nearest vertex.
-    pub fn rms_points_to_mesh(&self, vertices: &[[f64; 3]]) -> Result<f64, String> {
+    /// RMS (m) of the distances from each cloud point to its nearest vertex; with `warm` (the mesh's
+    /// edges and every point's vertex of the last p2m iteration) found by the walk of [`crate::walk`]
+    /// over all vertices instead of a k-d tree.
+    pub fn rms_points_to_mesh(
+        &self,
+        vertices: &[[f64; 3]],
+        warm: Option<(&CotanWeights, &[u32])>,
+    ) -> Result<f64, String> {
+        if let Some((graph, start)) = warm.filter(|(_, s)| s.len() == self.points.len()) {
+            let nn = walk_to_nearest(graph, vertices, &self.points, start, None);
+            return Ok(rms_of(nn.iter().map(|r| r.1)));
+        }
         let tree = build_tree(vertices)?;
         Ok(rms_of(nearest_batch(&tree, &self.points).iter().map(|r| r.1)))
     }

@@ -12,16 +12,22 @@
 //! line of sight, made perpendicular to `a`; width `w = a x d`), over five slices of the middle 60 %
 //! of the limb's length (the joints are left alone), for the posed template vertices and the cloud
 //! points alike:
-//! - width: the 1 % / 99 % quantiles of the projections on `w` (the silhouette, which both cameras
-//!   see; depth noise runs along the rays, i.e. along `d`, and does not move it);
+//! - width: the extent of the projections on `w` (the silhouette, which both cameras see; depth
+//!   noise runs along the rays, i.e. along `d`, and does not move it). The template's is the exact
+//!   extent of its vertices. The cloud's points sample the silhouette uniformly in `w` (pixels) up to
+//!   its edge, so the edge is extrapolated from the order statistics: with `w_(k)` the k-th largest,
+//!   `edge = 2 w_(k) - w_(2k)` for [`EDGE_RANK`] = 3 (exact for a uniform density, and two stray
+//!   points cannot move it). The 1 % / 99 % quantiles used before (session 4) sat 1 % of the width
+//!   inside each edge on the cloud but not on the vertex ring, and a depth camera's silhouette loses
+//!   part of its outermost pixels (mixed, flying): the limbs started 2-5 % too narrow, more in l515;
 //! - depth: inside the central band (|w - centre| < half the half-width), the median of the points in
 //!   front of the band's middle minus the median of those behind it: the front and back surfaces,
 //!   with the depth noise averaged out instead of stretching an extreme quantile.
 //!
 //! The median over the slices of the cloud/template ratios gives the depth and width scales
 //! (clamped to [`MIN_SCALE`, `MAX_SCALE`]); the median offset of the slice centres moves the template's
-//! axis onto the cloud's. The same estimator runs on both sides, so its own bias (the curvature of
-//! the band) cancels in the ratio.
+//! axis onto the cloud's. The depth estimator is the same on both sides, so its own bias (the
+//! curvature of the band) cancels in the ratio.
 
 use bsv_core::geometry::{cross, dot, normalize, sub};
 use nalgebra::{Matrix3, Vector3};
@@ -39,6 +45,31 @@ const MIN_VERTICES: usize = 8;
 const MIN_POINTS: usize = 30;
 /// Fewest usable slices.
 const MIN_SLICES: usize = 3;
+/// Rank of the order statistic the cloud's silhouette edge is extrapolated from (see the module
+/// docs): the edge is `2 w_(k) - w_(2k)` with `k` = this.
+pub const EDGE_RANK: usize = 3;
+
+/// How the items of a slice sample its cross-section.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Sampling {
+    /// Mesh vertices, clean: the width is their exact extent.
+    Vertices,
+    /// Camera pixels, uniform across the silhouette up to its edges: the edges are extrapolated.
+    Pixels,
+}
+
+/// The (low, high) edges of the projections `v` on the width axis (`v` is reordered).
+fn width_edges(v: &mut [f64], sampling: Sampling) -> (f64, f64) {
+    let n = v.len();
+    let k = EDGE_RANK.min(n / 4);
+    if sampling == Sampling::Vertices || k == 0 {
+        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        return (lo, hi);
+    }
+    v.sort_unstable_by(f64::total_cmp);
+    (2.0 * v[k - 1] - v[2 * k - 1], 2.0 * v[n - k] - v[n - 2 * k])
+}
 
 /// The cross-section change of one limb: `y -> y + shift + f(t) (map - I) (y - origin)` for positions
 /// `y` relative to the cloud limb's centroid (the axis component is unchanged), where `f` is 1 over the
@@ -109,9 +140,9 @@ fn median(v: &mut [f64]) -> Option<f64> {
 }
 
 /// (depth, depth centre, width, width centre) of one slice's (u = depth, v = width) projections.
-fn slice_extent(uv: &[(f64, f64)]) -> Option<(f64, f64, f64, f64)> {
+fn slice_extent(uv: &[(f64, f64)], sampling: Sampling) -> Option<(f64, f64, f64, f64)> {
     let mut v: Vec<f64> = uv.iter().map(|p| p.1).collect();
-    let (lo, hi) = (quantile(&mut v, 0.01), quantile(&mut v, 0.99));
+    let (lo, hi) = width_edges(&mut v, sampling);
     let (cw, half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
     if half <= 0.0 {
         return None;
@@ -168,7 +199,9 @@ pub fn fit_section(posed: &[[f64; 3]], cloud: &[[f64; 3]], axis: [f64; 3]) -> Op
         if tv.len() < MIN_VERTICES || cv.len() < MIN_POINTS {
             continue;
         }
-        let (Some(te), Some(ce)) = (slice_extent(tv), slice_extent(cv)) else { continue };
+        let (Some(te), Some(ce)) = (slice_extent(tv, Sampling::Vertices), slice_extent(cv, Sampling::Pixels)) else {
+            continue;
+        };
         rd.push(ce.0 / te.0);
         rw.push(ce.2 / te.2);
         od.push(ce.1 - te.1);
@@ -230,6 +263,51 @@ mod tests {
         assert!((moved[2] - 0.06).abs() < 0.002, "{moved:?}");
         let end = s.apply([0.0, 0.2, 0.04]);
         assert!((end[2] - 0.04).abs() < 1e-12, "beyond the limb's end nothing is scaled: {end:?}");
+    }
+
+    /// The elliptic cylinder as two cameras on +z and -z see it: per row of pixels (every 3 mm along
+    /// y), the front and back surfaces at x every `pitch` (the grid's phase changes from row to row, as
+    /// on a limb not aligned with the pixel grid), the outermost pixel of every other row lost (a mixed
+    /// or flying pixel), and `stray` points 2 cm outside the silhouette per side in every 25th row (at most two per slice).
+    fn pixels(rx: f64, rz: f64, pitch: f64, stray: usize) -> Vec<[f64; 3]> {
+        let mut out = Vec::new();
+        let m = (rx / pitch) as i64 + 1;
+        for row in 0..100 {
+            let y = -0.15 + 0.003 * row as f64;
+            let phase = (row as f64 * 0.618_034).fract() * pitch;
+            let xs: Vec<f64> = (-m - 1..=m).map(|i| i as f64 * pitch + phase).filter(|x| x.abs() < rx).collect();
+            let lose = usize::from(row % 2 == 0);
+            for &x in &xs[lose..xs.len() - lose] {
+                let z = rz * (1.0 - (x / rx).powi(2)).sqrt();
+                out.push([x, y, z]);
+                out.push([x, y, -z]);
+            }
+            if row % 25 == 0 {
+                for k in 0..stray {
+                    out.push([rx + 0.02 + 0.001 * k as f64, y, 0.0]);
+                    out.push([-rx - 0.02 - 0.001 * k as f64, y, 0.0]);
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn the_width_comes_from_the_silhouette_edges_of_a_pixel_sampled_cloud() {
+        let template = cylinder(0.04, 0.04, 30, false);
+        // A 40 mm wide forearm seen with 2.7 mm pixels, half its rim pixels lost: the edge is
+        // extrapolated (the 1 % quantiles gave a width 3.4 % short here).
+        let s = fit_section(&template, &pixels(0.036, 0.05, 0.0027, 0), [0.0, 1.0, 0.0]).expect("a section");
+        assert!((s.width_scale - 0.9).abs() < 0.012, "width {}", s.width_scale);
+        assert!((s.depth_scale - 1.25).abs() < 0.03, "depth {}", s.depth_scale);
+        // Two stray points per side and slice do not move it.
+        let s2 = fit_section(&template, &pixels(0.036, 0.05, 0.0027, 2), [0.0, 1.0, 0.0]).expect("a section");
+        assert!(
+            (s2.width_scale - s.width_scale).abs() < 0.01,
+            "width {} with strays, {} without",
+            s2.width_scale,
+            s.width_scale
+        );
     }
 
     #[test]

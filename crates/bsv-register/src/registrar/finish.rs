@@ -15,6 +15,10 @@ impl Registrar<'_> {
     pub fn finish(self) -> Result<Registration, RegisterError> {
         let (pool, params, template) = (self.pool, self.params, self.input.template);
         let keypoints = self.input.keypoints.residuals(&self.fit.cur);
+        // The last p2m iteration's vertex of every point starts the final points-to-mesh walk.
+        let p2m_vertex = self.fit.p2m_vertex;
+        let warm =
+            (params.p2m_warm_start && !p2m_vertex.is_empty()).then_some((&self.model.weights, p2m_vertex.as_slice()));
         let mut cur = self.fit.cur;
         // Discretisation correction (see [`surface_correction`]).
         if params.surface_correction {
@@ -24,7 +28,7 @@ impl Registrar<'_> {
         let index = &self.index;
         let nearest = pool.install(|| index.nearest(&cur));
         let rms_m2p = (nearest.iter().map(|r| r.1).sum::<f64>() / cur.len() as f64).sqrt();
-        let rms_p2m = pool.install(|| index.rms_points_to_mesh(&cur)).map_err(NumericError::index)?;
+        let rms_p2m = pool.install(|| index.rms_points_to_mesh(&cur, warm)).map_err(NumericError::index)?;
         let mut mesh = TriMesh::new(cur, template.triangles.clone());
         let labels_from = set_labels(&mut mesh, &nearest, params.labels, &self.input.cloud, template);
         let quality = crate::quality::segment_quality(&mesh, &nearest, template);

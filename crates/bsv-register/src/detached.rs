@@ -27,7 +27,6 @@
 //! forms ONE piece is kept.
 
 use crate::voxels::key;
-use rayon::prelude::*;
 use rustc_hash::FxHashMap as HashMap;
 
 /// Union-find over voxel ids with path halving.
@@ -68,48 +67,24 @@ fn forward_offsets() -> Vec<[i64; 3]> {
 /// Per point: whether it is kept (see the module docs). `labels` (one per point) separates the
 /// segments; without labels the whole cloud is one segment. Every point is kept when `voxel` is
 /// not positive and finite, `min_fraction` is 0 or the cloud is empty; a point that cannot be
-/// keyed (non-finite, absurdly far) is dropped. The segments are independent and run in parallel.
+/// keyed (non-finite, absurdly far) is dropped.
 pub fn attached_points(points: &[[f64; 3]], labels: Option<&[u8]>, voxel: f64, min_fraction: f64) -> Vec<bool> {
     if !(voxel > 0.0 && voxel.is_finite()) || min_fraction <= 0.0 || points.is_empty() {
         return vec![true; points.len()];
     }
     let inv = 1.0 / voxel;
-    // The points of every label (all of them as one group without labels).
-    let mut groups: Vec<Vec<u32>> = vec![Vec::new(); 256];
-    for i in 0..points.len() {
-        let l = labels.and_then(|l| l.get(i).copied()).unwrap_or(0);
-        groups[l as usize].push(i as u32);
-    }
-    let kept: Vec<(Vec<u32>, Vec<bool>)> = groups
-        .into_par_iter()
-        .filter(|g| !g.is_empty())
-        .map(|g| {
-            let keep = attached_in_segment(points, &g, inv, min_fraction);
-            (g, keep)
-        })
-        .collect();
-    let mut out = vec![false; points.len()];
-    for (g, keep) in kept {
-        for (&i, k) in g.iter().zip(keep) {
-            out[i as usize] = k;
-        }
-    }
-    out
-}
-
-/// [`attached_points`] for the points `members` of one segment (voxels of side `1 / inv`): whether
-/// each is kept, in the order of `members`.
-fn attached_in_segment(points: &[[f64; 3]], members: &[u32], inv: f64, min_fraction: f64) -> Vec<bool> {
-    // Voxel id of every point, and the voxels' keys and point counts.
-    let mut ids: HashMap<[i64; 3], u32> = HashMap::with_capacity_and_hasher(members.len() / 8, Default::default());
-    let mut voxels: Vec<[i64; 3]> = Vec::new();
+    let label = |i: usize| labels.and_then(|l| l.get(i).copied()).unwrap_or(0);
+    // Voxel id of every point (per label), and the voxels' keys and point counts.
+    let mut ids: HashMap<(u8, [i64; 3]), u32> = HashMap::with_capacity_and_hasher(points.len() / 8, Default::default());
+    let mut voxels: Vec<(u8, [i64; 3])> = Vec::new();
     let mut counts: Vec<u32> = Vec::new();
-    let point_voxel: Vec<Option<u32>> = members
+    let point_voxel: Vec<Option<u32>> = points
         .iter()
-        .map(|&i| {
-            let k = key(&points[i as usize], inv)?;
-            let id = *ids.entry(k).or_insert_with(|| {
-                voxels.push(k);
+        .enumerate()
+        .map(|(i, p)| {
+            let k = key(p, inv)?;
+            let id = *ids.entry((label(i), k)).or_insert_with(|| {
+                voxels.push((label(i), k));
                 counts.push(0);
                 (voxels.len() - 1) as u32
             });
@@ -119,25 +94,28 @@ fn attached_in_segment(points: &[[f64; 3]], members: &[u32], inv: f64, min_fract
         .collect();
     let mut forest = Forest((0..voxels.len() as u32).collect());
     let offsets = forward_offsets();
-    for (id, k) in voxels.iter().enumerate() {
+    for (id, &(l, k)) in voxels.iter().enumerate() {
         for o in &offsets {
             // |k| <= 2^52, so k + 1 cannot overflow.
-            if let Some(&nb) = ids.get(&[k[0] + o[0], k[1] + o[1], k[2] + o[2]]) {
+            if let Some(&nb) = ids.get(&(l, [k[0] + o[0], k[1] + o[1], k[2] + o[2]])) {
                 forest.union(id as u32, nb);
             }
         }
     }
-    // Point count of every piece, and the segment's largest piece.
+    // Point count of every piece, and the largest piece of every label.
     let mut piece = vec![0u64; voxels.len()];
     for (id, &c) in counts.iter().enumerate() {
         let r = forest.find(id as u32) as usize;
         piece[r] += u64::from(c);
     }
-    let largest = piece.iter().copied().max().unwrap_or(0);
+    let mut largest = [0u64; 256];
+    for (id, &(l, _)) in voxels.iter().enumerate() {
+        largest[l as usize] = largest[l as usize].max(piece[id]);
+    }
     let keep_voxel: Vec<bool> = (0..voxels.len())
         .map(|id| {
             let r = forest.find(id as u32) as usize;
-            piece[r] as f64 >= min_fraction * largest as f64
+            piece[r] as f64 >= min_fraction * largest[voxels[id].0 as usize] as f64
         })
         .collect();
     point_voxel.iter().map(|v| v.is_some_and(|id| keep_voxel[id as usize])).collect()

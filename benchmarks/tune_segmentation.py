@@ -57,9 +57,11 @@ def prepared(cache: Path, seed: int, index: int) -> dict[str, Any]:
     for cam in CAMERAS:
         d = data[cam]
         prm = sg.DEFAULT_PARAMS[cam]
-        res = sg.run_holistic(d["colour"], prm)
-        pose, hands, _ = sg._orient(res["pose"], res["hands"], cam)
-        mask = sg._clean_mask(res["mask"] > prm.mask_threshold)
+        det = sg.detect(d["colour"], cam, prm)  # oriented; averaged with the mirror image (flip_average)
+        pose, hands = det.pose, det.hands
+        if det.mask_soft is None:
+            raise SystemExit(f"{cap / cam}: MediaPipe returned no person mask")
+        mask = sg._clean_mask(det.mask_soft > prm.mask_threshold)
         mask = sg.refine_mask_with_depth(mask, d["depth_m"], prm.depth_band, prm.depth_grow_px)
         truth_lab = _read_label_png(cap / cam / d["meta"].get("labels", "labels.png"))
         out["views"][cam] = {"pose": pose, "hands": hands, "mask": mask, "truth_labels": truth_lab,

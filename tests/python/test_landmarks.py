@@ -49,20 +49,25 @@ def capture(tmp_path_factory):
 
 def _lower(monkeypatch, data, where: dict[tuple[str, str], float]) -> None:
     """MediaPipe's result with the visibility of (view, subject landmark) set as given. The view is told by
-    the image (front and back differ); the subject's left is on the image right from the front, left from
-    the back (the rule of segment._orient)."""
-    views = {hashlib.sha1(np.ascontiguousarray(data[v]["colour"]).tobytes()).hexdigest(): v for v in seg.VIEWS}
+    the image (front and back differ, and so do their mirror images, which ``flip_average`` detects too);
+    the subject's left is on the image right from the front, left from the back (the rule of
+    segment._orient), and the other way round in a mirror image."""
+    views = {}
+    for v in seg.VIEWS:
+        img = np.ascontiguousarray(data[v]["colour"])
+        views[hashlib.sha1(img.tobytes()).hexdigest()] = (v, False)
+        views[hashlib.sha1(np.ascontiguousarray(img[:, ::-1]).tobytes()).hexdigest()] = (v, True)
 
     def fake(rgb, params=None):
         r = _cached(rgb, params)
-        view = views[hashlib.sha1(np.ascontiguousarray(rgb).tobytes()).hexdigest()]
+        view, mirrored = views[hashlib.sha1(np.ascontiguousarray(rgb).tobytes()).hexdigest()]
         pose = r["pose"]
         for (v, name), vis in where.items():
             if v != view:
                 continue
             joint = name.split("_", 1)[1]
             i, j = seg.POSE_NAMES.index(f"left_{joint}"), seg.POSE_NAMES.index(f"right_{joint}")
-            left_is_larger_x = view == "front"
+            left_is_larger_x = (view == "front") != mirrored
             li = (i if pose[i, 0] > pose[j, 0] else j) if left_is_larger_x else (i if pose[i, 0] < pose[j, 0] else j)
             k = li if name.startswith("left_") else (j if li == i else i)
             pose[k, 2] = vis

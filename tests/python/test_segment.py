@@ -183,3 +183,35 @@ def test_write_segmentation_refuses_to_overwrite(scans, tmp_path):
     seg.write_segmentation(s, folder / "front", overwrite=True)
     seg.write_segmentation(s, tmp_path / "new" / "front")  # a new folder is created
     assert (tmp_path / "new" / "front" / "segmentation.png").is_file()
+
+
+def test_flip_average_is_the_mean_of_both_oriented_detections(monkeypatch):
+    """``flip_average``: the view is detected on the image and on its mirror image; the mirror's landmarks
+    are mapped back (x -> w - 1 - x), both are oriented to the subject's left/right, and the result is their
+    mean (positions, visibilities, hands, soft masks). A fake MediaPipe that answers the mirror image with
+    the true landmarks plus 4 px and 0.2 visibility shows it."""
+    h, w = 60, 80
+    img = np.zeros((h, w, 3), np.uint8)
+    img[:, : w // 2] = 50  # the mirror image differs from the image
+    truth = np.column_stack([np.linspace(5, 70, 33), np.linspace(5, 50, 33), np.full(33, 0.6)])
+    hand = np.column_stack([np.full(21, 60.0), np.linspace(20, 40, 21)])
+    mask = np.zeros((h, w), np.float32)
+    mask[10:50, 20:40] = 1.0
+
+    def fake(rgb, params=None):
+        mirrored = bool(rgb[0, -1, 0] == 50)
+        if not mirrored:
+            return {"pose": truth.copy(), "hands": [hand.copy(), None], "mask": mask.copy()}
+        pose = truth.copy()
+        pose[:, 0] = w - 1 - (pose[:, 0] + 4.0)  # the mirror's x of (truth + 4 px)
+        pose[:, 2] += 0.2
+        return {"pose": pose, "hands": [None, None], "mask": mask[:, ::-1] * 0.5}
+
+    monkeypatch.setattr(seg, "run_holistic", fake)
+    one = seg.detect(img, "front", flip_average=False)
+    both = seg.detect(img, "front", flip_average=True)
+    assert np.allclose(both.pose[:, 0], one.pose[:, 0] + 2.0)
+    assert np.allclose(both.pose[:, 1], one.pose[:, 1])
+    assert np.allclose(both.pose[:, 2], one.pose[:, 2] + 0.1)
+    assert [hd is None for hd in both.hands] == [hd is None for hd in one.hands]  # a hand seen once is kept
+    assert both.mask_soft is not None and np.allclose(both.mask_soft, 0.75 * mask)

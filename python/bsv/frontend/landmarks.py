@@ -78,19 +78,21 @@ TRUNK_REF_M = 0.48
 #: subject's facing direction), linear in the trunk length T (an anthropometric scaling, like the
 #: regression hip-joint-centre models of gait labs): offset = a + b (T - :data:`TRUNK_REF_M`), as
 #: ``(a, b)``. Least squares on cohort seeds 11 and 13 (12 subjects, clinic room, noer; left and right
-#: pooled) by ``benchmarks/learn_joint_offsets.py``; on the held-out seeds 12 and 14 the median 3-D error
-#: over the six joints goes from 18.6 mm (no offset) and 10.4 mm (a constant offset) to 9.3 mm, the hip's
-#: from 26.0 and 19.6 to 13.9 mm (95th percentile over all joints 46.8, 28.8, 26.3 mm). What it corrects: MediaPipe's ankle is the malleoli's outline, about
+#: pooled; MediaPipe on each image and its mirror image, averaged: ``SegmentParams.flip_average``) by
+#: ``benchmarks/learn_joint_offsets.py``; on the held-out seeds 12 and 14 the median 3-D error over the six
+#: joints goes from 18.1 mm (no offset) and 10.0 mm (a constant offset) to 8.6 mm, the hip's from 26.0 and
+#: 19.1 to 11.8 mm (95th percentile over all joints 48.4, 30.4, 24.1 mm; without the mirror average the
+#: fitted offsets gave 9.3 mm, the hip 13.9 mm). What it corrects: MediaPipe's ankle is the malleoli's outline, about
 #: 40 mm above the rig's ankle joint (the head of the foot bone); its hip, knee, elbow and shoulder lie
 #: 10-15 mm medial of the joint centres; its hip marks the hip's outline, not the femoral head, and the
 #: vertical gap grows with the trunk's length.
 JOINT_OFFSETS_M: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
-    "shoulder": ((0.0139, -0.0021, 0.0060), (0.1991, 0.0965, -0.1487)),
-    "elbow": ((0.0128, -0.0028, -0.0068), (0.0493, -0.0653, -0.1181)),
-    "wrist": ((0.0015, -0.0038, -0.0005), (0.0233, -0.0488, 0.0683)),
-    "hip": ((0.0155, -0.0051, -0.0074), (0.1852, 0.2488, -0.1738)),
-    "knee": ((0.0103, -0.0150, 0.0022), (0.0726, -0.1360, 0.0801)),
-    "ankle": ((0.0054, -0.0476, 0.0017), (0.0331, -0.3308, 0.0174)),
+    "shoulder": ((0.0139, -0.0028, 0.0066), (0.2088, 0.1021, -0.1397)),
+    "elbow": ((0.0138, -0.0029, -0.0065), (0.0641, -0.0567, -0.1128)),
+    "wrist": ((0.0025, -0.0032, -0.0004), (0.0322, -0.0249, 0.0635)),
+    "hip": ((0.0158, -0.0037, -0.0067), (0.1972, 0.2708, -0.1651)),
+    "knee": ((0.0097, -0.0131, 0.0021), (0.0605, -0.1513, 0.0645)),
+    "ankle": ((0.0051, -0.0474, 0.0017), (0.0243, -0.3390, 0.0131)),
 }
 
 

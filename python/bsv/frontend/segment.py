@@ -22,7 +22,8 @@ renders it recognises the back view most of the time, not always): each left/rig
 by its image side for the given ``view`` (the A-pose of the protocol keeps every pair apart). The back view
 can also be segmented on the horizontally flipped image (``flip_back``, mapped back); measured on the
 scanner's renders, the unflipped image gives better back-view labels (mean accuracy 0.944 against 0.937 on
-8 held-out subjects), so it is off by default.
+8 held-out subjects), so it is off by default. What is on by default (``flip_average``) is both: each view
+is detected on the image and on its mirror image, and the two oriented detections are averaged.
 
 Landmarks: the 33 pose landmarks without the four pose knuckles (17-20, left/right pinky and index), which
 the hand model gives more precisely (pinky_mcp, index_finger_mcp), then 21 per hand: 29 + 42 = 71 rows of
@@ -37,6 +38,7 @@ import json
 import math
 import os
 import sys
+import threading
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -114,6 +116,13 @@ class SegmentParams:
     mask_threshold: float = 0.35
     #: Segment the back view on the horizontally flipped image (and map the result back).
     flip_back: bool = False
+    #: Run MediaPipe on the image and on its mirror image and average the two (landmarks, visibilities, hands,
+    #: soft mask; each oriented to the subject's left/right first). The pose model is not mirror-symmetric:
+    #: the two detections differ by a few pixels, and their mean is the better estimate (camera path,
+    #: cohort seeds 0, 2 and 4, noer and l515: mean error over the nine segments 2.74 / 3.52 / 3.64 % ->
+    #: 2.56 / 3.39 / 3.49 %, the arms 0.3-0.6 points better; benchmarks/BENCH.md, round 2 session 9).
+    #: Costs one more MediaPipe run per view (about 0.15 s).
+    flip_average: bool = True
     #: Neck line: this fraction of the way from the shoulders' midpoint to the ears' midpoint.
     neck_fraction: float = 0.35
     #: Head half-width around the head axis, as a fraction of the shoulder width.
@@ -239,6 +248,29 @@ def _check_model(holistic: Any, complexity: int) -> None:
             ) from e
 
 
+#: The MediaPipe Holistic graphs of this process, by (model complexity, detection confidence), with the
+#: process id that made them: building a graph costs about 0.1 s per image, more than the inference, and a
+#: graph inherited through fork() has lost its worker threads, so a child process builds its own.
+_MODELS: dict[tuple[int, float], tuple[int, Any]] = {}
+#: One image at a time through a graph (MediaPipe's graphs are not re-entrant).
+_MODELS_LOCK = threading.Lock()
+
+
+def _holistic_model(complexity: int, min_detection_confidence: float) -> Any:
+    """This process's Holistic graph for static images (each image is detected on its own: no tracking
+    between calls) with these settings, built on first use. Call with :data:`_MODELS_LOCK` held."""
+    key = (complexity, float(min_detection_confidence))
+    made = _MODELS.get(key)
+    if made is not None and made[0] == os.getpid():
+        return made[1]
+    holistic = _mediapipe_holistic()
+    _check_model(holistic, complexity)
+    model = holistic.Holistic(static_image_mode=True, model_complexity=complexity, enable_segmentation=True,
+                              refine_face_landmarks=False, min_detection_confidence=min_detection_confidence)
+    _MODELS[key] = (os.getpid(), model)
+    return model
+
+
 @contextlib.contextmanager
 def _native_stderr_silenced() -> Iterator[None]:
     """Sends file descriptor 2 to /dev/null while MediaPipe's C++ code runs: absl/TFLite print
@@ -261,15 +293,10 @@ def run_holistic(rgb: np.ndarray, params: SegmentParams = SegmentParams()) -> di
     """MediaPipe Holistic on one RGB uint8 image: ``{"pose": (33, 3) x, y (pixels), visibility or None,
     "hands": [left (21, 2) or None, right], "mask": (H, W) float32 or None}`` with MediaPipe's own
     left/right naming; pixel coordinates with the centre of the top-left pixel at (0, 0)."""
-    holistic = _mediapipe_holistic()
-    _check_model(holistic, params.model_complexity)
     img = np.ascontiguousarray(rgb, dtype=np.uint8)
     h, w = img.shape[:2]
-    with _native_stderr_silenced(), holistic.Holistic(
-        static_image_mode=True, model_complexity=params.model_complexity, enable_segmentation=True,
-        refine_face_landmarks=False, min_detection_confidence=params.min_detection_confidence,
-    ) as model:
-        res = model.process(img)
+    with _MODELS_LOCK, _native_stderr_silenced():
+        res = _holistic_model(params.model_complexity, params.min_detection_confidence).process(img)
     out: dict[str, Any] = {"pose": None, "hands": [None, None], "mask": None}
     if res.pose_landmarks is not None:
         out["pose"] = np.array([[p.x * w - 0.5, p.y * h - 0.5, p.visibility] for p in res.pose_landmarks.landmark])
@@ -370,10 +397,29 @@ def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | 
         raise SegmentationError(f"colour image must be RGB uint8 (H, W, 3), got {img.dtype} {img.shape}")
     h, w = img.shape[:2]
     flip = view == "back" and prm.flip_back
-    res = run_holistic(img[:, ::-1] if flip else img, prm)
-    if res["pose"] is None:
+    first = _detect_once(img, view, prm, flip)
+    if first is None:
         raise PersonNotFoundError(f"no person found in the {view} image ({w} x {h}): the subject must stand in "
                                   "full view of the camera, lit, against a plain background")
+    pose, hands, mask_soft, swapped = first
+    if prm.flip_average:
+        other = _detect_once(img, view, prm, not flip)
+        if other is not None:
+            pose, hands, mask_soft = _average_detections((pose, hands, mask_soft), other[:3])
+    return Detection(view, (h, w), pose, hands, mask_soft, swapped, prm)
+
+
+#: One oriented detection: pose (33, 3), the subject's (left, right) hands, the soft mask and the swapped pairs.
+_Oriented = tuple[np.ndarray, list, "np.ndarray | None", tuple[str, ...]]
+
+
+def _detect_once(img: np.ndarray, view: str, prm: SegmentParams, flip: bool) -> _Oriented | None:
+    """MediaPipe on ``img`` (its mirror image when ``flip``), mapped back to the input's pixels and oriented:
+    (pose, hands, soft mask, swapped pairs); None when it finds no person."""
+    w = img.shape[1]
+    res = run_holistic(img[:, ::-1] if flip else img, prm)
+    if res["pose"] is None:
+        return None
     pose = res["pose"]
     hands = res["hands"]
     mask_soft = res["mask"]
@@ -381,9 +427,18 @@ def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | 
         pose = pose.copy()
         pose[:, 0] = w - 1 - pose[:, 0]
         hands = [None if hd is None else np.column_stack([w - 1 - hd[:, 0], hd[:, 1]]) for hd in hands]
-        mask_soft = None if mask_soft is None else mask_soft[:, ::-1]
+        mask_soft = None if mask_soft is None else np.ascontiguousarray(mask_soft[:, ::-1])
     pose, hands, swapped = _orient(pose, hands, view)
-    return Detection(view, (h, w), pose, hands, mask_soft, swapped, prm)
+    return pose, hands, mask_soft, swapped
+
+
+def _average_detections(a: tuple[np.ndarray, list, Any], b: tuple[np.ndarray, list, Any]) -> tuple[np.ndarray, list, Any]:
+    """The mean of two oriented detections of one image (pose x, y and visibility; each hand found in both;
+    the soft masks); a hand or mask found in one only is kept as it is."""
+    pose = (a[0] + b[0]) / 2.0
+    hands = [x if y is None else y if x is None else (x + y) / 2.0 for x, y in zip(a[1], b[1], strict=True)]
+    mask = a[2] if b[2] is None else b[2] if a[2] is None else (a[2] + b[2]) / 2.0
+    return pose, hands, mask
 
 
 def resolve_landmarks(det: Detection, from_other: dict[str, np.ndarray] | None = None,

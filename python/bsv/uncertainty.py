@@ -30,8 +30,10 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import time
 from collections.abc import Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
@@ -223,15 +225,22 @@ def calibration_spread(mesh: Mesh, cameras: Sequence[CameraSpread], *, samples: 
                        [CameraPose(c.name, c.rotation, c.translation, c.rotation, c.translation) for c in cameras])
     rng = np.random.default_rng(seed)
     names = sorted(nominal)
-    dev = np.full((samples, len(names)), np.nan)
-    for s in range(samples):
+    # The draws first, in order (the same draws whatever the threads), then the volumes of the moved
+    # meshes on a thread pool: bsv.volumes releases the GIL, and it is most of the time.
+    draws = [[rng.multivariate_normal(np.zeros(6), cov, method="eigh") for cov in covs] for _ in range(samples)]
+
+    def measure(deltas: list[np.ndarray]) -> dict[str, float]:
         moved = np.zeros_like(mesh.vertices)
-        for k, (c, cov) in enumerate(zip(cameras, covs, strict=True)):
-            delta = rng.multivariate_normal(np.zeros(6), cov, method="eigh")
+        for k, (c, delta) in enumerate(zip(cameras, deltas, strict=True)):
             r_alt, t_alt = perturb(c.rotation, c.translation, delta)
             moved += w[:, [k]] * CameraPose(c.name, c.rotation, c.translation, r_alt, t_alt).apply_error(mesh.vertices)
-        q = quantities(volumes(Mesh(moved, mesh.faces, mesh.vertex_labels, mesh.face_labels), islands=True,
-                               density=density))
+        return quantities(volumes(Mesh(moved, mesh.faces, mesh.vertex_labels, mesh.face_labels), islands=True,
+                                  density=density))
+
+    with ThreadPoolExecutor(max_workers=max(1, min(4, os.cpu_count() or 1))) as pool:
+        measured = list(pool.map(measure, draws))
+    dev = np.full((samples, len(names)), np.nan)
+    for s, q in enumerate(measured):
         for j, n in enumerate(names):
             if n in q:
                 dev[s, j] = transform(n, q[n]) - transform(n, nominal[n])

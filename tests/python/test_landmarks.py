@@ -153,6 +153,35 @@ def test_joint_centres_near_the_rig(capture, monkeypatch):
         assert json.loads(json.dumps(j.to_json()))["source"] == "front+back"
 
 
+def test_a_view_whose_landmark_is_not_repeatable_is_left_out(capture, monkeypatch):
+    """The back view's left ankle detected 12 px off, its image and mirror-image detections 30 px apart
+    (``pose_spread``): the joint comes from the front view alone, near the rig's; taken at face value
+    (no spread known: the plain front/back mean) the same wrong landmark moves the joint further."""
+    import dataclasses
+
+    _, data, cams, s = capture
+    _lower(monkeypatch, data, {})
+    segs = lm.segment_views(_images(data), cams)
+    depths = {v: data[v]["depth_m"] for v in seg.VIEWS}
+    truth = rig_joints(s.phenotype, s.pose)["ankle_l"]
+    i = seg.POSE_NAMES.index("left_ankle")
+    bad_pose = segs["back"].pose.copy()
+    bad_pose[i, 0] += 12.0
+    spread = np.full(33, 1.0)
+    spread[i] = 30.0
+    front = dataclasses.replace(segs["front"], pose_spread=np.full(33, 1.0))
+    flagged = {"front": front, "back": dataclasses.replace(segs["back"], pose=bad_pose, pose_spread=spread)}
+    joint = lm.joint_centres(flagged, depths, cams)["ankle_l"]
+    assert joint.source.startswith("front") and "back: left out" in joint.source, joint.source
+    err = float(np.linalg.norm(joint.xyz - truth)) * 1000
+    assert err < 35.0, err
+    unflagged = {"front": dataclasses.replace(segs["front"], pose_spread=None),
+                 "back": dataclasses.replace(segs["back"], pose=bad_pose, pose_spread=None)}
+    plain = lm.joint_centres(unflagged, depths, cams)["ankle_l"]
+    assert plain.source == "front+back"
+    assert float(np.linalg.norm(plain.xyz - truth)) * 1000 > err + 5.0
+
+
 def test_process_keeps_the_capture_and_records_the_warning(capture, monkeypatch, tmp_path):
     folder, data, _, _ = capture
     _lower(monkeypatch, data, {("back", "right_wrist"): 0.7})

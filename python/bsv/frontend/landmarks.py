@@ -70,6 +70,15 @@ _KINDS: dict[str, tuple[tuple[str, str], tuple[str, str], float]] = {
 }
 #: Pixels around a landmark whose depth gives the surface under it.
 DEPTH_RADIUS_PX = 7
+#: The repeatable part of a landmark's error (metres) in :func:`joint_centres`' weighting of the two views:
+#: each view weighs ``1 / (LANDMARK_SD_M^2 + s^2)``, ``s`` the landmark's image-vs-mirror spread
+#: (``Segmentation.pose_spread``) at its depth. About MediaPipe's elbow and knee scatter on the synthetic
+#: cohort; a view whose two detections of a landmark lie centimetres apart (a back view that put both
+#: ankles on one foot) then hardly counts.
+LANDMARK_SD_M = 0.01
+#: A view whose weight (see :data:`LANDMARK_SD_M`) is this many times smaller than the other view's is left
+#: out of that joint (its landmark is about 3 cm from repeatable or worse): the other view places it alone.
+UNRELIABLE_WEIGHT_RATIO = 10.0
 #: Trunk length (metres, mid-hip to mid-shoulder of the uncorrected estimates) at which the offsets of
 #: :data:`JOINT_OFFSETS_M` are the constant term.
 TRUNK_REF_M = 0.48
@@ -330,7 +339,7 @@ def joint_centres(segs: Mapping[str, Segmentation], depths: Mapping[str, np.ndar
     for joint in JOINTS:
         kind, side = _kind(joint)
         name = f"{side}_{kind}"
-        per: dict[str, tuple[np.ndarray, float, float, str]] = {}
+        per: dict[str, tuple[np.ndarray, float, float, str, float]] = {}
         for v in views:
             s = segs[v]
             how = s.sources.get(name, "")
@@ -346,19 +355,34 @@ def joint_centres(segs: Mapping[str, Segmentation], depths: Mapping[str, np.ndar
             surf = np.asarray(cam.deproject(uv[None], d)[0])
             half = _half_thickness(s.mask, s.pose, joint, d, cam.intrinsics.fx)
             vis = float(s.pose[POSE_NAMES.index(name), 2]) * (0.5 if how else 1.0)
-            per[v] = (surf, half, vis, how)
+            spread_px = np.nan if s.pose_spread is None else float(s.pose_spread[POSE_NAMES.index(name)])
+            spread_m = spread_px * d / cam.intrinsics.fx if np.isfinite(spread_px) else 0.0
+            per[v] = (surf, half, vis, how, 1.0 / (LANDMARK_SD_M**2 + spread_m**2))
         if not per:
             continue
-        notes = [f"{v}: {how}" for v, (_, _, _, how) in per.items() if how]
+        notes = [f"{v}: {how}" for v, (_, _, _, how, _) in per.items() if how]
         if len(per) == 2:
-            (sf, _, vf, _), (sb, _, vb, _) = per["front"], per["back"]
-            xyz = (sf + sb) / 2
+            w_front, w_back = per["front"][4], per["back"][4]
+            if max(w_front, w_back) > UNRELIABLE_WEIGHT_RATIO * min(w_front, w_back):
+                # One view's two detections disagree by centimetres: its landmark (and the depth under it)
+                # is not to be trusted; the other view places the joint alone.
+                dropped = "back" if w_front > w_back else "front"
+                del per[dropped]
+                notes.append(f"{dropped}: left out (its image and mirror-image landmarks disagree)")
+        if len(per) == 2:
+            (sf, _, vf, _, wf), (sb, _, vb, _, wb) = per["front"], per["back"]
             ax = cameras["front"].axis()
+            # Along the viewing axis: midway between the front and back surfaces. Across it: the views
+            # weighed by how repeatable each view's landmark is (its image-vs-mirror spread); equal
+            # weights (the plain mean) without the mirror detection.
+            mid = (sf + sb) / 2
+            across = (wf * (sf - (sf @ ax) * ax) + wb * (sb - (sb @ ax) * ax)) / (wf + wb)
+            xyz = across + (mid @ ax) * ax
             gap = sf - sb - ((sf - sb) @ ax) * ax  # the two views' disagreement across the viewing axis
             confidence = min(vf, vb) * max(0.0, 1.0 - float(np.linalg.norm(gap)) / 0.05)
             where = "front+back"
         else:
-            (v, (surf, half, vis, _)), = per.items()
+            (v, (surf, half, vis, _, _)), = per.items()
             xyz = surf + cameras[v].axis() * (half if np.isfinite(half) else 0.0)
             confidence = 0.5 * vis
             where = v

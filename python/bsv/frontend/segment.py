@@ -210,6 +210,9 @@ class Segmentation:
     sources: dict[str, str] = field(default_factory=dict)
     #: One sentence per degraded landmark (also in the volumes JSON's ``warnings`` and the report).
     warnings: tuple[str, ...] = field(default_factory=tuple)
+    #: (33,) pixels between the image's and the mirror image's detection of each pose landmark
+    #: (:attr:`Detection.spread`), or None.
+    pose_spread: np.ndarray | None = None
 
     def landmark(self, name: str) -> np.ndarray:
         """(x, y, visibility) of one landmark by name (KeyError naming it if unknown)."""
@@ -378,6 +381,10 @@ class Detection:
     swapped: tuple[str, ...]
     #: The parameters it was detected with (and is labelled with).
     params: SegmentParams
+    #: (33,) distance in pixels between the image's and the mirror image's detection of each pose landmark
+    #: (``flip_average``; None without it): how far MediaPipe's own estimate of the landmark is from
+    #: repeatable. :func:`bsv.frontend.landmarks.joint_centres` weighs the views by it.
+    spread: np.ndarray | None = None
 
 
 def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | None = None,
@@ -402,11 +409,13 @@ def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | 
         raise PersonNotFoundError(f"no person found in the {view} image ({w} x {h}): the subject must stand in "
                                   "full view of the camera, lit, against a plain background")
     pose, hands, mask_soft, swapped = first
+    spread = None
     if prm.flip_average:
         other = _detect_once(img, view, prm, not flip)
         if other is not None:
+            spread = np.hypot(*(pose[:, :2] - other[0][:, :2]).T)
             pose, hands, mask_soft = _average_detections((pose, hands, mask_soft), other[:3])
-    return Detection(view, (h, w), pose, hands, mask_soft, swapped, prm)
+    return Detection(view, (h, w), pose, hands, mask_soft, swapped, prm, spread)
 
 
 #: One oriented detection: pose (33, 3), the subject's (left, right) hands, the soft mask and the swapped pairs.
@@ -495,7 +504,7 @@ def label_detection(det: Detection, depth: np.ndarray | None = None, pose: np.nd
     labels = label_pixels(mask, pose, hands, prm)
     return Segmentation(labels=labels, mask=mask, landmarks=_landmarks71(pose, hands), view=det.view,
                         hands_found=(hands[0] is not None, hands[1] is not None), swapped=det.swapped, pose=pose,
-                        sources=dict(sources or {}), warnings=tuple(warnings))
+                        sources=dict(sources or {}), warnings=tuple(warnings), pose_spread=det.spread)
 
 
 def missing_error(view: str, missing: Sequence[tuple[str, str]]) -> LandmarkMissingError:

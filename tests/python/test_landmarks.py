@@ -155,7 +155,8 @@ def test_joint_centres_near_the_rig(capture, monkeypatch):
 
 def test_a_view_whose_landmark_is_not_repeatable_is_left_out(capture, monkeypatch):
     """The back view's left ankle detected 12 px off, its image and mirror-image detections 30 px apart
-    (``pose_spread``): the joint comes from the front view alone, near the rig's; taken at face value
+    (``pose_spread``): the joint comes from the front view's landmark and both views' depth, near the
+    rig's; taken at face value
     (no spread known: the plain front/back mean) the same wrong landmark moves the joint further."""
     import dataclasses
 
@@ -175,6 +176,10 @@ def test_a_view_whose_landmark_is_not_repeatable_is_left_out(capture, monkeypatc
     assert joint.source.startswith("front") and "back: left out" in joint.source, joint.source
     err = float(np.linalg.norm(joint.xyz - truth)) * 1000
     assert err < 35.0, err
+    # Its depth: midway between the front surface under the kept landmark and the back surface behind it
+    # (the left-out view's depth image at the kept point's projection), not the back's wrong landmark.
+    depth_err = abs(float((joint.xyz - truth) @ cams["front"].axis())) * 1000
+    assert depth_err < 20.0, depth_err
     unflagged = {"front": dataclasses.replace(segs["front"], pose_spread=None),
                  "back": dataclasses.replace(segs["back"], pose=bad_pose, pose_spread=None)}
     plain = lm.joint_centres(unflagged, depths, cams)["ankle_l"]

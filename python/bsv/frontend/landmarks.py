@@ -369,6 +369,14 @@ def joint_centres(segs: Mapping[str, Segmentation], depths: Mapping[str, np.ndar
                 dropped = "back" if w_front > w_back else "front"
                 del per[dropped]
                 notes.append(f"{dropped}: left out (its image and mirror-image landmarks disagree)")
+        opposite = None  # the left-out view's surface behind the kept view's landmark
+        if len(per) == 1 and len(views) == 2:
+            (kept, (surf, _, _, _, _)), = per.items()
+            other = next(v for v in views if v != kept)
+            uv_o = np.asarray(cameras[other].project(surf[None]))[0]
+            d_o = _surface_depth(np.asarray(depths[other], dtype=np.float64), segs[other].mask, uv_o)
+            if np.isfinite(d_o):
+                opposite = np.asarray(cameras[other].deproject(uv_o[None], d_o)[0])
         if len(per) == 2:
             (sf, _, vf, _, wf), (sb, _, vb, _, wb) = per["front"], per["back"]
             ax = cameras["front"].axis()
@@ -383,7 +391,11 @@ def joint_centres(segs: Mapping[str, Segmentation], depths: Mapping[str, np.ndar
             where = "front+back"
         else:
             (v, (surf, half, vis, _, _)), = per.items()
-            xyz = surf + cameras[v].axis() * (half if np.isfinite(half) else 0.0)
+            if opposite is not None:  # midway between this view's surface and the other's, behind it
+                ax = cameras[v].axis()
+                xyz = surf + ((opposite - surf) @ ax) / 2 * ax
+            else:
+                xyz = surf + cameras[v].axis() * (half if np.isfinite(half) else 0.0)
             confidence = 0.5 * vis
             where = v
         raw[joint] = xyz

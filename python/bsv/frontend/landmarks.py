@@ -369,7 +369,7 @@ def joint_centres(segs: Mapping[str, Segmentation], depths: Mapping[str, np.ndar
                 dropped = "back" if w_front > w_back else "front"
                 del per[dropped]
                 notes.append(f"{dropped}: left out (its image and mirror-image landmarks disagree)")
-        opposite = None  # the left-out view's surface behind the kept view's landmark
+        opposite = None  # the other view's surface behind the one view that places the joint
         if len(per) == 1 and len(views) == 2:
             (kept, (surf, _, _, _, _)), = per.items()
             other = next(v for v in views if v != kept)

@@ -119,7 +119,7 @@ class SegmentParams:
     #: Run MediaPipe on the image and on its mirror image and average the two (landmarks, visibilities, hands,
     #: soft mask; each oriented to the subject's left/right first). The pose model is not mirror-symmetric:
     #: the two detections differ by a few pixels, and their mean is the better estimate (camera path,
-    #: cohort seeds 0, 2 and 4, noer and l515: mean error over the nine segments 2.74 / 3.52 / 3.64 % ->
+    #: cohort seeds 0, 2 and 4, noer and l515: mean error over the eight limb segments 2.74 / 3.52 / 3.64 % ->
     #: 2.56 / 3.39 / 3.49 %, the arms 0.3-0.6 points better; benchmarks/BENCH.md, round 2 session 9).
     #: Costs one more MediaPipe run per view (about 0.15 s).
     flip_average: bool = True

@@ -286,9 +286,13 @@ def test_capture_cloud_with_the_true_label_images_is_the_scanner_cloud(body: bsv
     assert np.mean(cloud.labels[i] == rebuilt.labels) > 0.999
 
 
-def test_bad_options_are_usage_errors(tmp_path: Path) -> None:
+def test_bad_options_are_usage_errors(tmp_path: Path, capsys) -> None:
     with pytest.raises(SystemExit):
         bench_main(["synth", "--conditions", "noer,foggy"])
+    for bad in ("60,15", "15", "a,b", "10,90"):
+        with pytest.raises(SystemExit):
+            bench_main(["synth", "--arm-down", bad])
+        assert "--arm-down" in capsys.readouterr().err
     assert bench_main(["faust", "--root", str(tmp_path), "--out", str(tmp_path / "o"), "--quiet"]) == 2
 
 

@@ -173,6 +173,28 @@ def test_cohort_is_deterministic_and_plausible(tmp_path):
     assert not np.array_equal(other.body.vertices, s0.body.vertices)
 
 
+def test_wide_arm_range_changes_only_the_arms():
+    """``arm_range`` draws the arms from a wider A-pose interval with the same random numbers: every
+    other draw (sex, phenotype, elbows, hips) stays, the default range gives the cohort as before."""
+    from bsv.bodies.cohort import ARM_DOWN_RANGE_DEG, WIDE_ARM_DOWN_RANGE_DEG
+
+    lo, hi = WIDE_ARM_DOWN_RANGE_DEG
+    arms = []
+    for i in range(6):
+        std = bodies.subject(i, seed=5, check=False)
+        assert bodies.subject(i, seed=5, check=False, arm_range=ARM_DOWN_RANGE_DEG).pose == std.pose
+        wide = bodies.subject(i, seed=5, check=False, arm_range=WIDE_ARM_DOWN_RANGE_DEG)
+        assert wide.phenotype.local == std.phenotype.local and wide.sex == std.sex
+        assert (wide.pose.elbow_l, wide.pose.hip_abduction_r) == (std.pose.elbow_l, std.pose.hip_abduction_r)
+        for a in (wide.pose.arm_down_l, wide.pose.arm_down_r):
+            assert lo <= a <= hi
+            arms.append(a)
+    assert min(arms) < ARM_DOWN_RANGE_DEG[0] and max(arms) > ARM_DOWN_RANGE_DEG[1], arms
+    for bad in ((60.0, 15.0), (-5.0, 30.0), (20.0, 95.0)):
+        with pytest.raises(bodies.PoseError, match="arm range"):
+            bodies.subject(0, seed=5, arm_range=bad)
+
+
 def test_cohort_files_are_not_overwritten(tmp_path, capsys):
     from bsv.bodies.cohort import main as cohort_main
     from bsv.bodies.errors import OutputExistsError

@@ -26,6 +26,18 @@ def _ints(text: str) -> tuple[int, ...]:
         raise argparse.ArgumentTypeError(f"{text!r}: use a comma list of integers, e.g. 0,10,20") from exc
 
 
+def _arm_range(text: str) -> tuple[float, float]:
+    from ..bodies.cohort import check_arm_range
+    from ..bodies.pose import PoseError
+
+    try:
+        lo, hi = (float(x) for x in text.split(","))
+        return check_arm_range((lo, hi))
+    except (ValueError, PoseError) as exc:
+        raise argparse.ArgumentTypeError(f"{text!r}: give LOW,HIGH degrees below the horizontal, "
+                                         f"0 <= LOW < HIGH <= 80, e.g. 15,60 ({exc})") from None
+
+
 _param = key_value
 
 
@@ -81,6 +93,9 @@ def parser() -> argparse.ArgumentParser:
                    "calibrated run: ~1.5 s each)")
     s.add_argument("--template", default="default", help="default, fine or a labelled mesh path")
     s.add_argument("--no-local", action="store_true", help="cohort without MakeHuman local modifiers")
+    s.add_argument("--arm-down", type=_arm_range, default=(25.0, 50.0), metavar="LOW,HIGH",
+                   help="the arms' A-pose angle below the horizontal the subjects are drawn from, degrees "
+                   "(default 25,50; 15,60 for wide A-poses: the camera path's shoulder boundary moves with it)")
     s.add_argument("--cohort", choices=COHORTS, default="standard",
                    help="standard: bsv.bodies.cohort; hard: the same subjects reshaped into the registration's "
                    "hard classes (deep upper arms, bumps, a swollen segment, extreme segment modifiers; "
@@ -126,7 +141,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                               template=args.template, methods=methods, params=params, local=not args.no_local,
                               cloud=args.cloud, room=args.room, studio=args.studio,
                               cloud_params=dict(args.cloud_param), cohort=args.cohort,
-                              refine_calibration=args.refine_calibration)
+                              refine_calibration=args.refine_calibration, arm_range=args.arm_down)
             cfg.validate()
             infos, runs, wall = run_synth(cfg, jobs=max(1, args.jobs), progress=not args.quiet,
                                           scheduler=args.scheduler)
@@ -134,7 +149,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                       "segmentation": cfg.segmentation, "cloud": cfg.cloud, "room": ("studio" if cfg.studio else "clinic") if cfg.uses_room() else False,
                       "cloud_params": cfg.cloud_params, "template": cfg.template, "methods": ",".join(methods),
                       "params": params, "local_modifiers": cfg.local, "jobs": args.jobs,
-                      "cohort": cfg.cohort, "scheduler": args.scheduler,
+                      "cohort": cfg.cohort, "arm_down_deg": list(cfg.arm_range), "scheduler": args.scheduler,
                       "refine_calibration": cfg.refine_calibration}
             summary = write_outputs(args.out, "BSV synthetic benchmark", config, infos, runs, wall,
                                     overwrite=args.overwrite)

@@ -59,6 +59,9 @@ class SynthConfig:
     methods: tuple[str, ...] = ("bsv",)
     params: dict[str, Any] = field(default_factory=dict)
     local: bool = True
+    #: The arms' angle below the horizontal the subjects are drawn from (degrees; ``--arm-down``):
+    #: :data:`bsv.bodies.cohort.ARM_DOWN_RANGE_DEG` by default, wider to test the pose's effect.
+    arm_range: tuple[float, float] = (25.0, 50.0)
     cloud: str = "raw"
     #: Cloud-building keywords for the lab path (``bsv process``'s defaults when empty), e.g. {"sor": True}.
     cloud_params: dict[str, Any] = field(default_factory=dict)
@@ -92,6 +95,13 @@ class SynthConfig:
         bad = [c for c in self.conditions if c not in CONDITIONS]
         if bad or not self.conditions:
             raise BenchError(f"--conditions {','.join(self.conditions)}: use a comma list of {','.join(CONDITIONS)}")
+        from ..bodies.cohort import check_arm_range
+        from ..bodies.pose import PoseError
+
+        try:
+            check_arm_range(self.arm_range)
+        except PoseError as exc:
+            raise BenchError(f"--arm-down: {exc}") from None
         if self.cohort not in COHORTS:
             raise BenchError(f"--cohort {self.cohort}: use one of {', '.join(COHORTS)}")
         if self.segmentation not in SEGMENTATIONS:
@@ -328,7 +338,7 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] |
     t0 = time.perf_counter()
     try:
         make = hard_subject if cfg.cohort == "hard" else subject
-        s = make(index, cfg.seed, local=cfg.local)
+        s = make(index, cfg.seed, local=cfg.local, arm_range=cfg.arm_range)
     except Exception as exc:
         err = f"subject generation failed: {type(exc).__name__}: {exc}"
         runs: list[Run] = [Run(name, c, m, False, error=err) for c in cfg.conditions for m in cfg.methods]

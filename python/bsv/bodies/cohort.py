@@ -3,7 +3,7 @@
 Subject i of seed s depends only on (s, i): even indices are women, odd indices men. Stature is drawn
 from normal distributions (women 1.63 +- 0.065 m, men 1.77 +- 0.07 m, clipped at 2.5 sd), BMI from a
 normal 25 +- 4 truncated to [18.5, 35], age 20-65 years, a muscle start value 0.3-0.6, proportions
-0.3-0.7, random race mix; A-pose: arms 25-50 deg below horizontal, elbows 0-20 deg, hips 0-6 deg
+0.3-0.7, random race mix; A-pose: arms 25-50 deg below horizontal (``arm_range``: 15-60 for wide A-poses), elbows 0-20 deg, hips 0-6 deg
 (small left/right differences). MakeHuman LOCAL modifiers (stomach, buttocks, hip, pelvis, torso,
 breast, arms, legs) are applied by default: each modifier with probability 1/2, value uniform in
 +-0.6; left/right pairs share a value except with probability 1/5 (asymmetric). Height and weight
@@ -25,7 +25,7 @@ from .body import Body, SolveError, make_body, solve_stature_bmi
 from .collide import penetrations
 from .meshio import ply_bytes
 from .model import Phenotype
-from .pose import Pose
+from .pose import Pose, PoseError
 
 LOCAL_CENTRAL = ("stomach/stomach-pregnant", "stomach/stomach-tone", "buttocks/buttocks-volume",
                  "hip/hip-scale-depth", "hip/hip-scale-horiz", "pelvis/pelvis-tone", "torso/torso-scale-depth",
@@ -92,8 +92,32 @@ def _solve(ph: Phenotype, stature: float, bmi: float, pose: Pose) -> tuple[Pheno
         return solve_stature_bmi(stature, b2, ph, pose), b2
 
 
-def subject(index: int, seed: int = 0, local: bool = True, check: bool = True) -> Subject:
-    """Subject ``index`` of the cohort of ``seed`` (deterministic)."""
+#: The cohort's arm angle below the horizontal (degrees, both sides drawn around one value): the A-pose
+#: range the standard cohort covers.
+ARM_DOWN_RANGE_DEG: tuple[float, float] = (25.0, 50.0)
+#: A wider A-pose range (``bsv bench synth --arm-down 15,60``): arms from nearly horizontal to close to
+#: the body, where the camera path's shoulder boundary moves (BENCH.md, round 2 session 10).
+WIDE_ARM_DOWN_RANGE_DEG: tuple[float, float] = (15.0, 60.0)
+
+
+def check_arm_range(arm_range: tuple[float, float]) -> tuple[float, float]:
+    """``arm_range`` as floats, or PoseError when it is not an increasing pair inside [0, 80] degrees
+    (beyond, a collision-free A-pose cannot be kept: the arm meets the head or the torso)."""
+    try:
+        lo, hi = (float(x) for x in arm_range)
+    except (TypeError, ValueError) as exc:
+        raise PoseError(f"arm range {arm_range!r}: give two angles in degrees, e.g. (25, 50)") from exc
+    if not (0.0 <= lo < hi <= 80.0):
+        raise PoseError(f"arm range ({lo:g}, {hi:g}) deg: need 0 <= low < high <= 80 (degrees below the horizontal)")
+    return lo, hi
+
+
+def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
+            arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG) -> Subject:
+    """Subject ``index`` of the cohort of ``seed`` (deterministic). ``arm_range``: the interval (degrees
+    below the horizontal) the arms' angle is drawn from; the default keeps the cohort as it always was, a
+    wider one (:data:`WIDE_ARM_DOWN_RANGE_DEG`) draws the same random numbers, so every other draw stays."""
+    lo, hi = check_arm_range(arm_range)
     rng = np.random.default_rng([int(seed), int(index)])
     female = index % 2 == 0
     mu, sd = (1.63, 0.065) if female else (1.77, 0.07)
@@ -107,9 +131,9 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True) -
                    age=Phenotype.age_from_years(years), muscle=float(rng.uniform(0.3, 0.6)),
                    proportions=float(rng.uniform(0.3, 0.7)), african=float(race[0]), asian=float(race[1]),
                    caucasian=float(race[2]))
-    arm, elbow, hip = rng.uniform(25, 50), rng.uniform(0, 20), rng.uniform(0, 6)
+    arm, elbow, hip = rng.uniform(lo, hi), rng.uniform(0, 20), rng.uniform(0, 6)
     d = rng.normal(0, 1.5, size=3)
-    pose = Pose(float(np.clip(arm + d[0], 25, 50)), float(np.clip(arm - d[0], 25, 50)),
+    pose = Pose(float(np.clip(arm + d[0], lo, hi)), float(np.clip(arm - d[0], lo, hi)),
                 float(np.clip(elbow + d[1], 0, 20)), float(np.clip(elbow - d[1], 0, 20)),
                 float(np.clip(hip + d[2] / 3, 0, 6)), float(np.clip(hip - d[2] / 3, 0, 6)))
     loc = _draw_local(rng)
@@ -141,17 +165,19 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True) -
     return Subject(index, int(seed), "female" if female else "male", stature, bmi_used, ph, pose, body)
 
 
-def cohort(n: int, seed: int = 0, local: bool = True, check: bool = True) -> list[Subject]:
+def cohort(n: int, seed: int = 0, local: bool = True, check: bool = True,
+           arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG) -> list[Subject]:
     """``n`` plausible adults (half female), deterministic for a seed; local modifiers on by default."""
     if n < 0:
         raise ValueError(f"cohort size {n}: must be >= 0")
-    return list(iter_cohort(n, seed, local, check))
+    return list(iter_cohort(n, seed, local, check, arm_range))
 
 
-def iter_cohort(n: int, seed: int = 0, local: bool = True, check: bool = True) -> Iterator[Subject]:
+def iter_cohort(n: int, seed: int = 0, local: bool = True, check: bool = True,
+                arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG) -> Iterator[Subject]:
     """Like cohort() but yields subjects one at a time."""
     for i in range(n):
-        yield subject(i, seed, local, check)
+        yield subject(i, seed, local, check, arm_range)
 
 
 def volumes_json(s: Subject) -> str:

@@ -9,19 +9,25 @@ Tables, in plain language: volumes with their 95 % intervals and masses, the tru
 segments when known (a synthetic subject), proportions, left/right asymmetry ("not distinguishable from
 symmetric" when the interval holds 0), landmark and calibration warnings; the technical details (cloud
 cleaning per camera, registration figures and parameters, timings) are folded away in ``<details>``.
-Every file is rendered before any is written, and each is written atomically.
+Every file is rendered before any is written, and each is written atomically. The figures are drawn once
+for both files, on Linux by two processes at once (a forked child draws the cloud figure and the side view);
+report.pdf embeds the shaded renders as JPEG, which WeasyPrint takes as they are.
 """
 
 from __future__ import annotations
 
 import base64
 import csv
+import functools
 import html
 import io
 import math
 import os
+import signal
+import sys
 import tempfile
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -94,46 +100,94 @@ def palette() -> np.ndarray:
     return rgb01()
 
 
-def _png(fig: Any) -> bytes:
-    """The figure as PNG bytes (then closed)."""
-    import matplotlib.pyplot as plt
+#: Dots per inch of every figure (its pixels: figsize x DPI).
+FIGURE_DPI = 110
+#: JPEG quality of the shaded renders inside report.pdf (chroma kept at full resolution).
+PDF_JPEG_QUALITY = 90
+#: Longest side (pixels) of a camera segmentation preview: larger label images are shown every n-th pixel
+#: (nearest: the ids stay exact). The preview is displayed at most 320 px high.
+PREVIEW_MAX_PX = 512
+
+
+@dataclass(frozen=True)
+class _Image:
+    """One drawn report image: ``png`` is inlined in report.html; ``pdf_jpeg``, when set (the shaded renders),
+    is the same pixels as JPEG for report.pdf, which WeasyPrint embeds as they are (a PNG it decodes and
+    compresses again)."""
+
+    png: bytes
+    pdf_jpeg: bytes | None = None
+
+
+def _new_figure(width: float, height: float) -> Any:
+    """A matplotlib figure on its own Agg canvas (no pyplot: nothing to close, no global state)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height), dpi=FIGURE_DPI)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _pixels(fig: Any) -> np.ndarray:
+    """The figure drawn once on its Agg canvas: (H, W, 3) uint8 RGB (the background is opaque white)."""
+    fig.canvas.draw()
+    return np.ascontiguousarray(np.asarray(fig.canvas.buffer_rgba())[..., :3])
+
+
+def _encode(rgb: np.ndarray, fmt: str) -> bytes:
+    """RGB pixels as PNG (zlib's fastest level: about 8 % larger than matplotlib's default, half the time)
+    or as JPEG."""
+    from PIL import Image as PILImage
 
     buf = io.BytesIO()
-    fig.savefig(buf, format="png")
-    plt.close(fig)
+    if fmt == "PNG":
+        PILImage.fromarray(rgb).save(buf, format="PNG", compress_level=1)
+    else:
+        PILImage.fromarray(rgb).save(buf, format="JPEG", quality=PDF_JPEG_QUALITY, subsampling=0)
     return buf.getvalue()
 
 
-def _data_uri(png: bytes) -> str:
-    return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
+def _image(fig: Any, shaded: bool = False) -> _Image:
+    """A drawn figure as a report :class:`_Image` (``shaded``: a render, also kept as JPEG for the PDF)."""
+    rgb = _pixels(fig)
+    return _Image(_encode(rgb, "PNG"), _encode(rgb, "JPEG") if shaded else None)
 
 
-def _body_figure(mesh: Any, labels: np.ndarray, view: str) -> bytes:
-    import matplotlib.pyplot as plt
+def _data_uri(data: bytes, mime: str = "image/png") -> str:
+    return f"data:{mime};base64," + base64.b64encode(data).decode("ascii")
 
-    fig, ax = plt.subplots(figsize=(3.0, 5.0), dpi=110)
+
+def _body_figure(mesh: Any, labels: np.ndarray, view: str) -> _Image:
+    fig = _new_figure(3.0, 5.0)
+    ax = fig.add_subplot()
     render_mesh(ax, mesh.vertices, mesh.faces, labels, view)
     fig.subplots_adjust(bottom=0.01, top=0.99, left=0.01, right=0.99)
-    return _png(fig)
+    return _image(fig, shaded=True)
 
 
-def _cloud_figure(mesh: Any, labels: np.ndarray, cloud: Any, max_points: int = 25_000) -> bytes:
-    import matplotlib.pyplot as plt
-
+def _cloud_figure(mesh: Any, labels: np.ndarray, cloud: Any, max_points: int = 25_000) -> _Image:
+    """The measured points (segment colours) over the fitted mesh (grey), front and left side. The points
+    are one-pixel marks at half opacity, one batch per segment (a scatter of 25,000 markers cost 0.15 s a
+    view; these look alike)."""
     pts = np.asarray(cloud.points)
     lab = np.zeros(len(pts), dtype=np.uint8) if cloud.labels is None else np.asarray(cloud.labels)
     if len(pts) > max_points:
         sel = np.random.default_rng(0).choice(len(pts), max_points, replace=False)
         pts, lab = pts[sel], lab[sel]
+    lab = np.clip(lab, 0, 14)
     pal = rgb01()
-    fig, axes = plt.subplots(1, 2, figsize=(5.6, 5.0), dpi=110)
+    fig = _new_figure(5.6, 5.0)
+    axes = fig.subplots(1, 2)
     for ax, view in zip(axes, ("front", "side"), strict=True):
         render_mesh(ax, mesh.vertices, mesh.faces, labels, view, grey=True)
         sx, sy, _ = VIEWS[view]
-        ax.scatter(pts @ sx, pts @ sy, s=0.3, c=pal[np.clip(lab, 0, 14)], linewidths=0)
+        for k in np.unique(lab):
+            p = pts[lab == k]
+            ax.plot(p @ sx, p @ sy, ",", color=pal[k], alpha=0.5)
         ax.set_title("front" if view == "front" else "left side", fontsize=9)
     fig.subplots_adjust(left=0.02, right=0.98, top=0.94, bottom=0.02, wspace=0.05)
-    return _png(fig)
+    return _image(fig, shaded=True)
 
 
 #: Segments drawn on the limb chart (limb scale) and on the torso chart (its own scale).
@@ -142,14 +196,13 @@ CENTRAL_SEGMENTS = ("torso", "head")
 
 
 def _bar_chart(names: Sequence[str], volumes_l: dict[str, float], bands: dict[str, tuple[float, float]],
-               truth: dict[str, float] | None, title: str, width: float) -> bytes:
+               truth: dict[str, float] | None, title: str, width: float) -> _Image:
     """Bars of the estimated volumes in palette colours with their 95 % intervals (error bars) and the true
     volume of a synthetic subject (a black tick) when known."""
-    import matplotlib.pyplot as plt
-
     x = np.arange(len(names))
     est = np.array([volumes_l[n] for n in names])
-    fig, ax = plt.subplots(figsize=(width, 3.0), dpi=110)
+    fig = _new_figure(width, 3.0)
+    ax = fig.add_subplot()
     ax.bar(x, est, 0.7, color=[rgb01()[segment_id(n)] for n in names], edgecolor="k", linewidth=0.4)
     if any(n in bands for n in names):
         lo = np.array([est[k] - bands[n][0] if n in bands else 0.0 for k, n in enumerate(names)])
@@ -172,27 +225,128 @@ def _bar_chart(names: Sequence[str], volumes_l: dict[str, float], bands: dict[st
     ax.tick_params(axis="y", labelsize=7)
     ax.spines[["top", "right"]].set_visible(False)
     fig.tight_layout()
-    return _png(fig)
+    return _image(fig)
 
 
-def _segmentation_previews(out: Path, segmentations: Mapping[str, np.ndarray] | None) -> list[tuple[str, bytes]]:
-    """Colourised previews (PNG bytes) of the camera segmentations (raw ids 0-14): the given label images by
-    camera, else ``segmentation/<camera>/segmentation.png`` in OUT."""
-    from PIL import Image
+def _segmentation_ids(out: Path, segmentations: Mapping[str, np.ndarray] | None) -> dict[str, np.ndarray]:
+    """The camera segmentations (raw ids 0-14) by camera: the given label images, else
+    ``segmentation/<camera>/segmentation.png`` in OUT."""
+    from PIL import Image as PILImage
 
-    if segmentations is None:
-        segmentations = {}
-        for path in sorted(out.glob("segmentation/*/segmentation.png")):
-            with Image.open(path) as im:
-                ids = np.asarray(im)
-            if ids.ndim == 2:
-                segmentations[path.parent.name] = ids
-    previews = []
-    for cam, ids in segmentations.items():
-        buf = io.BytesIO()
-        Image.fromarray(colourise(ids)).save(buf, format="PNG")
-        previews.append((cam, buf.getvalue()))
-    return previews
+    if segmentations is not None:
+        return {cam: np.asarray(ids) for cam, ids in segmentations.items()}
+    found = {}
+    for path in sorted(out.glob("segmentation/*/segmentation.png")):
+        with PILImage.open(path) as im:
+            ids = np.asarray(im)
+        if ids.ndim == 2:
+            found[path.parent.name] = ids
+    return found
+
+
+def _preview(ids: np.ndarray) -> _Image:
+    """A segmentation colourised in the palette, at most :data:`PREVIEW_MAX_PX` on the long side."""
+    step = max(1, math.ceil(max(ids.shape[:2]) / PREVIEW_MAX_PX))
+    return _Image(_encode(colourise(ids[::step, ::step]), "PNG"))
+
+
+def parallel_drawing() -> bool:
+    """Whether the report's figures are drawn by two processes at once (:func:`render_report`'s default):
+    on Linux (``fork``) when this process may run on two cores or more."""
+    return sys.platform == "linux" and len(os.sched_getaffinity(0)) >= 2
+
+
+#: Seconds this process waits for the drawing child once its own figures are drawn; then the child is
+#: stopped and its figures are drawn here (it draws for about 0.3 s).
+CHILD_TIMEOUT_S = 60.0
+
+
+def _draw(jobs: Mapping[str, Callable[[], _Image]], forked: Sequence[str], parallel: bool) -> dict[str, _Image]:
+    """Runs the drawing jobs. With ``parallel``, a forked child process runs the ``forked`` ones (it inherits
+    the data; the images come back pickled through a pipe) while this process runs the others. A child that
+    fails or hangs only costs time: its figures are then drawn here."""
+    theirs = [k for k in jobs if k in forked] if parallel else []
+    images: dict[str, _Image] = {}
+    child = _fork_drawing(jobs, theirs) if theirs else None
+    try:
+        images.update((k, jobs[k]()) for k in jobs if k not in theirs)
+    except BaseException:
+        if child is not None:
+            _stop(*child)
+        raise
+    if child is not None:
+        images.update(_collect(*child))
+    images.update((k, jobs[k]()) for k in jobs if k not in images)  # a failed child's figures, drawn here
+    return images
+
+
+def _fork_drawing(jobs: Mapping[str, Callable[[], _Image]], keys: Sequence[str]) -> tuple[int, int] | None:
+    """Forks a child that runs ``jobs[k]`` for ``keys`` and writes {key: image} pickled to a pipe; returns
+    (child pid, read end), or None when no child could be made."""
+    import pickle
+    import warnings
+
+    r, w = os.pipe()
+    try:
+        with warnings.catch_warnings():
+            # Python >= 3.12 warns that a child forked from a threaded process can deadlock on a lock another
+            # thread held (the idle worker threads of the Rust core and of MediaPipe live here). The child only
+            # draws with numpy, matplotlib and Pillow, and a hung child is stopped (CHILD_TIMEOUT_S).
+            warnings.simplefilter("ignore", DeprecationWarning)
+            pid = os.fork()
+    except OSError:
+        os.close(r)
+        os.close(w)
+        return None
+    if pid == 0:  # the child: draw, send, leave at once (no cleanup of the parent's objects, no atexit)
+        code = 1
+        try:
+            os.close(r)
+            with os.fdopen(w, "wb") as f:
+                pickle.dump({k: jobs[k]() for k in keys}, f, protocol=pickle.HIGHEST_PROTOCOL)
+            code = 0
+        finally:
+            os._exit(code)
+    os.close(w)
+    return pid, r
+
+
+def _collect(pid: int, r: int) -> dict[str, _Image]:
+    """The child's images ({} when it failed or did not answer within :data:`CHILD_TIMEOUT_S`)."""
+    import pickle
+    import select
+    import time
+
+    chunks: list[bytes] = []
+    deadline = time.monotonic() + CHILD_TIMEOUT_S
+    try:
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0 or not select.select([r], [], [], left)[0]:
+                _stop(pid, -1)
+                return {}
+            chunk = os.read(r, 1 << 20)
+            if not chunk:
+                break
+            chunks.append(chunk)
+    except BaseException:  # interrupted while waiting: leave no child behind
+        _stop(pid, -1)
+        raise
+    finally:
+        os.close(r)
+    _, status = os.waitpid(pid, 0)
+    if os.waitstatus_to_exitcode(status) != 0:
+        return {}
+    images: dict[str, _Image] = pickle.loads(b"".join(chunks))
+    return images
+
+
+def _stop(pid: int, r: int) -> None:
+    """Stops the drawing child and reaps it (closes the read end unless it is -1)."""
+    if r >= 0:
+        os.close(r)
+    os.kill(pid, signal.SIGKILL)
+    os.waitpid(pid, 0)
 
 
 def _opt(x: Any, digits: int) -> str:
@@ -387,19 +541,30 @@ summary{cursor:pointer;font-weight:bold}
 @page{size:A4;margin:14mm}"""
 
 
-def _figure(png: bytes, alt: str, caption: str, cls: str = "") -> str:
-    return (f'<figure class="{cls}"><img src="{_data_uri(png)}" alt="{html.escape(alt)}">'
+def _figure(img: _Image, alt: str, caption: str, cls: str = "", pdf_swaps: dict[str, str] | None = None) -> str:
+    """A ``<figure>`` with the image inlined as PNG; a JPEG twin for the PDF is noted in ``pdf_swaps``
+    (PNG data: URI -> JPEG data: URI)."""
+    uri = _data_uri(img.png)
+    if img.pdf_jpeg is not None and pdf_swaps is not None:
+        pdf_swaps[uri] = _data_uri(img.pdf_jpeg, "image/jpeg")
+    return (f'<figure class="{cls}"><img src="{uri}" alt="{html.escape(alt)}">'
             f"<figcaption>{html.escape(caption)}</figcaption></figure>")
 
 
 def render_html(result: Any, out_dir: PathLike, title: str = "BSV report",
-                segmentations: Mapping[str, np.ndarray] | None = None) -> str:
+                segmentations: Mapping[str, np.ndarray] | None = None, *, parallel: bool | None = None) -> str:
     """The self-contained report of a :class:`bsv.pipeline.ProcessResult` (figures inlined as data: URIs).
     ``segmentations``: the camera segmentations (label images by camera), shown colourised; without them,
-    the ``segmentation/<camera>/segmentation.png`` in ``out_dir``."""
-    import matplotlib
+    the ``segmentation/<camera>/segmentation.png`` in ``out_dir``. ``parallel``: draw the figures in two
+    processes (None: :func:`parallel_drawing`; the images are the same either way)."""
+    return _documents(result, out_dir, title, segmentations, parallel)[0]
 
-    matplotlib.use("Agg", force=False)
+
+def _documents(result: Any, out_dir: PathLike, title: str, segmentations: Mapping[str, np.ndarray] | None,
+               parallel: bool | None = None) -> tuple[str, str]:
+    """The report's HTML twice from one drawing of the figures: for report.html (every image a PNG) and
+    for report.pdf (the shaded renders as JPEG; see :class:`_Image`). ``parallel``: draw in two processes
+    (None: :func:`parallel_drawing`)."""
     from .uncertainty import asymmetry_text
 
     out = Path(out_dir)
@@ -418,25 +583,36 @@ def render_html(result: Any, out_dir: PathLike, title: str = "BSV report",
         b = bands.get(name) or (iv.ratios.get(name) if iv else None)
         return f"{_fmt(b[0], digits)} to {_fmt(b[1], digits)}" if b else "not computed"
 
-    # Figures
-    body = (_figure(_body_figure(mesh, flabels, "front"), "segmented fitted body, front", "Front", "body")
-            + _figure(_body_figure(mesh, flabels, "side"), "segmented fitted body, left side", "Left side", "body"))
+    # Figures: the point-cloud figure and the side view in a forked child while this process draws the rest
+    # (about 0.3 s each; _draw).
     limbs = [n for n in LIMB_SEGMENTS if n in volumes_l]
     central = [n for n in CENTRAL_SEGMENTS if n in volumes_l]
+    seg_ids = _segmentation_ids(out, segmentations)
+    jobs: dict[str, Callable[[], _Image]] = {
+        "front": lambda: _body_figure(mesh, flabels, "front"),
+        "side": lambda: _body_figure(mesh, flabels, "side"),
+        "cloud": lambda: _cloud_figure(mesh, flabels, result.cloud)}
+    if central:
+        jobs["torso"] = lambda: _bar_chart(central, volumes_l, bands, same or None, "Torso", 1.9 + 0.6 * len(central))
+    if limbs:
+        jobs["limbs"] = lambda: _bar_chart(limbs, volumes_l, bands, same or None, "Arms and legs", 5.2)
+    for cam, ids in seg_ids.items():
+        jobs[f"seg:{cam}"] = functools.partial(_preview, ids)
+    img = _draw(jobs, ("cloud", "side"), parallel_drawing() if parallel is None else parallel)
+    swaps: dict[str, str] = {}
+    body = (_figure(img["front"], "segmented fitted body, front", "Front", "body", swaps)
+            + _figure(img["side"], "segmented fitted body, left side", "Left side", "body", swaps))
     charts = ""
     if central:
-        charts += _figure(_bar_chart(central, volumes_l, bands, same or None, "Torso", 1.9 + 0.6 * len(central)),
-                          "torso volume", "Torso (own scale)", "narrow")
+        charts += _figure(img["torso"], "torso volume", "Torso (own scale)", "narrow")
     if limbs:
-        charts += _figure(_bar_chart(limbs, volumes_l, bands, same or None, "Arms and legs", 5.2), "limb volumes",
-                          "Arms and legs (own scale)")
-    previews = _segmentation_previews(out, segmentations)
+        charts += _figure(img["limbs"], "limb volumes", "Arms and legs (own scale)")
     seg_html = ""
-    if previews:
+    if seg_ids:
         seg_html = ("<h2>Camera segmentation</h2><p class=\"note\">What each camera's image was divided into (the raw "
                     "label images are <code>segmentation/&lt;camera&gt;/segmentation.png</code>, ids 0-14).</p>"
-                    '<div class="figs">' + "".join(_figure(p, f"{cam} camera segmentation", f"{cam} camera", "seg")
-                                                   for cam, p in previews) + "</div>")
+                    '<div class="figs">' + "".join(_figure(img[f"seg:{cam}"], f"{cam} camera segmentation",
+                                                           f"{cam} camera", "seg") for cam in seg_ids) + "</div>")
 
     # Key numbers
     tl = "trunk_limbs" if "trunk_limbs" in volumes_l else ("whole" if "whole" in volumes_l else None)
@@ -478,7 +654,7 @@ def render_html(result: Any, out_dir: PathLike, title: str = "BSV report",
 
     tech = _technical_html(result, vols)
     notes = "".join(f"<li>{html.escape(str(n))}</li>" for n in vols.get("notes", []) or [])
-    return f"""<!DOCTYPE html>
+    doc = f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><meta name="viewport" content="width=device-width, initial-scale=1">
 <title>{html.escape(title)}</title><style>{CSS}</style></head><body><main>
 <h1>{html.escape(title)}</h1>
@@ -498,12 +674,16 @@ Volumes in litres, masses in kilograms; 95 % intervals give the range the true v
 {_bsip_html(result.bsip) if getattr(result, "bsip", None) is not None else ""}
 {seg_html}
 <h2>Fit to the measured points</h2>
-<div class="figs">{_figure(_cloud_figure(mesh, flabels, result.cloud), "measured points over the fitted body",
-                           "Measured points (colours: segments) over the fitted body (grey)")}</div>
+<div class="figs">{_figure(img["cloud"], "measured points over the fitted body",
+                           "Measured points (colours: segments) over the fitted body (grey)", "", swaps)}</div>
 {tech}
 {f"<h2>Notes</h2><ul>{notes}</ul>" if notes else ""}
 </main></body></html>
 """
+    pdf_doc = doc
+    for png_uri, jpeg_uri in swaps.items():
+        pdf_doc = pdf_doc.replace(png_uri, jpeg_uri)
+    return doc, pdf_doc
 
 
 def _bsip_html(b: Any) -> str:
@@ -630,16 +810,19 @@ def _write_atomic(path: Path, data: bytes) -> None:
 
 
 def render_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", pdf: bool = True,
-                  segmentations: Mapping[str, np.ndarray] | None = None) -> dict[str, tuple[Path, bytes]]:
+                  segmentations: Mapping[str, np.ndarray] | None = None,
+                  parallel: bool | None = None) -> dict[str, tuple[Path, bytes]]:
     """The report's files rendered in memory, nothing written: {key: (path, bytes)} for ``report.html``
     (self-contained), ``report.pdf`` (unless ``pdf`` is False) and ``volumes.csv`` (keys: report,
-    report_pdf, volumes_csv). Write them with :func:`write_rendered`."""
+    report_pdf, volumes_csv). Write them with :func:`write_rendered`. The figures are drawn once for both
+    files (report.pdf takes the shaded renders as JPEG), in two processes when ``parallel`` (None:
+    :func:`parallel_drawing`)."""
     out = Path(out_dir)
-    doc = render_html(result, out, title, segmentations)
+    doc, pdf_doc = _documents(result, out, title, segmentations, parallel)
     files = {"report": (out / "report.html", doc.encode("utf-8")),
              "volumes_csv": (out / "volumes.csv", csv_text(result).encode("utf-8"))}
     if pdf:
-        files["report_pdf"] = (out / "report.pdf", render_pdf(doc))
+        files["report_pdf"] = (out / "report.pdf", render_pdf(pdf_doc))
     return files
 
 
@@ -675,8 +858,12 @@ def write_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", o
 
 __all__ = [
     "AGGREGATE_MEMBERS",
+    "CHILD_TIMEOUT_S",
     "CSS",
+    "FIGURE_DPI",
     "FILES",
+    "PDF_JPEG_QUALITY",
+    "PREVIEW_MAX_PX",
     "VIEWS",
     "check_outputs",
     "cleaning_html",
@@ -684,6 +871,7 @@ __all__ = [
     "face_labels",
     "like_for_like_truth",
     "palette",
+    "parallel_drawing",
     "quality_html",
     "render_html",
     "render_mesh",

@@ -12,8 +12,10 @@ import base64
 import csv
 import io
 import json
+import os
 import re
 import shutil
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -136,10 +138,80 @@ def test_segmentation_previews_are_colourised_in_the_palette(run, tmp_path):
     assert m, "no front camera preview"
     img = cv2.cvtColor(cv2.imdecode(np.frombuffer(base64.b64decode(m.group(1)), np.uint8), cv2.IMREAD_COLOR),
                        cv2.COLOR_BGR2RGB)
-    ids = labels["front"]
+    # Every n-th pixel of the label image (ids exact), at most PREVIEW_MAX_PX on the long side.
+    step = -(-max(labels["front"].shape) // report.PREVIEW_MAX_PX)
+    ids = labels["front"][::step, ::step]
+    assert step >= 2 and max(img.shape[:2]) <= report.PREVIEW_MAX_PX
     np.testing.assert_array_equal(img, colourise(ids))
     torso = ids == SEGMENT_IDS["torso"]
     assert torso.any() and (img[torso] == PALETTE[SEGMENT_IDS["torso"]]).all()
+
+
+def test_the_pdf_has_the_same_figures_with_the_shaded_renders_as_jpeg(run):
+    _, res, _ = run
+    doc, pdf_doc = report._documents(res, res.out_dir, "t", None, False)
+    html_srcs = re.findall(r'<img src="data:image/(png|jpeg);base64,[^"]+" alt="([^"]+)"', doc)
+    pdf_srcs = re.findall(r'<img src="data:image/(png|jpeg);base64,[^"]+" alt="([^"]+)"', pdf_doc)
+    assert [alt for _, alt in pdf_srcs] == [alt for _, alt in html_srcs] and len(html_srcs) >= 5
+    assert {kind for kind, _ in html_srcs} == {"png"}
+    jpeg = {alt for kind, alt in pdf_srcs if kind == "jpeg"}
+    assert jpeg == {"segmented fitted body, front", "segmented fitted body, left side",
+                    "measured points over the fitted body"}
+    assert re.sub(r'src="[^"]*"', "", doc) == re.sub(r'src="[^"]*"', "", pdf_doc)  # nothing else differs
+    pdf = (res.out_dir / "report.pdf").read_bytes()
+    assert pdf.count(b"/DCTDecode") == 3  # embedded as they are, not decoded and compressed again
+
+
+def test_drawing_in_two_processes_gives_the_same_report(run, tmp_path):
+    if not report.parallel_drawing():
+        pytest.skip("figures are drawn in two processes on Linux with two cores or more")
+    _, res, _ = run
+    assert report.render_html(res, tmp_path, "t", parallel=True) == report.render_html(res, tmp_path, "t",
+                                                                                       parallel=False)
+
+
+def _pid_image() -> report._Image:
+    return report._Image(str(os.getpid()).encode())
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="drawing in a child process needs fork()")
+def test_the_forked_jobs_run_in_a_child_and_a_failed_or_hung_child_costs_only_time(monkeypatch):
+    me = str(os.getpid()).encode()
+    jobs = {"a": _pid_image, "b": _pid_image, "c": _pid_image}
+    drawn = report._draw(jobs, ("b", "c"), parallel=True)
+    assert drawn["a"].png == me and drawn["b"].png != me and drawn["b"].png == drawn["c"].png
+    assert all(v.png == me for v in report._draw(jobs, ("b", "c"), parallel=False).values())
+
+    def fails_in_child() -> report._Image:
+        if str(os.getpid()).encode() != me:
+            raise RuntimeError("child")
+        return _pid_image()
+
+    assert report._draw({"a": _pid_image, "b": fails_in_child}, ("b",), parallel=True)["b"].png == me
+
+    def hangs_in_child() -> report._Image:
+        if str(os.getpid()).encode() != me:
+            time.sleep(60)
+        return _pid_image()
+
+    stopped: list[int] = []
+    stop = report._stop
+    monkeypatch.setattr(report, "_stop", lambda pid, r: (stopped.append(pid), stop(pid, r))[1])
+    monkeypatch.setattr(report, "CHILD_TIMEOUT_S", 0.5)
+    t = time.perf_counter()
+    assert report._draw({"a": _pid_image, "b": hangs_in_child}, ("b",), parallel=True)["b"].png == me
+    assert time.perf_counter() - t < 10 and len(stopped) == 1
+    with pytest.raises(ChildProcessError):
+        os.waitpid(stopped[0], os.WNOHANG)  # stopped and reaped: no zombie left
+
+    def fails() -> report._Image:
+        raise ValueError("here")
+
+    with pytest.raises(ValueError, match="here"):
+        report._draw({"a": fails, "b": hangs_in_child}, ("b",), parallel=True)
+    assert len(stopped) == 2
+    with pytest.raises(ChildProcessError):
+        os.waitpid(stopped[1], os.WNOHANG)
 
 
 def test_the_report_refuses_to_overwrite_and_leaves_nothing_when_the_pdf_fails(run, tmp_path, monkeypatch):

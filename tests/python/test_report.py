@@ -12,10 +12,8 @@ import base64
 import csv
 import io
 import json
-import os
 import re
 import shutil
-import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -149,7 +147,7 @@ def test_segmentation_previews_are_colourised_in_the_palette(run, tmp_path):
 
 def test_the_pdf_has_the_same_figures_with_the_shaded_renders_as_jpeg(run):
     _, res, _ = run
-    doc, pdf_doc = report._documents(res, res.out_dir, "t", None, False)
+    doc, pdf_doc = report._documents(res, res.out_dir, "t", None)
     html_srcs = re.findall(r'<img src="data:image/(png|jpeg);base64,[^"]+" alt="([^"]+)"', doc)
     pdf_srcs = re.findall(r'<img src="data:image/(png|jpeg);base64,[^"]+" alt="([^"]+)"', pdf_doc)
     assert [alt for _, alt in pdf_srcs] == [alt for _, alt in html_srcs] and len(html_srcs) >= 5
@@ -160,58 +158,6 @@ def test_the_pdf_has_the_same_figures_with_the_shaded_renders_as_jpeg(run):
     assert re.sub(r'src="[^"]*"', "", doc) == re.sub(r'src="[^"]*"', "", pdf_doc)  # nothing else differs
     pdf = (res.out_dir / "report.pdf").read_bytes()
     assert pdf.count(b"/DCTDecode") == 3  # embedded as they are, not decoded and compressed again
-
-
-def test_drawing_in_two_processes_gives_the_same_report(run, tmp_path):
-    if not report.parallel_drawing():
-        pytest.skip("figures are drawn in two processes on Linux with two cores or more")
-    _, res, _ = run
-    assert report.render_html(res, tmp_path, "t", parallel=True) == report.render_html(res, tmp_path, "t",
-                                                                                       parallel=False)
-
-
-def _pid_image() -> report._Image:
-    return report._Image(str(os.getpid()).encode())
-
-
-@pytest.mark.skipif(not hasattr(os, "fork"), reason="drawing in a child process needs fork()")
-def test_the_forked_jobs_run_in_a_child_and_a_failed_or_hung_child_costs_only_time(monkeypatch):
-    me = str(os.getpid()).encode()
-    jobs = {"a": _pid_image, "b": _pid_image, "c": _pid_image}
-    drawn = report._draw(jobs, ("b", "c"), parallel=True)
-    assert drawn["a"].png == me and drawn["b"].png != me and drawn["b"].png == drawn["c"].png
-    assert all(v.png == me for v in report._draw(jobs, ("b", "c"), parallel=False).values())
-
-    def fails_in_child() -> report._Image:
-        if str(os.getpid()).encode() != me:
-            raise RuntimeError("child")
-        return _pid_image()
-
-    assert report._draw({"a": _pid_image, "b": fails_in_child}, ("b",), parallel=True)["b"].png == me
-
-    def hangs_in_child() -> report._Image:
-        if str(os.getpid()).encode() != me:
-            time.sleep(60)
-        return _pid_image()
-
-    stopped: list[int] = []
-    stop = report._stop
-    monkeypatch.setattr(report, "_stop", lambda pid, r: (stopped.append(pid), stop(pid, r))[1])
-    monkeypatch.setattr(report, "CHILD_TIMEOUT_S", 0.5)
-    t = time.perf_counter()
-    assert report._draw({"a": _pid_image, "b": hangs_in_child}, ("b",), parallel=True)["b"].png == me
-    assert time.perf_counter() - t < 10 and len(stopped) == 1
-    with pytest.raises(ChildProcessError):
-        os.waitpid(stopped[0], os.WNOHANG)  # stopped and reaped: no zombie left
-
-    def fails() -> report._Image:
-        raise ValueError("here")
-
-    with pytest.raises(ValueError, match="here"):
-        report._draw({"a": fails, "b": hangs_in_child}, ("b",), parallel=True)
-    assert len(stopped) == 2
-    with pytest.raises(ChildProcessError):
-        os.waitpid(stopped[1], os.WNOHANG)
 
 
 def test_the_report_refuses_to_overwrite_and_leaves_nothing_when_the_pdf_fails(run, tmp_path, monkeypatch):
@@ -370,3 +316,22 @@ def test_segment_inertial_parameters_are_shown_and_their_masses_used(run, tmp_pa
         if name in rows:
             assert float(rows[name]["mass_kg"]) == pytest.approx(s.mass_kg, abs=1e-3)
     assert float(rows["thigh_l"]["density_kg_m3"]) != float(rows["torso"]["density_kg_m3"])  # segment-specific
+
+
+def test_an_opaque_mesh_is_drawn_without_seams_between_its_faces():
+    """Two faces of one flat square, one colour: every pixel inside is that colour, the shared diagonal too
+    (polygons filled one by one, antialiased and without stroked edges, leave a lighter line there)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    verts = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]])
+    faces = np.array([[0, 1, 2], [0, 2, 3]])
+    fig = Figure(figsize=(2, 2), dpi=100)
+    FigureCanvasAgg(fig)
+    ax = fig.add_axes((0.0, 0.0, 1.0, 1.0))
+    report.render_mesh(ax, verts, faces, np.array([1, 1], dtype=np.uint8), "front")
+    fig.canvas.draw()
+    rgb = np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(int)
+    inside = rgb[30:170, 30:170].reshape(-1, 3)  # the square spans pixels 18-182 (0.05 margins)
+    assert (np.abs(inside - inside[0]).max(axis=1) <= 1).all()
+    assert (inside[0] != 255).any()  # the face colour, not the background

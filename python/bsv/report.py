@@ -471,7 +471,7 @@ figure.body{flex:1 1 140px;max-width:300px}figure.narrow{max-width:240px}.body i
 .note{color:#555;font-size:13px}.warn{color:#a00000;font-weight:bold}
 details{margin:12px 0;border:1px solid #ddd;border-radius:4px;padding:6px 10px}
 summary{cursor:pointer;font-weight:bold}
-@media print{body{font-size:10pt;padding:0}table{font-size:8pt}td,th{padding:1px 4px}
+@media print{body{font-size:10pt;padding:0}table{font-size:8pt}td,th{padding:1px 4px}th{white-space:normal}
 .scroll{overflow:visible}details{border:none;padding:0}figure{break-inside:avoid}.body img{max-height:330px}}
 @page{size:A4;margin:14mm}"""
 

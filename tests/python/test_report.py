@@ -160,6 +160,23 @@ def test_the_pdf_has_the_same_figures_with_the_shaded_renders_as_jpeg(run):
     assert pdf.count(b"/DCTDecode") == 3  # embedded as they are, not decoded and compressed again
 
 
+def test_no_table_is_wider_than_the_pdf_page(run):
+    """A page clips what is wider than it: the fit-quality table lost its last three columns ("Fit": ok or
+    doubtful) and the cloud-cleaning table its last one until the headers could wrap in print."""
+    weasyprint = pytest.importorskip("weasyprint")
+    _, res, _ = run
+    _, pdf_doc = report._documents(res, res.out_dir, "t", None)
+    tables = 0
+    for page in weasyprint.HTML(string=pdf_doc).render().pages:
+        box = page._page_box  # the laid-out page (WeasyPrint has no public API for its boxes)
+        right = box.content_box_x() + box.width
+        for b in box.descendants():
+            if getattr(b, "element_tag", None) == "table" and hasattr(b, "margin_width"):
+                tables += 1
+                assert b.position_x + b.margin_width() <= right + 0.5, (page, b)
+    assert tables >= 10
+
+
 def test_the_report_refuses_to_overwrite_and_leaves_nothing_when_the_pdf_fails(run, tmp_path, monkeypatch):
     from bsv.errors import ReportError
 

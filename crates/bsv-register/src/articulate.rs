@@ -20,7 +20,10 @@
 //!    the silhouette, which the cameras do see);
 //! 4. `x -> c_cloud + R_L S_L (x - c_template)` per vertex, then the displacement field is smoothed
 //!    by a few Jacobi iterations over the mesh graph: a rigid motion is an affine field, which the
-//!    averaging keeps inside a segment, so only the joints are blended.
+//!    averaging keeps inside a segment, so only the joints are blended. The shoulder half of each
+//!    upper arm ([`shoulder_halves`]) is held out of the averaging: the shoulder is blended on the
+//!    torso's side only, so the template's shoulder boundary turns with the arm instead of lagging
+//!    behind it by an amount that grows with the arm's abduction.
 //!
 //! The articulated template becomes the rest shape of the ARAP fit (its rotations are free anyway;
 //! only the joints' bending and the axial scale are baked in).
@@ -196,15 +199,56 @@ pub fn segment_poses(
     out
 }
 
+/// Upper-arm segment ids (left, right).
+const UPPER_ARMS: [u8; 2] = [3, 4];
+/// The torso's segment id.
+const TORSO: u8 = 2;
+/// Forearm segment ids (left, right).
+const FOREARMS: [u8; 2] = [5, 6];
+
+/// Hops over the mesh graph of `weights` from the nearest vertex whose label satisfies `seed`
+/// (`usize::MAX` where none is reachable).
+fn hops_from(vertex_labels: &[u8], weights: &CotanWeights, seed: impl Fn(u8) -> bool) -> Vec<usize> {
+    let mut d = vec![usize::MAX; vertex_labels.len()];
+    let mut queue = std::collections::VecDeque::new();
+    for (i, &l) in vertex_labels.iter().enumerate() {
+        if seed(l) {
+            d[i] = 0;
+            queue.push_back(i);
+        }
+    }
+    while let Some(i) = queue.pop_front() {
+        let (nb, _) = weights.row(i);
+        for &j in nb {
+            let j = j as usize;
+            if d[j] == usize::MAX {
+                d[j] = d[i] + 1;
+                queue.push_back(j);
+            }
+        }
+    }
+    d
+}
+
+/// The upper-arm vertices nearer (in mesh hops) to the torso than to the forearm: the shoulder
+/// halves that [`articulate`] keeps rigid with their arm. A property of the template alone.
+pub fn shoulder_halves(vertex_labels: &[u8], weights: &CotanWeights) -> Vec<bool> {
+    let to_torso = hops_from(vertex_labels, weights, |l| l == TORSO);
+    let to_forearm = hops_from(vertex_labels, weights, |l| FOREARMS.contains(&l));
+    vertex_labels.iter().enumerate().map(|(i, l)| UPPER_ARMS.contains(l) && to_torso[i] < to_forearm[i]).collect()
+}
+
 /// The articulated positions: each limb vertex moved by its segment's pose, the others unmoved,
 /// then the displacement field smoothed by `smooth_iterations` Jacobi steps
-/// (`u_i <- (u_i + mean_j u_j) / 2` over the mesh neighbours of `weights`).
+/// (`u_i <- (u_i + mean_j u_j) / 2` over the mesh neighbours of `weights`) at every vertex not
+/// `held` (a held vertex keeps its segment's rigid motion; `held` is empty or one flag per vertex).
 pub fn articulate(
     rest: &[[f64; 3]],
     vertex_labels: &[u8],
     poses: &[SegmentPose],
     weights: &CotanWeights,
     smooth_iterations: usize,
+    held: &[bool],
 ) -> Vec<[f64; 3]> {
     let mut by_label: [Option<&SegmentPose>; 256] = [None; 256];
     for p in poses {
@@ -219,7 +263,7 @@ pub fn articulate(
     for _ in 0..smooth_iterations {
         for (i, out) in next.iter_mut().enumerate() {
             let (nb, _) = weights.row(i);
-            if nb.is_empty() {
+            if nb.is_empty() || held.get(i).copied().unwrap_or(false) {
                 *out = u[i];
                 continue;
             }
@@ -237,4 +281,80 @@ pub fn articulate(
         std::mem::swap(&mut u, &mut next);
     }
     rest.iter().zip(&u).map(|(p, d)| [p[0] + d[0], p[1] + d[1], p[2] + d[2]]).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A strip of quads along x (two rows of vertices), labelled torso / upper arm / forearm by x.
+    fn strip(n: usize) -> (Vec<[f64; 3]>, Vec<[u32; 3]>, Vec<u8>) {
+        let mut v = Vec::new();
+        for i in 0..n {
+            v.push([i as f64, 0.0, 0.0]);
+            v.push([i as f64, 1.0, 0.0]);
+        }
+        let mut t = Vec::new();
+        for i in 0..n as u32 - 1 {
+            let (a, b, c, d) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
+            t.push([a, c, b]);
+            t.push([b, c, d]);
+        }
+        let labels = v
+            .iter()
+            .map(|p| {
+                if p[0] < 4.0 {
+                    2
+                } else if p[0] < 12.0 {
+                    3
+                } else {
+                    5
+                }
+            })
+            .collect();
+        (v, t, labels)
+    }
+
+    #[test]
+    fn shoulder_halves_are_the_upper_arm_vertices_nearer_the_torso() {
+        let (v, t, l) = strip(16);
+        let w = CotanWeights::new(&v, &t);
+        let held = shoulder_halves(&l, &w);
+        let xs: Vec<f64> = v.iter().zip(&held).filter(|(_, &h)| h).map(|(p, _)| p[0]).collect();
+        assert!(!xs.is_empty());
+        assert!(xs.iter().all(|&x| (4.0..8.0).contains(&x)), "held x: {xs:?}");
+        assert!(xs.contains(&4.0) && xs.contains(&7.0));
+    }
+
+    #[test]
+    fn a_held_vertex_keeps_its_segments_rigid_motion_and_the_torso_side_is_blended() {
+        let (v, t, l) = strip(16);
+        let w = CotanWeights::new(&v, &t);
+        // The upper arm moves up by 1 (the identity rotation about its own centroid, moved).
+        let pose = SegmentPose {
+            label: 3,
+            template_centroid: [8.0, 0.5, 0.0],
+            cloud_centroid: [8.0, 0.5, 1.0],
+            rotation: Matrix3::identity(),
+            axis: [1.0, 0.0, 0.0],
+            axial_scale: 1.0,
+            angle_deg: 0.0,
+            section: Section::identity(),
+        };
+        let held = shoulder_halves(&l, &w);
+        let blended = articulate(&v, &l, &[pose], &w, 10, &[]);
+        let rigid = articulate(&v, &l, &[pose], &w, 10, &held);
+        for i in 0..v.len() {
+            let (x, dz_b, dz_r) = (v[i][0], blended[i][2], rigid[i][2]);
+            if held[i] {
+                assert!((dz_r - 1.0).abs() < 1e-12, "held vertex at x = {x} moved {dz_r}");
+            }
+            if x == 4.0 {
+                assert!(dz_b < 0.9, "blending pulls the first arm vertex back: {dz_b}");
+            }
+            if x == 3.0 {
+                assert!(dz_r > dz_b, "the torso side takes more of the arm's motion: {dz_r} vs {dz_b}");
+            }
+        }
+    }
 }

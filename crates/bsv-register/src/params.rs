@@ -323,6 +323,12 @@ pub struct ArticulationParams {
     /// Jacobi smoothing steps of the articulation's displacement field (blends the joints).
     /// Default 10.
     pub articulate_smooth_iterations: usize,
+    /// Leave the shoulder half of each upper arm out of that blending: its vertices keep the arm's
+    /// rigid motion and only the torso side of the shoulder is blended, so the template's shoulder
+    /// boundary turns with the arm. Blended, the boundary lags behind the arm's turn and the
+    /// template-labelled upper arm's volume follows the arm's abduction (+0.19 % per degree with
+    /// exact labels; benchmarks/BENCH.md, round 2 session 10). Default true.
+    pub articulate_rigid_shoulders: bool,
 }
 
 impl Default for ArticulationParams {
@@ -332,6 +338,7 @@ impl Default for ArticulationParams {
             articulate_axial_scale: true,
             articulate_cross_section: true,
             articulate_smooth_iterations: 10,
+            articulate_rigid_shoulders: true,
         }
     }
 }
@@ -412,7 +419,7 @@ impl Default for RegisterParams {
 
 /// Every key of the serde form of [`RegisterParams`] (the flat parameter names), in the order of
 /// the serialised form. A unit test keeps it equal to the serialised keys.
-pub const PARAMETER_NAMES: [&str; 40] = [
+pub const PARAMETER_NAMES: [&str; 41] = [
     "alpha",
     "cell_weight",
     "data_weight",
@@ -453,6 +460,7 @@ pub const PARAMETER_NAMES: [&str; 40] = [
     "articulate_axial_scale",
     "articulate_cross_section",
     "articulate_smooth_iterations",
+    "articulate_rigid_shoulders",
 ];
 
 /// The deserialised form of [`RegisterParams`]: the same groups plus every key no group took.

@@ -299,7 +299,9 @@ fn articulate_limbs(
         return (rest, Vec::new());
     }
     let w0 = CotanWeights::new(&rest, &template.triangles);
-    let rest = articulate::articulate(&rest, tl, &poses, &w0, params.articulate_smooth_iterations);
+    let held =
+        if params.articulate_rigid_shoulders { articulate::shoulder_halves(tl, &w0) } else { vec![false; rest.len()] };
+    let rest = articulate::articulate(&rest, tl, &poses, &w0, params.articulate_smooth_iterations, &held);
     let limbs = poses
         .iter()
         .map(|p| LimbAlignment {

@@ -327,7 +327,9 @@ pub struct ArticulationParams {
     /// rigid motion and only the torso side of the shoulder is blended, so the template's shoulder
     /// boundary turns with the arm. Blended, the boundary lags behind the arm's turn and the
     /// template-labelled upper arm's volume follows the arm's abduction (+0.19 % per degree with
-    /// exact labels; benchmarks/BENCH.md, round 2 session 10). Default true.
+    /// exact labels; benchmarks/BENCH.md, round 2 session 10). Applies when the result keeps the
+    /// template's labels (`labels` = template, the camera path's); with the cloud's labels the
+    /// boundary is the cloud's and the blended shoulder fits the oracle cohort better. Default true.
     pub articulate_rigid_shoulders: bool,
 }
 

@@ -137,7 +137,7 @@ pub fn prepare<'a>(
     let similarity = prealign::prealign(&template.vertices, &template_box, &cloud.points, &cloud_box, &prealignment)
         .map_err(NumericError::index)?;
     let rest: Vec<[f64; 3]> = template.vertices.iter().map(|&p| similarity.apply(p)).collect();
-    let (rest, articulation) = articulate_limbs(rest, template, &cloud, &params.articulation);
+    let (rest, articulation) = articulate_limbs(rest, template, &cloud, &params.articulation, params.labels);
     Ok(Prepared {
         template,
         cloud,
@@ -277,12 +277,15 @@ fn mark_far(
 }
 
 /// The articulated initialisation (labelled template and cloud, `articulate` on): the rest shape
-/// with every limb turned onto the cloud's, and the limbs moved. Unchanged otherwise.
+/// with every limb turned onto the cloud's, and the limbs moved. Unchanged otherwise. The shoulder
+/// halves are held rigid (`articulate_rigid_shoulders`) only when the result keeps the template's
+/// labels: that rule carries the template's boundary, which the cloud's labels replace otherwise.
 fn articulate_limbs(
     rest: Vec<[f64; 3]>,
     template: &TriMesh,
     cloud: &PointCloud,
     params: &ArticulationParams,
+    labels: LabelSource,
 ) -> (Vec<[f64; 3]>, Vec<LimbAlignment>) {
     let (true, Some(cl), Some(tl)) = (params.articulate, &cloud.labels, &template.vertex_labels) else {
         return (rest, Vec::new());
@@ -299,8 +302,11 @@ fn articulate_limbs(
         return (rest, Vec::new());
     }
     let w0 = CotanWeights::new(&rest, &template.triangles);
-    let held =
-        if params.articulate_rigid_shoulders { articulate::shoulder_halves(tl, &w0) } else { vec![false; rest.len()] };
+    let held = if params.articulate_rigid_shoulders && labels == LabelSource::Template {
+        articulate::shoulder_halves(tl, &w0)
+    } else {
+        vec![false; rest.len()]
+    };
     let rest = articulate::articulate(&rest, tl, &poses, &w0, params.articulate_smooth_iterations, &held);
     let limbs = poses
         .iter()

@@ -20,10 +20,12 @@
 //!    the silhouette, which the cameras do see);
 //! 4. `x -> c_cloud + R_L S_L (x - c_template)` per vertex, then the displacement field is smoothed
 //!    by a few Jacobi iterations over the mesh graph: a rigid motion is an affine field, which the
-//!    averaging keeps inside a segment, so only the joints are blended. The shoulder half of each
-//!    upper arm ([`shoulder_halves`]) is held out of the averaging: the shoulder is blended on the
-//!    torso's side only, so the template's shoulder boundary turns with the arm instead of lagging
-//!    behind it by an amount that grows with the arm's abduction.
+//!    averaging keeps inside a segment, so only the joints are blended. With
+//!    `articulate_rigid_shoulders` on and the template's labels kept for the result (the camera
+//!    path's `labels = template`; `prepare.rs` decides), the shoulder half of each posed upper arm
+//!    ([`shoulder_halves`]) is held out of the averaging: the shoulder is blended on the torso's side
+//!    only, so the template's shoulder boundary turns with the arm instead of lagging behind it by an
+//!    amount that grows with the arm's abduction.
 //!
 //! The articulated template becomes the rest shape of the ARAP fit (its rotations are free anyway;
 //! only the joints' bending and the axial scale are baked in).
@@ -31,10 +33,20 @@
 use crate::cotan::CotanWeights;
 use crate::section::{fit_section, Section};
 use bsv_core::geometry::{cross, dot, normalize, sub};
+use bsv_core::Segment;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 
 /// Limb segment ids (upper arms, forearms, thighs, shins).
-pub const LIMBS: [u8; 8] = [3, 4, 5, 6, 9, 10, 11, 12];
+pub const LIMBS: [u8; 8] = [
+    Segment::UpperArmL as u8,
+    Segment::UpperArmR as u8,
+    Segment::ForearmL as u8,
+    Segment::ForearmR as u8,
+    Segment::ThighL as u8,
+    Segment::ThighR as u8,
+    Segment::ShinL as u8,
+    Segment::ShinR as u8,
+];
 
 /// Fewest vertices/points a segment needs to be aligned.
 const MIN_ITEMS: usize = 30;
@@ -200,11 +212,11 @@ pub fn segment_poses(
 }
 
 /// Upper-arm segment ids (left, right).
-const UPPER_ARMS: [u8; 2] = [3, 4];
+const UPPER_ARMS: [u8; 2] = [Segment::UpperArmL as u8, Segment::UpperArmR as u8];
 /// The torso's segment id.
-const TORSO: u8 = 2;
+const TORSO: u8 = Segment::Torso as u8;
 /// Forearm segment ids (left, right).
-const FOREARMS: [u8; 2] = [5, 6];
+const FOREARMS: [u8; 2] = [Segment::ForearmL as u8, Segment::ForearmR as u8];
 
 /// Hops over the mesh graph of `weights` from the nearest vertex whose label satisfies `seed`
 /// (`usize::MAX` where none is reachable).
@@ -231,11 +243,21 @@ fn hops_from(vertex_labels: &[u8], weights: &CotanWeights, seed: impl Fn(u8) -> 
 }
 
 /// The upper-arm vertices nearer (in mesh hops) to the torso than to the forearm: the shoulder
-/// halves that [`articulate`] keeps rigid with their arm. A property of the template alone.
-pub fn shoulder_halves(vertex_labels: &[u8], weights: &CotanWeights) -> Vec<bool> {
+/// halves that [`articulate`] keeps rigid with their arm. Only an upper arm that has a pose in
+/// `poses` and reaches both a torso and a forearm vertex over the mesh is split; the others hold
+/// nothing (an unposed arm's held half would stay at zero displacement while its elbow follows the
+/// forearm; a template without forearms would hold its whole upper arm).
+pub fn shoulder_halves(vertex_labels: &[u8], weights: &CotanWeights, poses: &[SegmentPose]) -> Vec<bool> {
     let to_torso = hops_from(vertex_labels, weights, |l| l == TORSO);
     let to_forearm = hops_from(vertex_labels, weights, |l| FOREARMS.contains(&l));
-    vertex_labels.iter().enumerate().map(|(i, l)| UPPER_ARMS.contains(l) && to_torso[i] < to_forearm[i]).collect()
+    let posed = |l: u8| poses.iter().any(|p| p.label == l);
+    vertex_labels
+        .iter()
+        .enumerate()
+        .map(|(i, &l)| {
+            UPPER_ARMS.contains(&l) && posed(l) && to_forearm[i] != usize::MAX && to_torso[i] < to_forearm[i]
+        })
+        .collect()
 }
 
 /// The articulated positions: each limb vertex moved by its segment's pose, the others unmoved,
@@ -250,6 +272,7 @@ pub fn articulate(
     smooth_iterations: usize,
     held: &[bool],
 ) -> Vec<[f64; 3]> {
+    debug_assert!(held.is_empty() || held.len() == rest.len(), "held: one flag per vertex or none");
     let mut by_label: [Option<&SegmentPose>; 256] = [None; 256];
     for p in poses {
         by_label[p.label as usize] = Some(p);
@@ -315,11 +338,25 @@ mod tests {
         (v, t, labels)
     }
 
+    /// The upper arm (label 3) of [`strip`] moved up by 1 (the identity rotation, moved).
+    fn arm_up() -> SegmentPose {
+        SegmentPose {
+            label: 3,
+            template_centroid: [8.0, 0.5, 0.0],
+            cloud_centroid: [8.0, 0.5, 1.0],
+            rotation: Matrix3::identity(),
+            axis: [1.0, 0.0, 0.0],
+            axial_scale: 1.0,
+            angle_deg: 0.0,
+            section: Section::identity(),
+        }
+    }
+
     #[test]
     fn shoulder_halves_are_the_upper_arm_vertices_nearer_the_torso() {
         let (v, t, l) = strip(16);
         let w = CotanWeights::new(&v, &t);
-        let held = shoulder_halves(&l, &w);
+        let held = shoulder_halves(&l, &w, &[arm_up()]);
         let xs: Vec<f64> = v.iter().zip(&held).filter(|(_, &h)| h).map(|(p, _)| p[0]).collect();
         assert!(!xs.is_empty());
         assert!(xs.iter().all(|&x| (4.0..8.0).contains(&x)), "held x: {xs:?}");
@@ -330,18 +367,8 @@ mod tests {
     fn a_held_vertex_keeps_its_segments_rigid_motion_and_the_torso_side_is_blended() {
         let (v, t, l) = strip(16);
         let w = CotanWeights::new(&v, &t);
-        // The upper arm moves up by 1 (the identity rotation about its own centroid, moved).
-        let pose = SegmentPose {
-            label: 3,
-            template_centroid: [8.0, 0.5, 0.0],
-            cloud_centroid: [8.0, 0.5, 1.0],
-            rotation: Matrix3::identity(),
-            axis: [1.0, 0.0, 0.0],
-            axial_scale: 1.0,
-            angle_deg: 0.0,
-            section: Section::identity(),
-        };
-        let held = shoulder_halves(&l, &w);
+        let pose = arm_up();
+        let held = shoulder_halves(&l, &w, &[pose]);
         let blended = articulate(&v, &l, &[pose], &w, 10, &[]);
         let rigid = articulate(&v, &l, &[pose], &w, 10, &held);
         for i in 0..v.len() {
@@ -356,5 +383,22 @@ mod tests {
                 assert!(dz_r > dz_b, "the torso side takes more of the arm's motion: {dz_r} vs {dz_b}");
             }
         }
+    }
+
+    #[test]
+    fn nothing_is_held_without_a_pose_a_torso_or_a_forearm() {
+        let (v, t, l) = strip(16);
+        let w = CotanWeights::new(&v, &t);
+        let none = |held: Vec<bool>| !held.iter().any(|&h| h);
+        // The arm was not posed (too few cloud points): its vertices must follow the blending.
+        assert!(none(shoulder_halves(&l, &w, &[])));
+        let right_arm_only = SegmentPose { label: 4, ..arm_up() };
+        assert!(none(shoulder_halves(&l, &w, &[right_arm_only])));
+        // No torso labels: no shoulder to split at.
+        let no_torso: Vec<u8> = l.iter().map(|&x| if x == 2 { 1 } else { x }).collect();
+        assert!(none(shoulder_halves(&no_torso, &w, &[arm_up()])));
+        // No forearm labels: the whole upper arm would be "nearer the torso"; hold nothing instead.
+        let no_forearm: Vec<u8> = l.iter().map(|&x| if x == 5 { 7 } else { x }).collect();
+        assert!(none(shoulder_halves(&no_forearm, &w, &[arm_up()])));
     }
 }

@@ -303,9 +303,9 @@ fn articulate_limbs(
     }
     let w0 = CotanWeights::new(&rest, &template.triangles);
     let held = if params.articulate_rigid_shoulders && labels == LabelSource::Template {
-        articulate::shoulder_halves(tl, &w0)
+        articulate::shoulder_halves(tl, &w0, &poses)
     } else {
-        vec![false; rest.len()]
+        Vec::new()
     };
     let rest = articulate::articulate(&rest, tl, &poses, &w0, params.articulate_smooth_iterations, &held);
     let limbs = poses

@@ -286,6 +286,20 @@ def test_capture_cloud_with_the_true_label_images_is_the_scanner_cloud(body: bsv
     assert np.mean(cloud.labels[i] == rebuilt.labels) > 0.999
 
 
+def test_arm_down_option_reaches_the_synth_config() -> None:
+    from bsv.bench.main import parser, synth_config, synth_record
+    from bsv.bodies import ARM_DOWN_RANGE_DEG, WIDE_ARM_DOWN_RANGE_DEG
+
+    args = parser().parse_args(["synth", "--arm-down", "15,60"])
+    cfg = synth_config(args)
+    cfg.validate()
+    assert cfg.arm_range == WIDE_ARM_DOWN_RANGE_DEG == (15.0, 60.0)
+    assert synth_record(cfg, args)["arm_down_deg"] == [15.0, 60.0]
+    default = parser().parse_args(["synth"])
+    assert synth_config(default).arm_range == ARM_DOWN_RANGE_DEG
+    assert synth_record(synth_config(default), default)["arm_down_deg"] == list(ARM_DOWN_RANGE_DEG)
+
+
 def test_bad_options_are_usage_errors(tmp_path: Path, capsys) -> None:
     with pytest.raises(SystemExit):
         bench_main(["synth", "--conditions", "noer,foggy"])

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -154,6 +155,8 @@ def test_cohort_is_deterministic_and_plausible(tmp_path):
         assert pa.read_bytes() == pb.read_bytes()
         assert ja.read_bytes() == jb.read_bytes()
     doc = json.loads(a[0][1].read_text())
+    assert json.loads((tmp_path / "a" / "cohort.json").read_text())["arm_down_deg"] == [25.0, 50.0]
+    assert doc["subject"]["arm_down_deg"] == [25.0, 50.0]
     assert doc["subject"]["sex"] == "female" and json.loads(a[1][1].read_text())["subject"]["sex"] == "male"
     for _, j in a:
         d = json.loads(j.read_text())
@@ -173,26 +176,61 @@ def test_cohort_is_deterministic_and_plausible(tmp_path):
     assert not np.array_equal(other.body.vertices, s0.body.vertices)
 
 
+#: Arm angles (arm_down_l, arm_down_r) of the default cohort's subjects 0-4 of seed 5 as drawn (check=False),
+#: pinned before ``arm_range`` existed: the default range must keep drawing exactly these.
+DEFAULT_ARMS_SEED5 = [(48.542005068, 50.0), (48.054584502, 50.0), (29.718649709, 25.507292691),
+                      (31.734340477, 28.570516348), (27.057379923, 25.0)]
+
+
 def test_wide_arm_range_changes_only_the_arms():
     """``arm_range`` draws the arms from a wider A-pose interval with the same random numbers: every
-    other draw (sex, phenotype, elbows, hips) stays, the default range gives the cohort as before."""
-    from bsv.bodies.cohort import ARM_DOWN_RANGE_DEG, WIDE_ARM_DOWN_RANGE_DEG
+    other draw (sex, local modifiers, elbows, hips) stays, and the default range draws the pinned arms."""
+    import dataclasses
+
+    from bsv.bodies import ARM_DOWN_RANGE_DEG, WIDE_ARM_DOWN_RANGE_DEG
 
     lo, hi = WIDE_ARM_DOWN_RANGE_DEG
     arms = []
-    for i in range(6):
+    for i, pinned in enumerate(DEFAULT_ARMS_SEED5):
         std = bodies.subject(i, seed=5, check=False)
-        assert bodies.subject(i, seed=5, check=False, arm_range=ARM_DOWN_RANGE_DEG).pose == std.pose
+        assert (round(std.pose.arm_down_l, 9), round(std.pose.arm_down_r, 9)) == pinned, i
         wide = bodies.subject(i, seed=5, check=False, arm_range=WIDE_ARM_DOWN_RANGE_DEG)
         assert wide.phenotype.local == std.phenotype.local and wide.sex == std.sex
-        assert (wide.pose.elbow_l, wide.pose.hip_abduction_r) == (std.pose.elbow_l, std.pose.hip_abduction_r)
+        assert dataclasses.replace(wide.pose, arm_down_l=std.pose.arm_down_l,
+                                   arm_down_r=std.pose.arm_down_r) == std.pose
         for a in (wide.pose.arm_down_l, wide.pose.arm_down_r):
             assert lo <= a <= hi
             arms.append(a)
+        assert std.info()["arm_down_deg"] == list(ARM_DOWN_RANGE_DEG)
+        assert wide.info()["arm_down_deg"] == list(WIDE_ARM_DOWN_RANGE_DEG)
     assert min(arms) < ARM_DOWN_RANGE_DEG[0] and max(arms) > ARM_DOWN_RANGE_DEG[1], arms
-    for bad in ((60.0, 15.0), (-5.0, 30.0), (20.0, 95.0)):
+
+
+def test_bad_arm_ranges_are_pose_errors():
+    from bsv.bodies.variants import hard_subject
+
+    assert bodies.check_arm_range("15,60") == (15.0, 60.0) == bodies.check_arm_range([15, 60])
+    for bad in ((60.0, 15.0), (-5.0, 30.0), (20.0, 95.0), (), (20.0,), (1.0, 2.0, 3.0), "a,b", (math.nan, 30.0)):
         with pytest.raises(bodies.PoseError, match="arm range"):
             bodies.subject(0, seed=5, arm_range=bad)
+        with pytest.raises(bodies.PoseError, match="arm range"):
+            hard_subject(0, seed=5, arm_range=bad)
+        with pytest.raises(bodies.PoseError, match="arm range"):
+            bodies.cohort(0, arm_range=bad)
+
+
+def test_colliding_subject_keeps_its_arms_inside_the_arm_range():
+    """Subject 6 of seed 3 has its thighs touching: the legs are spread, the arms (drawn near the
+    horizontal, touching nothing) keep their drawn angles; they were once pushed to 10 deg, outside (0, 8).
+    The subject's ``arm_down_deg`` reproduces it."""
+    drawn = bodies.subject(6, seed=3, check=False, arm_range=(0.0, 8.0)).pose
+    s = bodies.subject(6, seed=3, arm_range=(0.0, 8.0))
+    assert s.pose.hip_abduction_l > drawn.hip_abduction_l, "the thighs collided: the legs were spread"
+    assert (s.pose.arm_down_l, s.pose.arm_down_r) == (drawn.arm_down_l, drawn.arm_down_r)
+    assert 0.0 <= s.pose.arm_down_l <= 8.0 and 0.0 <= s.pose.arm_down_r <= 8.0
+    info = json.loads(bodies.volumes_json(s))["subject"]
+    assert info["arm_down_deg"] == [0.0, 8.0]
+    assert bodies.subject(info["index"], info["seed"], arm_range=tuple(info["arm_down_deg"])).pose == s.pose
 
 
 def test_cohort_files_are_not_overwritten(tmp_path, capsys):
@@ -206,8 +244,16 @@ def test_cohort_files_are_not_overwritten(tmp_path, capsys):
     assert not (tmp_path / "subject_000.ply").exists() and not (tmp_path / "cohort.json").exists()
     assert cohort_main([str(tmp_path), "2", "7"]) == 2 and "--overwrite" in capsys.readouterr().err
     assert (tmp_path / "subject_001.json").read_text() == "mine"
-    cohort_main([str(tmp_path), "1", "7", "--overwrite"])
+    for bad in ("60,15", "15", "a,b"):
+        with pytest.raises(SystemExit):
+            cohort_main([str(tmp_path), "1", "7", "--overwrite", "--arm-down", bad])
+        assert "--arm-down" in capsys.readouterr().err
+    cohort_main([str(tmp_path), "1", "7", "--overwrite", "--arm-down", "15,60"])
     assert (tmp_path / "cohort.json").is_file() and (tmp_path / "subject_001.json").read_text() == "mine"
+    assert json.loads((tmp_path / "cohort.json").read_text())["arm_down_deg"] == [15.0, 60.0]
+    written = json.loads((tmp_path / "subject_000.json").read_text())["subject"]
+    assert written["arm_down_deg"] == [15.0, 60.0]
+    assert all(15.0 <= written["pose"][k] <= 60.0 for k in ("arm_down_l", "arm_down_r"))
     with pytest.raises(OutputExistsError, match=r"cohort\.json"):
         bodies.write_cohort(tmp_path, 1, seed=7)
     s = bodies.subject(0, seed=7)

@@ -5,10 +5,12 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from typing import Any
 
 from ..argtypes import key_value, seed, whole
+from ..bodies.cohort import ARM_DOWN_RANGE_DEG, arm_down_help, arm_range_arg
 from .reference import CONDITIONS
-from .synth import COHORTS
+from .synth import COHORTS, SynthConfig
 
 
 def _conditions(text: str) -> tuple[str, ...]:
@@ -24,18 +26,6 @@ def _ints(text: str) -> tuple[int, ...]:
         return tuple(int(x) for x in text.split(",") if x.strip())
     except ValueError as exc:
         raise argparse.ArgumentTypeError(f"{text!r}: use a comma list of integers, e.g. 0,10,20") from exc
-
-
-def _arm_range(text: str) -> tuple[float, float]:
-    from ..bodies.cohort import check_arm_range
-    from ..bodies.pose import PoseError
-
-    try:
-        lo, hi = (float(x) for x in text.split(","))
-        return check_arm_range((lo, hi))
-    except (ValueError, PoseError) as exc:
-        raise argparse.ArgumentTypeError(f"{text!r}: give LOW,HIGH degrees below the horizontal, "
-                                         f"0 <= LOW < HIGH <= 80, e.g. 15,60 ({exc})") from None
 
 
 _param = key_value
@@ -93,9 +83,8 @@ def parser() -> argparse.ArgumentParser:
                    "calibrated run: ~1.5 s each)")
     s.add_argument("--template", default="default", help="default, fine or a labelled mesh path")
     s.add_argument("--no-local", action="store_true", help="cohort without MakeHuman local modifiers")
-    s.add_argument("--arm-down", type=_arm_range, default=(25.0, 50.0), metavar="LOW,HIGH",
-                   help="the arms' A-pose angle below the horizontal the subjects are drawn from, degrees "
-                   "(default 25,50; 15,60 for wide A-poses: the camera path's shoulder boundary moves with it)")
+    s.add_argument("--arm-down", type=arm_range_arg, default=ARM_DOWN_RANGE_DEG, metavar="LOW,HIGH",
+                   help=f"{arm_down_help()}; the camera path's shoulder boundary moves with the arms")
     s.add_argument("--cohort", choices=COHORTS, default="standard",
                    help="standard: bsv.bodies.cohort; hard: the same subjects reshaped into the registration's "
                    "hard classes (deep upper arms, bumps, a swollen segment, extreme segment modifiers; "
@@ -117,12 +106,37 @@ def parser() -> argparse.ArgumentParser:
     return ap
 
 
+def _methods(args: argparse.Namespace) -> tuple[str, ...]:
+    return ("bsv",) + ((args.peer,) if args.peer else ())
+
+
+def synth_config(args: argparse.Namespace) -> SynthConfig:
+    """The :class:`SynthConfig` of parsed ``bsv bench synth`` arguments (:func:`parser`), not yet validated."""
+    return SynthConfig(n=args.n, seed=args.seed, conditions=args.conditions, segmentation=args.segmentation,
+                       template=args.template, methods=_methods(args), params=dict(args.param),
+                       local=not args.no_local, cloud=args.cloud, room=args.room, studio=args.studio,
+                       cloud_params=dict(args.cloud_param), cohort=args.cohort,
+                       refine_calibration=args.refine_calibration, arm_range=args.arm_down)
+
+
+def synth_record(cfg: SynthConfig, args: argparse.Namespace) -> dict[str, Any]:
+    """The ``config`` block a ``bsv bench synth`` run writes to results.json and report.md: ``cfg``
+    (:func:`synth_config`) plus the run's ``--jobs`` and ``--scheduler``."""
+    return {"n": cfg.n, "seed": cfg.seed, "conditions": ",".join(cfg.conditions),
+            "segmentation": cfg.segmentation, "cloud": cfg.cloud,
+            "room": ("studio" if cfg.studio else "clinic") if cfg.uses_room() else False,
+            "cloud_params": cfg.cloud_params, "template": cfg.template, "methods": ",".join(cfg.methods),
+            "params": cfg.params, "local_modifiers": cfg.local, "jobs": args.jobs,
+            "cohort": cfg.cohort, "arm_down_deg": list(cfg.arm_range), "scheduler": args.scheduler,
+            "refine_calibration": cfg.refine_calibration}
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Runs ``bsv bench ...``; returns the process exit code (0 ok, 1 some run failed, 2 bad usage or
     outputs already in --out without --overwrite)."""
     args = parser().parse_args(list(sys.argv[1:] if argv is None else argv))
     params = dict(args.param)
-    methods = ("bsv",) + ((args.peer,) if args.peer else ())
+    methods = _methods(args)
 
     def run() -> int:
         from .output import check_outputs
@@ -135,23 +149,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         RegisterParams(**{k: v for k, v in split_request(params)[1].items() if k not in BENCH_ONLY_PARAMS})  # a bad --param fails now, not in every run
         if args.command == "synth":
             from .output import write_outputs
-            from .synth import SynthConfig, run_synth
+            from .synth import run_synth
 
-            cfg = SynthConfig(n=args.n, seed=args.seed, conditions=args.conditions, segmentation=args.segmentation,
-                              template=args.template, methods=methods, params=params, local=not args.no_local,
-                              cloud=args.cloud, room=args.room, studio=args.studio,
-                              cloud_params=dict(args.cloud_param), cohort=args.cohort,
-                              refine_calibration=args.refine_calibration, arm_range=args.arm_down)
+            cfg = synth_config(args)
             cfg.validate()
             infos, runs, wall = run_synth(cfg, jobs=max(1, args.jobs), progress=not args.quiet,
                                           scheduler=args.scheduler)
-            config = {"n": cfg.n, "seed": cfg.seed, "conditions": ",".join(cfg.conditions),
-                      "segmentation": cfg.segmentation, "cloud": cfg.cloud, "room": ("studio" if cfg.studio else "clinic") if cfg.uses_room() else False,
-                      "cloud_params": cfg.cloud_params, "template": cfg.template, "methods": ",".join(methods),
-                      "params": params, "local_modifiers": cfg.local, "jobs": args.jobs,
-                      "cohort": cfg.cohort, "arm_down_deg": list(cfg.arm_range), "scheduler": args.scheduler,
-                      "refine_calibration": cfg.refine_calibration}
-            summary = write_outputs(args.out, "BSV synthetic benchmark", config, infos, runs, wall,
+            summary = write_outputs(args.out, "BSV synthetic benchmark", synth_record(cfg, args), infos, runs, wall,
                                     overwrite=args.overwrite)
         elif args.command == "boxes":
             from .boxes import run_boxes

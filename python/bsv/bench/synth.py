@@ -31,6 +31,8 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..bodies.cohort import ARM_DOWN_RANGE_DEG, check_arm_range
+from ..errors import PoseError
 from ..types import Mesh, PointCloud
 from .common import BenchError, Run, keep_trunk_limbs, load_template, register_method
 from .outliers import inject, split_request
@@ -61,7 +63,7 @@ class SynthConfig:
     local: bool = True
     #: The arms' angle below the horizontal the subjects are drawn from (degrees; ``--arm-down``):
     #: :data:`bsv.bodies.cohort.ARM_DOWN_RANGE_DEG` by default, wider to test the pose's effect.
-    arm_range: tuple[float, float] = (25.0, 50.0)
+    arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG
     cloud: str = "raw"
     #: Cloud-building keywords for the lab path (``bsv process``'s defaults when empty), e.g. {"sor": True}.
     cloud_params: dict[str, Any] = field(default_factory=dict)
@@ -95,9 +97,6 @@ class SynthConfig:
         bad = [c for c in self.conditions if c not in CONDITIONS]
         if bad or not self.conditions:
             raise BenchError(f"--conditions {','.join(self.conditions)}: use a comma list of {','.join(CONDITIONS)}")
-        from ..bodies.cohort import check_arm_range
-        from ..bodies.pose import PoseError
-
         try:
             check_arm_range(self.arm_range)
         except PoseError as exc:

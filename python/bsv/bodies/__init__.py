@@ -9,7 +9,18 @@ from __future__ import annotations
 from ..errors import LabelError
 from .asset import AssetError, asset_path, load_asset
 from .body import Body, SolveError, make_body, solve_stature_bmi
-from .cohort import Subject, cohort, iter_cohort, subject, volumes_json, write_cohort, write_subject
+from .cohort import (
+    ARM_DOWN_RANGE_DEG,
+    WIDE_ARM_DOWN_RANGE_DEG,
+    Subject,
+    check_arm_range,
+    cohort,
+    iter_cohort,
+    subject,
+    volumes_json,
+    write_cohort,
+    write_subject,
+)
 from .collide import penetrations
 from .labels import PALETTE, segment_volumes, volume
 from .model import Phenotype, PhenotypeError, shape
@@ -17,7 +28,9 @@ from .pose import Pose, PoseError
 from .template import templates, write_templates
 
 __all__ = [
+    "ARM_DOWN_RANGE_DEG",
     "PALETTE",
+    "WIDE_ARM_DOWN_RANGE_DEG",
     "AssetError",
     "Body",
     "LabelError",
@@ -28,6 +41,7 @@ __all__ = [
     "SolveError",
     "Subject",
     "asset_path",
+    "check_arm_range",
     "cohort",
     "iter_cohort",
     "load_asset",

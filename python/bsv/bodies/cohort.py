@@ -3,18 +3,21 @@
 Subject i of seed s depends only on (s, i): even indices are women, odd indices men. Stature is drawn
 from normal distributions (women 1.63 +- 0.065 m, men 1.77 +- 0.07 m, clipped at 2.5 sd), BMI from a
 normal 25 +- 4 truncated to [18.5, 35], age 20-65 years, a muscle start value 0.3-0.6, proportions
-0.3-0.7, random race mix; A-pose: arms 25-50 deg below horizontal (``arm_range``: 15-60 for wide A-poses), elbows 0-20 deg, hips 0-6 deg
+0.3-0.7, random race mix; A-pose: arms 25-50 deg below horizontal (``arm_range``, e.g. 15-60 for wide
+A-poses: :data:`ARM_DOWN_RANGE_DEG`, :data:`WIDE_ARM_DOWN_RANGE_DEG`), elbows 0-20 deg, hips 0-6 deg
 (small left/right differences). MakeHuman LOCAL modifiers (stomach, buttocks, hip, pelvis, torso,
 breast, arms, legs) are applied by default: each modifier with probability 1/2, value uniform in
 +-0.6; left/right pairs share a value except with probability 1/5 (asymmetric). Height and weight
 (then muscle) are solved for the drawn stature and BMI. A body whose arms enter the torso or thighs, or
-whose thighs enter each other, has its arms raised / legs spread step by step until it is free.
+whose thighs enter each other, has the colliding arm(s) raised / legs spread step by step until it is free;
+an arm is raised below the arm range's low bound only when that bound is above 10 deg and the body is not
+free before (:data:`ARM_FREE_FLOOR_DEG`; none of the default cohorts of seeds 0-3 needs it).
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -27,14 +30,30 @@ from .meshio import ply_bytes
 from .model import Phenotype
 from .pose import Pose, PoseError
 
+#: The central MakeHuman local modifiers a subject may get (each with probability 1/2, value in +-0.6).
 LOCAL_CENTRAL = ("stomach/stomach-pregnant", "stomach/stomach-tone", "buttocks/buttocks-volume",
                  "hip/hip-scale-depth", "hip/hip-scale-horiz", "pelvis/pelvis-tone", "torso/torso-scale-depth",
                  "torso/torso-scale-horiz", "torso/torso-vshape", "torso/measure-waist-circ",
                  "torso/measure-bust-circ", "torso/torso-muscle-pectoral", "breast/breast-volume-vert",
                  "breast/breast-dist")
+#: The left/right local modifier pairs (``{s}``: l or r), drawn like :data:`LOCAL_CENTRAL`, sides asymmetric
+#: with probability 1/5.
 LOCAL_SIDED = ("arms/{s}-upperarm-fat", "arms/{s}-upperarm-muscle", "arms/{s}-lowerarm-fat",
                "arms/{s}-lowerarm-muscle", "legs/{s}-upperleg-fat", "legs/{s}-upperleg-muscle",
                "legs/{s}-lowerleg-fat", "legs/{s}-lowerleg-muscle")
+
+#: The cohort's arm angle below the horizontal (degrees, both sides drawn around one value): the A-pose
+#: range the standard cohort covers.
+ARM_DOWN_RANGE_DEG: tuple[float, float] = (25.0, 50.0)
+#: A wider A-pose range (``bsv bench synth --arm-down 15,60``): arms from nearly horizontal to close to
+#: the body, where the camera path's shoulder boundary moves (BENCH.md, round 2 session 10).
+WIDE_ARM_DOWN_RANGE_DEG: tuple[float, float] = (15.0, 60.0)
+#: The lowest angle (degrees below the horizontal) the collision loop raises a colliding arm to: the arm
+#: range's low bound, or this when the bound is higher (a body must come out free; the cohorts before
+#: ``arm_range`` existed used this floor).
+ARM_FREE_FLOOR_DEG = 10.0
+#: The bounds an arm range must lie in (degrees below the horizontal; see :func:`check_arm_range`).
+_ARM_DOWN_LIMITS_DEG: tuple[float, float] = (0.0, 80.0)
 
 
 @dataclass
@@ -51,17 +70,22 @@ class Subject:
     body: Body
     #: What :mod:`bsv.bodies.variants` changed on the body (empty for a plain cohort member).
     variant: dict = field(default_factory=dict)
+    #: The interval the arm angles were drawn from (``arm_range`` of :func:`subject`; degrees below the
+    #: horizontal): with (index, seed) it reproduces the subject.
+    arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG
 
     def volumes_l(self) -> dict[str, float]:
         """Ground-truth volumes (litres): 14 segments and aggregates."""
         return self.body.volumes_l()
 
     def info(self) -> dict:
-        """JSON-ready description (draws, phenotype, pose, measured stature/BMI)."""
+        """JSON-ready description (draws, phenotype, pose, the arm range ``arm_down_deg``, measured
+        stature/BMI)."""
         return {"index": self.index, "seed": self.seed, "sex": self.sex,
                 "stature_target_m": self.stature_target, "bmi_target": self.bmi_target,
                 "stature_m": self.body.stature, "bmi": self.body.bmi, "volume_l": self.body.volume_l,
                 "phenotype": asdict(self.phenotype), "pose": asdict(self.pose),
+                "arm_down_deg": [float(a) for a in self.arm_range],
                 **({"variant": self.variant} if self.variant else {})}
 
 
@@ -92,31 +116,71 @@ def _solve(ph: Phenotype, stature: float, bmi: float, pose: Pose) -> tuple[Pheno
         return solve_stature_bmi(stature, b2, ph, pose), b2
 
 
-#: The cohort's arm angle below the horizontal (degrees, both sides drawn around one value): the A-pose
-#: range the standard cohort covers.
-ARM_DOWN_RANGE_DEG: tuple[float, float] = (25.0, 50.0)
-#: A wider A-pose range (``bsv bench synth --arm-down 15,60``): arms from nearly horizontal to close to
-#: the body, where the camera path's shoulder boundary moves (BENCH.md, round 2 session 10).
-WIDE_ARM_DOWN_RANGE_DEG: tuple[float, float] = (15.0, 60.0)
-
-
-def check_arm_range(arm_range: tuple[float, float]) -> tuple[float, float]:
-    """``arm_range`` as floats, or PoseError when it is not an increasing pair inside [0, 80] degrees
-    (beyond, a collision-free A-pose cannot be kept: the arm meets the head or the torso)."""
+def check_arm_range(arm_range: Sequence[float] | str) -> tuple[float, float]:
+    """``arm_range`` (two angles, or the command line's ``"LOW,HIGH"``) as floats, or PoseError when it is
+    not an increasing pair inside [0, 80] degrees below the horizontal. This is narrower than
+    :meth:`Pose.validate`'s [-10, 85], which bounds any pose the skinning accepts: a cohort subject is in
+    an A-pose (no arm above the horizontal), and beyond 80 deg a collision-free A-pose cannot be kept (the
+    arm meets the torso)."""
+    parts = arm_range.split(",") if isinstance(arm_range, str) else arm_range
     try:
-        lo, hi = (float(x) for x in arm_range)
+        lo, hi = (float(x) for x in parts)
     except (TypeError, ValueError) as exc:
-        raise PoseError(f"arm range {arm_range!r}: give two angles in degrees, e.g. (25, 50)") from exc
-    if not (0.0 <= lo < hi <= 80.0):
-        raise PoseError(f"arm range ({lo:g}, {hi:g}) deg: need 0 <= low < high <= 80 (degrees below the horizontal)")
+        raise PoseError(f"arm range {arm_range!r}: give two angles in degrees below the horizontal, LOW < HIGH, "
+                        "e.g. 15,60") from exc
+    low, high = _ARM_DOWN_LIMITS_DEG
+    if not (low <= lo < hi <= high):
+        raise PoseError(f"arm range ({lo:g}, {hi:g}) deg: need {low:g} <= low < high <= {high:g} "
+                        "(degrees below the horizontal)")
     return lo, hi
+
+
+def arm_range_arg(text: str) -> tuple[float, float]:
+    """The argparse type of ``--arm-down LOW,HIGH`` (``bsv cohort``, ``bsv bench synth``):
+    :func:`check_arm_range`, its message as the usage error."""
+    import argparse
+
+    try:
+        return check_arm_range(text)
+    except PoseError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def arm_down_help() -> str:
+    """The help text of ``--arm-down LOW,HIGH`` (``bsv cohort``, ``bsv bench synth``)."""
+    (lo, hi), (wlo, whi) = ARM_DOWN_RANGE_DEG, WIDE_ARM_DOWN_RANGE_DEG
+    return (f"the interval the arms' A-pose angle below the horizontal is drawn from, degrees (default "
+            f"{lo:g},{hi:g}; {wlo:g},{whi:g} for wide A-poses)")
+
+
+def _free_step(pose: Pose, hits: Iterable[str], arm_floor: float) -> Pose:
+    """The collision loop's next pose: each arm that enters the torso or a thigh raised by 3 deg but not
+    past ``arm_floor`` (the other arm unchanged), both legs spread by 1 deg when a thigh is involved."""
+    raise_arm = {"l": False, "r": False}
+    legs = 0.0
+    for k in hits:
+        part = k.split("/")[0]
+        if part == "thigh_l":
+            legs = 1.0
+        else:
+            raise_arm[part[-1]] = True
+            if k.endswith(("thigh_l", "thigh_r")):
+                legs = 1.0
+
+    def arm(angle: float, side: str) -> float:
+        return max(angle - 3.0, arm_floor) if raise_arm[side] else angle
+
+    return Pose(arm(pose.arm_down_l, "l"), arm(pose.arm_down_r, "r"), pose.elbow_l, pose.elbow_r,
+                pose.hip_abduction_l + legs, pose.hip_abduction_r + legs)
 
 
 def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
             arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG) -> Subject:
     """Subject ``index`` of the cohort of ``seed`` (deterministic). ``arm_range``: the interval (degrees
-    below the horizontal) the arms' angle is drawn from; the default keeps the cohort as it always was, a
-    wider one (:data:`WIDE_ARM_DOWN_RANGE_DEG`) draws the same random numbers, so every other draw stays."""
+    below the horizontal, :func:`check_arm_range`) the arms' angle is drawn from; the default keeps the
+    cohort as it always was, a wider one (:data:`WIDE_ARM_DOWN_RANGE_DEG`) draws the same random numbers,
+    so every other draw stays. Both arm angles stay inside ``arm_range`` unless a collision raises an arm
+    (then down to ``min(low, ARM_FREE_FLOOR_DEG)``); a body that still collides there is a SolveError."""
     lo, hi = check_arm_range(arm_range)
     rng = np.random.default_rng([int(seed), int(index)])
     female = index % 2 == 0
@@ -145,37 +209,38 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
         hits = penetrations(body.vertices, body.faces, body.face_labels)
         if not hits:
             break
-        arms = {"l": 0.0, "r": 0.0}
-        legs = 0.0
-        for k in hits:
-            part = k.split("/")[0]
-            if part == "thigh_l":
-                legs = 1.0
-            else:
-                arms[part[-1]] = 3.0
-                if k.endswith(("thigh_l", "thigh_r")):
-                    legs = 1.0
-        pose = Pose(max(pose.arm_down_l - arms["l"], 10.0), max(pose.arm_down_r - arms["r"], 10.0),
-                    pose.elbow_l, pose.elbow_r, pose.hip_abduction_l + legs, pose.hip_abduction_r + legs)
+        floor = min(lo, ARM_FREE_FLOOR_DEG)
+        step = _free_step(pose, hits, floor)
+        if step == pose:
+            raise SolveError(f"cohort subject {index} (seed {seed}) self-intersects ({', '.join(sorted(hits))}) "
+                             f"with its colliding arms raised to {floor:g} deg below the horizontal")
+        pose = step
         ph, bmi_used = _solve(ph, stature, bmi_used, pose)
         body = make_body(ph, pose)
     else:
         if check and penetrations(body.vertices, body.faces, body.face_labels):
             raise SolveError(f"cohort subject {index} (seed {seed}) still self-intersects after pose changes")
-    return Subject(index, int(seed), "female" if female else "male", stature, bmi_used, ph, pose, body)
+    return Subject(index, int(seed), "female" if female else "male", stature, bmi_used, ph, pose, body,
+                   arm_range=(lo, hi))
 
 
 def cohort(n: int, seed: int = 0, local: bool = True, check: bool = True,
            arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG) -> list[Subject]:
-    """``n`` plausible adults (half female), deterministic for a seed; local modifiers on by default."""
+    """``n`` plausible adults (half female), deterministic for a seed; local modifiers on by default.
+    ``arm_range``: the interval (degrees below the horizontal) the arm angles are drawn from, as in
+    :func:`subject` (:data:`ARM_DOWN_RANGE_DEG` by default, :data:`WIDE_ARM_DOWN_RANGE_DEG` for wide
+    A-poses); a bad range is a PoseError before any subject is made."""
     if n < 0:
         raise ValueError(f"cohort size {n}: must be >= 0")
+    check_arm_range(arm_range)
     return list(iter_cohort(n, seed, local, check, arm_range))
 
 
 def iter_cohort(n: int, seed: int = 0, local: bool = True, check: bool = True,
                 arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG) -> Iterator[Subject]:
-    """Like cohort() but yields subjects one at a time."""
+    """Like cohort() but yields subjects one at a time. ``arm_range``: the interval (degrees below the
+    horizontal) the arm angles are drawn from (:func:`subject`); a bad range is a PoseError at the first
+    subject."""
     for i in range(n):
         yield subject(i, seed, local, check, arm_range)
 
@@ -214,23 +279,26 @@ def write_subject(s: Subject, out_dir: str | Path, overwrite: bool = False) -> t
     return ply, js
 
 
-def write_cohort(out_dir: str | Path, n: int, seed: int = 0, local: bool = True,
-                 overwrite: bool = False) -> list[tuple[Path, Path]]:
-    """Generate and write a cohort: one PLY + JSON per subject and ``cohort.json`` listing them. Any of
-    these files already present is refused before anything is generated (:class:`bsv.errors.OutputExistsError`)
-    unless ``overwrite``."""
+def write_cohort(out_dir: str | Path, n: int, seed: int = 0, local: bool = True, overwrite: bool = False,
+                 arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG) -> list[tuple[Path, Path]]:
+    """Generate and write a cohort: one PLY + JSON per subject and ``cohort.json`` listing them (with the
+    seed, local modifiers and ``arm_down_deg``, the arm range of :func:`subject`). A bad ``arm_range``
+    (PoseError) or any of these files already present is refused before anything is generated
+    (:class:`bsv.errors.OutputExistsError`) unless ``overwrite``."""
     out = Path(out_dir)
+    lo, hi = check_arm_range(arm_range)
     _refuse_existing([out / "cohort.json", *(p for i in range(max(n, 0)) for p in subject_files(i, out))], overwrite)
-    paths = [write_subject(s, out, overwrite) for s in iter_cohort(n, seed, local)]
-    index = {"seed": int(seed), "n": int(n), "local_modifiers": bool(local),
+    paths = [write_subject(s, out, overwrite) for s in iter_cohort(n, seed, local, arm_range=(lo, hi))]
+    index = {"seed": int(seed), "n": int(n), "local_modifiers": bool(local), "arm_down_deg": [lo, hi],
              "subjects": [{"mesh": p.name, "volumes": j.name} for p, j in paths]}
     (out / "cohort.json").write_text(json.dumps(index, indent=1) + "\n")
     return paths
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m bsv.bodies.cohort OUT_DIR N [SEED] [--no-local] [--overwrite]``: write a cohort; returns
-    the exit status (2 and a message if files exist and --overwrite is not given, see bsv.exitcodes)."""
+    """``python -m bsv.bodies.cohort OUT_DIR N [SEED] [--no-local] [--arm-down LOW,HIGH] [--overwrite]``:
+    write a cohort; returns the exit status (2 and a message if files exist and --overwrite is not given,
+    see bsv.exitcodes)."""
     import argparse
 
     from ..argtypes import seed, whole
@@ -240,17 +308,27 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("n", type=whole(1, 100_000, "N subjects"))
     ap.add_argument("seed", type=seed, nargs="?", default=0)
     ap.add_argument("--no-local", action="store_true", help="macro phenotypes only (no local modifiers)")
+    ap.add_argument("--arm-down", type=arm_range_arg, default=ARM_DOWN_RANGE_DEG, metavar="LOW,HIGH",
+                    help=arm_down_help())
     ap.add_argument("--overwrite", action="store_true", help="replace subject files and cohort.json already in OUT_DIR")
     args = ap.parse_args(argv)
     from ..exitcodes import run_command
 
     def run() -> int:
-        written = write_cohort(args.out_dir, args.n, args.seed, not args.no_local, overwrite=args.overwrite)
+        written = write_cohort(args.out_dir, args.n, args.seed, not args.no_local, overwrite=args.overwrite,
+                               arm_range=args.arm_down)
         for ply, js in written:
             print(ply, js)
         return 0
 
     return run_command("bsv cohort", run)
+
+
+__all__ = [
+    "ARM_DOWN_RANGE_DEG", "ARM_FREE_FLOOR_DEG", "LOCAL_CENTRAL", "LOCAL_SIDED", "WIDE_ARM_DOWN_RANGE_DEG", "Subject", "arm_down_help",
+    "arm_range_arg", "check_arm_range", "cohort", "iter_cohort", "main", "subject", "subject_files",
+    "volumes_json", "write_cohort", "write_subject",
+]
 
 
 if __name__ == "__main__":

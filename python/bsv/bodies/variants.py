@@ -13,17 +13,15 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from ..errors import PhenotypeError
 from ..types import SEGMENT_IDS
 from .body import Body, make_body
+from .cohort import ARM_DOWN_RANGE_DEG, Subject, subject
 from .collide import penetrations
-
-if TYPE_CHECKING:
-    from .cohort import Subject
 
 #: The limb segments a variant may reshape or swell.
 LIMB_SEGMENTS: tuple[str, ...] = ("upper_arm_l", "upper_arm_r", "forearm_l", "forearm_r",
@@ -133,17 +131,15 @@ def _first_clean(body: Body, make: Callable[[float], Body]) -> tuple[Body, float
 
 
 def hard_subject(index: int, seed: int = 0, local: bool = True,
-                 arm_range: tuple[float, float] | None = None) -> Subject:
+                 arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG) -> Subject:
     """Cohort subject ``index`` of ``seed`` reshaped into one of the registration's hard classes
     (:data:`HARD_CLASSES`, cycling with the index; deterministic): both upper arms 1.3-1.6x deeper
     front-to-back and 0.75-0.9x narrower; 12 bumps of 6-15 mm; one limb segment swollen by
     ~20-45 %; MakeHuman's segment scale targets (depth and width of every limb segment) at
     0.6-1.0 of their range. A change that would make a limb cut into another segment is scaled down
     (``variant["strength"]`` < 1). The truth is the changed body's own volumes. ``arm_range``: the
-    base subject's (:func:`bsv.bodies.subject`; None: the cohort's default)."""
-    from .cohort import ARM_DOWN_RANGE_DEG, subject
-
-    base = subject(index, seed, local=local, arm_range=arm_range or ARM_DOWN_RANGE_DEG)
+    base subject's (:func:`bsv.bodies.subject`; a bad range is its PoseError)."""
+    base = subject(index, seed, local=local, arm_range=arm_range)
     rng = np.random.default_rng([int(seed), int(index), 10])
     kind = HARD_CLASSES[index % len(HARD_CLASSES)]
     variant: dict[str, Any] = {"class": kind}

@@ -23,10 +23,10 @@ import io
 import math
 import os
 import tempfile
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -35,7 +35,12 @@ from .errors import OutputExistsError, ReportError
 from .palette import colourise, hex_colour, plain_name, rgb01, segment_id
 from .types import SEGMENT_NAMES
 
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
+
 PathLike = str | Path
+#: The file a report document is rendered for: report.html or report.pdf.
+_Target = Literal["html", "pdf"]
 
 #: The files the report writes into its folder.
 FILES = ("report.html", "report.pdf", "volumes.csv")
@@ -67,7 +72,10 @@ def render_mesh(ax: Any, vertices: np.ndarray, faces: np.ndarray, labels: np.nda
     mesh goes to the renderer in one call (its Gouraud-triangle primitive with the same colour at the three
     corners: adjacent faces meet without seams; half the time of a collection of 4,000 polygons with their
     edges stroked to hide the seams). A translucent one (``alpha`` < 1) stays such a collection: the
-    primitive widens each triangle by half a pixel, which doubles the shared edges' opacity."""
+    primitive widens each triangle by half a pixel, which doubles the shared edges' opacity. ``alpha`` must lie
+    in [0, 1] (a :class:`ValueError` otherwise)."""
+    if not 0.0 <= alpha <= 1.0:  # NaN fails too
+        raise ValueError(f"render_mesh: alpha must be between 0 and 1, got {alpha!r}")
     sx, sy, toward = VIEWS[view]
     v = np.asarray(vertices, dtype=np.float64)
     f = np.asarray(faces, dtype=np.int64)
@@ -86,7 +94,7 @@ def render_mesh(ax: Any, vertices: np.ndarray, faces: np.ndarray, labels: np.nda
     base = np.full((len(idx), 3), 0.78) if grey else rgb01()[np.clip(np.asarray(labels)[idx], 0, 14)]
     colours = np.clip(base * shade[idx, None], 0.0, 1.0)
     rgba = np.concatenate([colours, np.full((len(idx), 1), alpha)], axis=1)
-    if alpha >= 1.0:
+    if alpha == 1.0:
         ax.add_artist(_flat_triangles_class()(xy, rgba))
     else:
         from matplotlib.collections import PolyCollection
@@ -100,9 +108,9 @@ def render_mesh(ax: Any, vertices: np.ndarray, faces: np.ndarray, labels: np.nda
 
 
 @functools.cache
-def _flat_triangles_class() -> type:
-    """The matplotlib artist of :func:`render_mesh` (made on first use: importing this module does not import
-    matplotlib)."""
+def _flat_triangles_class() -> Callable[[np.ndarray, np.ndarray], Artist]:
+    """The matplotlib artist class of :func:`render_mesh`, called with the triangles and their colours (made
+    on first use: importing this module does not import matplotlib)."""
     from matplotlib.artist import Artist
 
     class FlatTriangles(Artist):
@@ -143,14 +151,27 @@ PDF_JPEG_QUALITY = 90
 PREVIEW_MAX_PX = 512
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _Image:
-    """One drawn report image: ``png`` is inlined in report.html; ``pdf_jpeg``, when set (the shaded renders),
-    is the same pixels as JPEG for report.pdf, which WeasyPrint embeds as they are (a PNG it decodes and
-    compresses again)."""
+    """One drawn report image, (H, W, 3) uint8 RGB, encoded when a document first asks for it: as PNG in
+    report.html and, unless ``jpeg_in_pdf`` (the shaded renders), in report.pdf; with ``jpeg_in_pdf`` as JPEG
+    in report.pdf, which WeasyPrint embeds as it is (a PNG it decodes and compresses again). A report without
+    report.pdf encodes no JPEG."""
 
-    png: bytes
-    pdf_jpeg: bytes | None = None
+    rgb: np.ndarray
+    jpeg_in_pdf: bool = False
+
+    @functools.cached_property
+    def _png_uri(self) -> str:
+        return _data_uri(_encode(self.rgb, "PNG"))
+
+    @functools.cached_property
+    def _jpeg_uri(self) -> str:
+        return _data_uri(_encode(self.rgb, "JPEG"), "image/jpeg")
+
+    def src(self, target: _Target) -> str:
+        """The image's data: URI in the document for ``target``."""
+        return self._jpeg_uri if target == "pdf" and self.jpeg_in_pdf else self._png_uri
 
 
 def _new_figure(width: float, height: float) -> Any:
@@ -169,23 +190,24 @@ def _pixels(fig: Any) -> np.ndarray:
     return np.ascontiguousarray(np.asarray(fig.canvas.buffer_rgba())[..., :3])
 
 
-def _encode(rgb: np.ndarray, fmt: str) -> bytes:
+def _encode(rgb: np.ndarray, fmt: Literal["PNG", "JPEG"]) -> bytes:
     """RGB pixels as PNG (zlib's fastest level: about 8 % larger than matplotlib's default, half the time)
-    or as JPEG."""
+    or as JPEG (:data:`PDF_JPEG_QUALITY`, full-resolution chroma); any other ``fmt`` is a ValueError."""
     from PIL import Image as PILImage
 
     buf = io.BytesIO()
     if fmt == "PNG":
         PILImage.fromarray(rgb).save(buf, format="PNG", compress_level=1)
-    else:
+    elif fmt == "JPEG":
         PILImage.fromarray(rgb).save(buf, format="JPEG", quality=PDF_JPEG_QUALITY, subsampling=0)
+    else:
+        raise ValueError(f"_encode: fmt must be 'PNG' or 'JPEG', got {fmt!r}")
     return buf.getvalue()
 
 
 def _image(fig: Any, shaded: bool = False) -> _Image:
-    """A drawn figure as a report :class:`_Image` (``shaded``: a render, also kept as JPEG for the PDF)."""
-    rgb = _pixels(fig)
-    return _Image(_encode(rgb, "PNG"), _encode(rgb, "JPEG") if shaded else None)
+    """A drawn figure as a report :class:`_Image` (``shaded``: a render, JPEG in the PDF)."""
+    return _Image(_pixels(fig), jpeg_in_pdf=shaded)
 
 
 def _data_uri(data: bytes, mime: str = "image/png") -> str:
@@ -281,7 +303,7 @@ def _segmentation_ids(out: Path, segmentations: Mapping[str, np.ndarray] | None)
 def _preview(ids: np.ndarray) -> _Image:
     """A segmentation colourised in the palette, at most :data:`PREVIEW_MAX_PX` on the long side."""
     step = max(1, math.ceil(max(ids.shape[:2]) / PREVIEW_MAX_PX))
-    return _Image(_encode(colourise(ids[::step, ::step]), "PNG"))
+    return _Image(colourise(ids[::step, ::step]))
 
 
 def _opt(x: Any, digits: int) -> str:
@@ -476,13 +498,9 @@ summary{cursor:pointer;font-weight:bold}
 @page{size:A4;margin:14mm}"""
 
 
-def _figure(img: _Image, alt: str, caption: str, cls: str = "", pdf_swaps: dict[str, str] | None = None) -> str:
-    """A ``<figure>`` with the image inlined as PNG; a JPEG twin for the PDF is noted in ``pdf_swaps``
-    (PNG data: URI -> JPEG data: URI)."""
-    uri = _data_uri(img.png)
-    if img.pdf_jpeg is not None and pdf_swaps is not None:
-        pdf_swaps[uri] = _data_uri(img.pdf_jpeg, "image/jpeg")
-    return (f'<figure class="{cls}"><img src="{uri}" alt="{html.escape(alt)}">'
+def _figure(img: _Image, target: _Target, alt: str, caption: str, cls: str = "") -> str:
+    """A ``<figure>`` with the image inlined as a data: URI, in its format for ``target`` (:meth:`_Image.src`)."""
+    return (f'<figure class="{cls}"><img src="{img.src(target)}" alt="{html.escape(alt)}">'
             f"<figcaption>{html.escape(caption)}</figcaption></figure>")
 
 
@@ -491,13 +509,14 @@ def render_html(result: Any, out_dir: PathLike, title: str = "BSV report",
     """The self-contained report of a :class:`bsv.pipeline.ProcessResult` (figures inlined as data: URIs).
     ``segmentations``: the camera segmentations (label images by camera), shown colourised; without them,
     the ``segmentation/<camera>/segmentation.png`` in ``out_dir``."""
-    return _documents(result, out_dir, title, segmentations)[0]
+    return _documents(result, out_dir, title, segmentations, ("html",))["html"]
 
 
-def _documents(result: Any, out_dir: PathLike, title: str,
-               segmentations: Mapping[str, np.ndarray] | None) -> tuple[str, str]:
-    """The report's HTML twice from one drawing of the figures: for report.html (every image a PNG) and
-    for report.pdf (the shaded renders as JPEG; see :class:`_Image`)."""
+def _documents(result: Any, out_dir: PathLike, title: str, segmentations: Mapping[str, np.ndarray] | None,
+               targets: Sequence[_Target]) -> dict[_Target, str]:
+    """The report's HTML for each of ``targets`` from one drawing of the figures: for report.html (every
+    image a PNG), for report.pdf (the shaded renders as JPEG; see :class:`_Image`). Only the figures'
+    ``src`` differ between the two."""
     from .uncertainty import asymmetry_text
 
     out = Path(out_dir)
@@ -527,20 +546,6 @@ def _documents(result: Any, out_dir: PathLike, title: str,
     if limbs:
         img["limbs"] = _bar_chart(limbs, volumes_l, bands, same or None, "Arms and legs", 5.2)
     img.update((f"seg:{cam}", _preview(ids)) for cam, ids in seg_ids.items())
-    swaps: dict[str, str] = {}
-    body = (_figure(img["front"], "segmented fitted body, front", "Front", "body", swaps)
-            + _figure(img["side"], "segmented fitted body, left side", "Left side", "body", swaps))
-    charts = ""
-    if central:
-        charts += _figure(img["torso"], "torso volume", "Torso (own scale)", "narrow")
-    if limbs:
-        charts += _figure(img["limbs"], "limb volumes", "Arms and legs (own scale)")
-    seg_html = ""
-    if seg_ids:
-        seg_html = ("<h2>Camera segmentation</h2><p class=\"note\">What each camera's image was divided into (the raw "
-                    "label images are <code>segmentation/&lt;camera&gt;/segmentation.png</code>, ids 0-14).</p>"
-                    '<div class="figs">' + "".join(_figure(img[f"seg:{cam}"], f"{cam} camera segmentation",
-                                                           f"{cam} camera", "seg") for cam in seg_ids) + "</div>")
 
     # Key numbers
     tl = "trunk_limbs" if "trunk_limbs" in volumes_l else ("whole" if "whole" in volumes_l else None)
@@ -580,38 +585,63 @@ def _documents(result: Any, out_dir: PathLike, title: str,
                   html.escape(asymmetry_text(v, iv.ratios.get(k) if iv else None))]
                  for k, v in ratios.items() if k.startswith("asymmetry_") and v is not None]
 
+    reg = vols.get("registration") or {}
+    alerts = f"{key}{_doubtful_html(reg)}{_landmark_warnings_html(vols)}{_warnings_html(result)}"
+    iv_note = (f'<p class="note">95 % intervals: {html.escape(iv.method)}.</p>' if iv
+               else '<p class="note">No 95 % intervals were computed for this run.</p>')
+    asym_html = (_table(["Part", "Left minus right, % of their mean"], asym_rows) if asym_rows
+                 else '<p class="note">Not measured.</p>')
+    ratio_html = (_table(["Ratio of volumes", "Value", "95 % interval"], ratio_rows) if ratio_rows
+                  else '<p class="note">Not measured.</p>')
+    bsip_html = _bsip_html(result.bsip) if getattr(result, "bsip", None) is not None else ""
+    quality = quality_html(reg)
     tech = _technical_html(result, vols)
     notes = "".join(f"<li>{html.escape(str(n))}</li>" for n in vols.get("notes", []) or [])
-    doc = f"""<!DOCTYPE html>
+
+    def page(target: _Target) -> str:
+        """The document for ``target``: everything computed above is shared, the figures' markup is its own."""
+        body = (_figure(img["front"], target, "segmented fitted body, front", "Front", "body")
+                + _figure(img["side"], target, "segmented fitted body, left side", "Left side", "body"))
+        charts = ""
+        if central:
+            charts += _figure(img["torso"], target, "torso volume", "Torso (own scale)", "narrow")
+        if limbs:
+            charts += _figure(img["limbs"], target, "limb volumes", "Arms and legs (own scale)")
+        seg_html = ""
+        if seg_ids:
+            seg_html = ("<h2>Camera segmentation</h2><p class=\"note\">What each camera's image was divided into (the "
+                        "raw label images are <code>segmentation/&lt;camera&gt;/segmentation.png</code>, ids 0-14).</p>"
+                        '<div class="figs">' + "".join(_figure(img[f"seg:{cam}"], target, f"{cam} camera segmentation",
+                                                               f"{cam} camera", "seg") for cam in seg_ids) + "</div>")
+        cloud = _figure(img["cloud"], target, "measured points over the fitted body",
+                        "Measured points (colours: segments) over the fitted body (grey)")
+        return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><meta name="viewport" content="width=device-width, initial-scale=1">
 <title>{html.escape(title)}</title><style>{CSS}</style></head><body><main>
 <h1>{html.escape(title)}</h1>
 <p class="note">Body segment volumes from two depth cameras (bsv {html.escape(str(vols.get('bsv_version', '')))}).
 Volumes in litres, masses in kilograms; 95 % intervals give the range the true value lies in with 95 % confidence.</p>
-{key}{_doubtful_html(vols.get("registration") or {})}{_landmark_warnings_html(vols)}{_warnings_html(result)}
+{alerts}
 <h2>Segments</h2>
 <div class="figs">{body}</div>
 {_legend_html(segments)}
 <h2>Volumes</h2>
 <div class="figs">{charts}</div>
 {vol_table}{truth_note}
-{f'<p class="note">95 % intervals: {html.escape(iv.method)}.</p>' if iv else '<p class="note">No 95 % intervals were computed for this run.</p>'}
-<h2>Left / right</h2>{_table(["Part", "Left minus right, % of their mean"], asym_rows) if asym_rows else '<p class="note">Not measured.</p>'}
-<h2>Proportions</h2>{_table(["Ratio of volumes", "Value", "95 % interval"], ratio_rows) if ratio_rows else '<p class="note">Not measured.</p>'}
-{quality_html(vols.get("registration") or {})}
-{_bsip_html(result.bsip) if getattr(result, "bsip", None) is not None else ""}
+{iv_note}
+<h2>Left / right</h2>{asym_html}
+<h2>Proportions</h2>{ratio_html}
+{quality}
+{bsip_html}
 {seg_html}
 <h2>Fit to the measured points</h2>
-<div class="figs">{_figure(img["cloud"], "measured points over the fitted body",
-                           "Measured points (colours: segments) over the fitted body (grey)", "", swaps)}</div>
+<div class="figs">{cloud}</div>
 {tech}
 {f"<h2>Notes</h2><ul>{notes}</ul>" if notes else ""}
 </main></body></html>
 """
-    pdf_doc = doc
-    for png_uri, jpeg_uri in swaps.items():
-        pdf_doc = pdf_doc.replace(png_uri, jpeg_uri)
-    return doc, pdf_doc
+
+    return {target: page(target) for target in targets}
 
 
 def _bsip_html(b: Any) -> str:
@@ -744,11 +774,11 @@ def render_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", 
     report_pdf, volumes_csv). Write them with :func:`write_rendered`. The figures are drawn once for both
     files (report.pdf takes the shaded renders as JPEG)."""
     out = Path(out_dir)
-    doc, pdf_doc = _documents(result, out, title, segmentations)
-    files = {"report": (out / "report.html", doc.encode("utf-8")),
+    docs = _documents(result, out, title, segmentations, ("html", "pdf") if pdf else ("html",))
+    files = {"report": (out / "report.html", docs["html"].encode("utf-8")),
              "volumes_csv": (out / "volumes.csv", csv_text(result).encode("utf-8"))}
     if pdf:
-        files["report_pdf"] = (out / "report.pdf", render_pdf(pdf_doc))
+        files["report_pdf"] = (out / "report.pdf", render_pdf(docs["pdf"]))
     return files
 
 

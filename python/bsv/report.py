@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from . import _bsv
+from . import _bsv, anatomy
 from .errors import OutputExistsError, ReportError
 from .palette import colourise, hex_colour, plain_name, rgb01, segment_id
 from .types import SEGMENT_NAMES
@@ -482,6 +482,7 @@ h3{font-size:15px;margin:10px 0 4px}
 .scroll{max-width:100%;overflow-x:auto;-webkit-overflow-scrolling:touch}
 table{border-collapse:collapse;margin:2px 0 8px;font-size:14px}
 td,th{border:1px solid #ccc;padding:3px 8px;text-align:right;white-space:nowrap}
+table.prose td{white-space:normal;text-align:left;min-width:6em}
 th{background:#f0f0f0}td:first-child,th:first-child{text-align:left}
 .figs{display:flex;flex-wrap:wrap;gap:12px;align-items:flex-start}
 figure{margin:0;max-width:100%}figure img{display:block;max-width:100%;height:auto}
@@ -595,6 +596,7 @@ def _documents(result: Any, out_dir: PathLike, title: str, segmentations: Mappin
                   else '<p class="note">Not measured.</p>')
     bsip_html = _bsip_html(result.bsip) if getattr(result, "bsip", None) is not None else ""
     quality = quality_html(reg)
+    definitions = definitions_html(reg)
     tech = _technical_html(result, vols)
     notes = "".join(f"<li>{html.escape(str(n))}</li>" for n in vols.get("notes", []) or [])
 
@@ -631,6 +633,7 @@ Volumes in litres, masses in kilograms; 95 % intervals give the range the true v
 {iv_note}
 <h2>Left / right</h2>{asym_html}
 <h2>Proportions</h2>{ratio_html}
+{definitions}
 {quality}
 {bsip_html}
 {seg_html}
@@ -642,6 +645,22 @@ Volumes in litres, masses in kilograms; 95 % intervals give the range the true v
 """
 
     return {target: page(target) for target in targets}
+
+
+def definitions_html(reg: dict[str, Any]) -> str:
+    """What bounds each segment (:mod:`bsv.anatomy`): the joint loops between segments, as measured on the
+    template, and how this result's boundaries were placed (its label source)."""
+    source = str((reg.get("params") or {}).get("labels", ""))
+    how = anatomy.LABEL_SOURCE_TEXT.get(source)
+    lead = (f"Segment boundaries in this result: {html.escape(how)}. " if how else "")
+    rows = [[html.escape(c) for c in r] for r in anatomy.boundary_rows()]
+    return ("<h2>Segment definitions</h2>"
+            f'<p class="note">{lead}Each boundary is a closed loop of the body surface at a joint (the '
+            "template's segments: each point belongs to the segment whose joints move it most). Where the loops "
+            "run:</p>"
+            + _table(["Boundary", "Between", "Where the loop runs",
+                      "On the template: mm from the joint centre along the limb (+ = towards the hand or foot)"],
+                     rows, cls="prose"))
 
 
 def _bsip_html(b: Any) -> str:

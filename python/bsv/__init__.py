@@ -39,7 +39,7 @@ from .errors import (
     WriteError,
 )
 from .interop import as_cloud, as_mesh, missing_labels_hint
-from .types import SEGMENT_IDS, SEGMENT_NAMES, TRUNK_LIMBS, Mesh, PointCloud, Registration
+from .types import SEGMENT_IDS, SEGMENT_NAMES, SEXES, TRUNK_LIMBS, Mesh, PointCloud, Registration
 
 __version__: str = _bsv.__version__
 
@@ -151,9 +151,23 @@ def volume_report(
     )
 
 
-def default_template(full: bool = False) -> Mesh:
-    """The embedded MakeHuman template: 9 segments (head, hands, feet removed), or all 14 with ``full``."""
-    v, f, vl, fl = _bsv.default_template(bool(full))
+def default_template(full: bool = False, sex: str | None = None) -> Mesh:
+    """The embedded MakeHuman template: 9 segments (head, hands, feet removed), or all 14 with ``full``.
+    ``sex`` ("female" or "male"): the 9-segment template at MakeHuman's female or male end of the gender
+    macro (same vertices order, faces and segments, that sex's shape: on the synthetic cohort the torso and
+    thighs of the camera path fit better, see ``docs/DESIGN.md``); None, the average body."""
+    if sex is None:
+        v, f, vl, fl = _bsv.default_template(bool(full))
+        return Mesh(v, f, vl, fl)
+    if sex not in SEXES:
+        err = InputError(f"sex {sex!r}: give one of {', '.join(SEXES)}, or None for the average template")
+        err.argument = "sex"
+        raise err
+    if full:
+        err = InputError("the sexed templates have 9 segments (no head, hands or feet): pass full=False with sex")
+        err.argument = "full"
+        raise err
+    v, f, vl, fl = _bsv.default_template(kind=sex)
     return Mesh(v, f, vl, fl)
 
 
@@ -204,7 +218,7 @@ def register(
         rings = joint_rings(tmpl)
         if rings is None and measured:
             err = InputError("keypoints need a template that carries joint centres: the embedded templates "
-                             "(template=None, bsv.default_template(), the 'fine' and 'full' ones) do; this one "
+                             "(template=None, bsv.default_template(), the 'fine', 'full' and sexed ones) do; this one "
                              "does not, so fit it without keypoints")
             err.argument = "keypoints"
             raise err
@@ -342,6 +356,7 @@ def bsip(
 __all__ = [
     "SEGMENT_IDS",
     "SEGMENT_NAMES",
+    "SEXES",
     "TRUNK_LIMBS",
     "BsvError",
     "BsvWarning",

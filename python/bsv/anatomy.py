@@ -77,6 +77,17 @@ LABEL_SOURCE_TEXT: dict[str, str] = {
 }
 
 
+#: The templates a result can be fitted with (volumes.json ``template.kind``), in words.
+TEMPLATE_TEXT: dict[str, str] = {
+    "default": "the average MakeHuman body (no sex given)",
+    "female": "the female MakeHuman body (--sex female)",
+    "male": "the male MakeHuman body (--sex male)",
+    "fine": "the average MakeHuman body, subdivided",
+    "full": "the average MakeHuman body with head, hands and feet",
+    "custom": "a template given by the user",
+}
+
+
 def bounds(segment_kind: str) -> tuple[list[str], list[str]]:
     """The joint kinds at the proximal and at the distal end of a segment kind (from
     :data:`bsv.biomech.tables.JOINTS`); the head and the torso have no proximal joint, their loops are all

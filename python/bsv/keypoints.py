@@ -19,24 +19,24 @@ from .types import SEGMENT_IDS, Mesh, PointCloud
 JOINT_NAMES: tuple[str, ...] = tuple(f"{j}_{s}" for s in ("l", "r")
                                      for j in ("shoulder", "elbow", "wrist", "hip", "knee", "ankle"))
 
-#: Kinds of the embedded templates that carry joint rings, by vertex count.
-_KIND_BY_VERTICES = {4177: "default", 16702: "fine", 13380: "full"}
+#: Kinds of the embedded templates that carry joint rings, by vertex count (the sexed templates share the
+#: default's mesh and count).
+_KINDS_BY_VERTICES = {4177: ("default", "female", "male"), 16702: ("fine",), 13380: ("full",)}
 
 
-@lru_cache(maxsize=2)
-def _embedded_vertices(full: bool) -> np.ndarray:
-    return np.asarray(_bsv.default_template(full)[0])
+@lru_cache(maxsize=5)
+def _embedded_vertices(kind: str) -> np.ndarray:
+    return np.asarray(_bsv.default_template(kind=kind)[0])
 
 
 def template_kind(mesh: Mesh) -> str | None:
-    """"default", "fine" or "full" when ``mesh`` is that embedded template (its vertices, in its order,
-    before any fit), else None."""
-    kind = _KIND_BY_VERTICES.get(len(mesh.vertices))
-    if kind is None:
-        return None
-    ref = _embedded_vertices(kind == "full")
-    head = np.asarray(mesh.vertices[: len(ref)])
-    return kind if np.array_equal(head, ref) else None
+    """The embedded template's kind (``"default"``, ``"fine"``, ``"full"``, ``"female"``, ``"male"``) when
+    ``mesh`` is that template (its vertices, in its order, before any fit), else None."""
+    head = np.asarray(mesh.vertices)
+    for kind in _KINDS_BY_VERTICES.get(len(head), ()):
+        if np.array_equal(head, _embedded_vertices(kind)):
+            return kind
+    return None
 
 
 def joint_rings(mesh: Mesh) -> list[tuple[str, list[int], list[float]]] | None:

@@ -34,8 +34,9 @@ from .argtypes import seed as seed_type
 from .errors import BsipError, InputError, OutputExistsError, PersonIsolationError
 from .extras import require
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
-from .keypoints import camera_joints, confine_cloud_upper_arms
-from .types import SEGMENT_IDS, TRUNK_LIMBS, Mesh, PointCloud, Registration
+from .interop import as_mesh
+from .keypoints import camera_joints, confine_cloud_upper_arms, template_kind
+from .types import SEGMENT_IDS, SEXES, TRUNK_LIMBS, Mesh, PointCloud, Registration
 
 PathLike = str | Path
 
@@ -361,7 +362,8 @@ def process(
     truth: dict[str, float] | None = None,
     bsip: bool = False,
     bsip_density: float | dict[str, float] | None = None,
-    bsip_sex: str = "male",
+    bsip_sex: str | None = None,
+    sex: str | None = None,
     refine_floor: bool = False,
     keypoints: bool | None = None,
     **register_params: Any,
@@ -382,7 +384,11 @@ def process(
     :func:`build_cloud`. The floor check's warnings are printed and shown in the report.
 
     ``bsip``: also the body-segment inertial parameters of the fitted mesh (:func:`bsv.bsip`; densities
-    ``bsip_density``, de Leva's values for ``bsip_sex``): bsip.json, bsip.csv and model.osim (OpenSim).
+    ``bsip_density``, de Leva's values for ``bsip_sex``, default ``sex``, else male): bsip.json, bsip.csv
+    and model.osim (OpenSim).
+
+    ``sex`` ("female" or "male", ``--sex``): the embedded template of that sex (:func:`bsv.default_template`;
+    the camera path's torso and thighs fit better, ``docs/DESIGN.md``); None: the average template.
 
     ``refine_floor`` (``--refine-floor``): correct each camera's pitch, roll and height with the floor it
     sees (:func:`bsv.frontend.floorplane.refine_extrinsics`; the camera must see the floor) before building
@@ -404,6 +410,15 @@ def process(
 
     if segmentation not in SEGMENTATIONS:
         raise SegmentationError(f"segmentation must be one of {SEGMENTATIONS}, got {segmentation!r}")
+    if sex is not None and template is not None:
+        err = InputError("sex chooses one of the embedded templates: give sex or template, not both")
+        err.argument = "sex"
+        raise err
+    if template is None and sex is not None:
+        from . import default_template
+
+        template = default_template(sex=sex)  # a bad sex fails here, before any work
+    bsip_sex = bsip_sex or sex or "male"
     _bsv.RegisterParams(**register_params)  # bad registration parameters fail here, before any work
     cap = Path(capture_dir)
     out = Path(out_dir)
@@ -495,6 +510,8 @@ def process(
                      "upper_arm_points_relabelled_torso": arm_relabelled}
     vols["joints_m"] = {name: j.to_json() for name, j in joints.items()}
     vols["warnings"] = landmark_warnings
+    vols["template"] = {"kind": "default" if template is None else template_kind(as_mesh(template)) or "custom",
+                        "sex": sex}
     out.mkdir(parents=True, exist_ok=True)
     files = {"cloud": out / "cloud.ply", "fitted": out / "fitted.ply", "volumes": out / "volumes.json",
              "report": out / "report.html"}
@@ -594,6 +611,8 @@ def demo(
     steps.run("scan", f"virtual two-camera capture ({condition}{where}) into {cap}",
               lambda: scan(subj.body.mesh(), condition, seed, images=cap, overwrite=overwrite, room=room))
     truth = subj.volumes_l()
+    if process_params.get("template") is None:  # the subject's sex, as a clinic enters it
+        process_params.setdefault("sex", subj.sex)
     res = process(cap, cap / "calibration.json", out, segmentation=segmentation, progress=progress,
                   overwrite=overwrite, truth=truth,
                   title=f"BSV demo: synthetic subject {subject} (seed {seed}, {condition}, {segmentation} segmentation)",
@@ -638,6 +657,10 @@ def main_process(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--segmentation", choices=SEGMENTATIONS, default="camera",
                     help="camera: MediaPipe on the colour images (default); oracle: the virtual scanner's labels.png")
     ap.add_argument("--template", help="template mesh (PLY/OBJ with segment labels); default: the embedded one")
+    ap.add_argument("--sex", choices=SEXES,
+                    help="the subject's sex: the embedded template of that sex (MakeHuman's female or male body; "
+                         "the torso and thighs fit better) and, with --bsip, de Leva's column; default: the "
+                         "average template")
     ap.add_argument("--keep-extremities", action="store_true", help="keep head, hand and foot points in the cloud")
     ap.add_argument("--sor", action="store_true",
                     help="the paper's statistical outlier removal before merging (off by default: it erodes the "
@@ -678,7 +701,7 @@ def main_process(argv: Sequence[str] | None = None) -> int:
                       overwrite=a.overwrite, keep_extremities=a.keep_extremities, sor=a.sor, sor_k=a.sor_k,
                       sor_std_ratio=a.sor_std, remove_floor=not a.keep_floor, isolate_person=not a.no_isolate,
                       cloud_params=_register_args(a.cloud_param, "--cloud-param"),
-                      refine_floor=a.refine_floor, keypoints=a.keypoints,
+                      refine_floor=a.refine_floor, keypoints=a.keypoints, sex=a.sex,
                       **_bsip_args(a), **_register_args(a.param))
         _print_process(res)
         return 0
@@ -694,8 +717,9 @@ def _add_bsip_options(ap: argparse.ArgumentParser) -> None:
     ap.add_argument("--bsip-density", metavar="KG_M3|JSON",
                     help="with --bsip: one density in kg/m^3, or a JSON mapping by segment or kind, e.g. "
                          "'{\"thigh\": 1060}' (default: Dempster 1955 via Winter 2009 Table 4.1)")
-    ap.add_argument("--bsip-sex", choices=("male", "female"), default="male",
-                    help="with --bsip: the column of de Leva's (1996) table to compare with (default male)")
+    ap.add_argument("--bsip-sex", choices=SEXES,
+                    help="with --bsip: the column of de Leva's (1996) table to compare with (default: --sex, "
+                         "else male)")
 
 
 def _bsip_args(a: argparse.Namespace) -> dict[str, Any]:

@@ -596,7 +596,7 @@ def _documents(result: Any, out_dir: PathLike, title: str, segmentations: Mappin
                   else '<p class="note">Not measured.</p>')
     bsip_html = _bsip_html(result.bsip) if getattr(result, "bsip", None) is not None else ""
     quality = quality_html(reg)
-    definitions = definitions_html(reg)
+    definitions = definitions_html(vols)
     tech = _technical_html(result, vols)
     notes = "".join(f"<li>{html.escape(str(n))}</li>" for n in vols.get("notes", []) or [])
 
@@ -647,12 +647,16 @@ Volumes in litres, masses in kilograms; 95 % intervals give the range the true v
     return {target: page(target) for target in targets}
 
 
-def definitions_html(reg: dict[str, Any]) -> str:
+def definitions_html(vols: dict[str, Any]) -> str:
     """What bounds each segment (:mod:`bsv.anatomy`): the joint loops between segments, as measured on the
-    template, and how this result's boundaries were placed (its label source)."""
+    template, the template this result was fitted with and how its boundaries were placed (its label
+    source), from a volumes report."""
+    reg = vols.get("registration") or {}
     source = str((reg.get("params") or {}).get("labels", ""))
     how = anatomy.LABEL_SOURCE_TEXT.get(source)
+    kind = (vols.get("template") or {}).get("kind")
     lead = (f"Segment boundaries in this result: {html.escape(how)}. " if how else "")
+    lead += (f"Template: {html.escape(anatomy.TEMPLATE_TEXT.get(kind, str(kind)))}. " if kind else "")
     rows = [[html.escape(c) for c in r] for r in anatomy.boundary_rows()]
     return ("<h2>Segment definitions</h2>"
             f'<p class="note">{lead}Each boundary is a closed loop of the body surface at a joint (the '

@@ -25,6 +25,9 @@ TRUNK_LIMBS: tuple[str, ...] = tuple(SEGMENT_NAMES[i] for i in _bsv.TRUNK_LIMBS)
 EXTREMITIES: tuple[str, ...] = tuple(SEGMENT_NAMES[i] for i in _bsv.EXTREMITIES)
 #: Palette colour (sRGB) per segment id, what the Rust writers put in PLY files: (15, 3) uint8.
 PALETTE: npt.NDArray[np.uint8] = np.array(_bsv.PALETTE, dtype=np.uint8)
+#: A subject's sex as the sexed templates (:func:`bsv.default_template`) and de Leva's inertial parameters
+#: (:mod:`bsv.biomech`) take it.
+SEXES: tuple[str, ...] = ("male", "female")
 
 
 FloatArray = npt.NDArray[np.float64]

@@ -64,9 +64,10 @@ def test_the_design_notes_hold_the_generated_tables() -> None:
 
 
 def test_the_report_says_how_this_results_boundaries_were_placed() -> None:
-    tpl = report.definitions_html({"params": {"labels": "template"}})
-    cloud = report.definitions_html({"params": {"labels": "cloud"}})
+    tpl = report.definitions_html({"registration": {"params": {"labels": "template"}}, "template": {"kind": "female"}})
+    cloud = report.definitions_html({"registration": {"params": {"labels": "cloud"}}})
     assert "same anatomical loop on every subject" in tpl and "nearest measured point" in cloud
+    assert "Template: the female MakeHuman body" in tpl and "Template:" not in cloud
     assert tpl.count("<tr>") == len(anatomy.BOUNDARIES) + 1
     assert "through the armpit" in tpl and "centroid +38 mm" in tpl
     assert "Segment boundaries in this result" not in report.definitions_html({})

@@ -12,7 +12,7 @@ import bsv
 from bsv import _bsv
 from bsv.bodies.joints import rig_joints
 from bsv.bodies.model import Phenotype
-from bsv.bodies.template import default_pose, templates
+from bsv.bodies.template import TEMPLATE_GENDER, default_pose, templates
 from bsv.bodies.template_joints import template_joints
 from bsv.keypoints import as_keypoints, joint_rings, template_kind
 
@@ -42,8 +42,9 @@ def assert_same_json(a: object, b: object, where: str = "") -> None:
 
 
 def test_embedded_rings_are_the_generator_output_and_hit_the_rig_joints() -> None:
-    centres = rig_joints(Phenotype(gender=0.5), default_pose())
-    made = {name: template_joints(m, centres) for name, m in templates().items()}
+    by_gender = {g: rig_joints(Phenotype(gender=g), default_pose()) for g in set(TEMPLATE_GENDER.values())}
+    made = {name: template_joints(m, by_gender[TEMPLATE_GENDER[name]]) for name, m in templates().items()}
+    centres = by_gender[0.5]
     # regenerate if this fails (numbers to 1e-12: numpy releases may round the last bit differently)
     assert_same_json(json.loads(ASSET.read_text())["templates"], json.loads(json.dumps(made)))
     t = bsv.default_template()
@@ -55,6 +56,23 @@ def test_embedded_rings_are_the_generator_output_and_hit_the_rig_joints() -> Non
         assert np.linalg.norm(np.asarray(w) @ t.vertices[idx] - centres[name]) < 1e-9, name
     moved = bsv.Mesh(t.vertices + 0.001, t.faces, t.vertex_labels, t.face_labels)
     assert template_kind(moved) is None and joint_rings(moved) is None
+
+
+@pytest.mark.parametrize(("sex", "gender"), [("female", 0.0), ("male", 1.0)])
+def test_the_sexed_templates_carry_their_own_rig_joints(sex: str, gender: float) -> None:
+    t = bsv.default_template(sex=sex)
+    assert template_kind(t) == sex
+    rings = joint_rings(t)
+    assert rings is not None and len(rings) == 10
+    centres = rig_joints(Phenotype(gender=gender), default_pose())
+    for name, idx, w in rings:
+        assert np.linalg.norm(np.asarray(w) @ t.vertices[idx] - centres[name]) < 1e-9, name
+    d = bsv.default_template()
+    assert np.array_equal(t.faces, d.faces) and np.array_equal(t.vertex_labels, d.vertex_labels)
+    with pytest.raises(bsv.InputError, match="sex 'other'"):
+        bsv.default_template(sex="other")
+    with pytest.raises(bsv.InputError, match="9 segments"):
+        bsv.default_template(full=True, sex=sex)
 
 
 def test_a_measured_knee_moves_the_template_knee(template_scan: bsv.PointCloud) -> None:
@@ -188,3 +206,13 @@ def test_select_joints_and_the_camera_paths_default_of_arm_joints(monkeypatch) -
             common.register_bsv(cloud, bsv.default_template(), params, keypoints=joints)
     assert seen[0] == arms and seen[1] == joints and seen[2] is None
     assert sorted(seen[3]) == ["knee_l", "knee_r"]  # type: ignore[arg-type]
+
+
+def test_process_takes_a_sex_or_a_template_not_both(tmp_path: Path) -> None:
+    from bsv import pipeline
+
+    with pytest.raises(bsv.InputError, match="sex or template"):
+        pipeline.process(tmp_path, None, tmp_path / "out", sex="female", template=bsv.default_template())
+    with pytest.raises(bsv.InputError, match="sex 'x'"):
+        pipeline.process(tmp_path, None, tmp_path / "out", sex="x")
+    assert not (tmp_path / "out").exists()

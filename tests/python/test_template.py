@@ -30,7 +30,9 @@ def built():
 
 @pytest.mark.parametrize("name,labels", [("template", {2, 3, 4, 5, 6, 9, 10, 11, 12}),
                                          ("template_fine", {2, 3, 4, 5, 6, 9, 10, 11, 12}),
-                                         ("template_full", set(range(1, 15)))])
+                                         ("template_full", set(range(1, 15))),
+                                         ("template_female", {2, 3, 4, 5, 6, 9, 10, 11, 12}),
+                                         ("template_male", {2, 3, 4, 5, 6, 9, 10, 11, 12})])
 def test_shipped_template_is_watertight_outward_labelled(name, labels):
     v, f, vl, fl = read_ply(TEMPLATES / f"{name}.ply")
     assert edges_closed(f)

@@ -17,8 +17,9 @@ pub struct Args {
     cloud: PathBuf,
     /// Template mesh (PLY/OBJ, closed, labelled). Default: the embedded template (see --template-kind).
     template: Option<PathBuf>,
-    /// Embedded template used when TEMPLATE is not given: default, fine or full.
-    #[arg(long, default_value = "default", value_parser = ["default", "fine", "full"])]
+    /// Embedded template used when TEMPLATE is not given: default, fine, full, or female / male (the
+    /// default mesh at MakeHuman's female or male end: the torso and thighs of that sex fit better).
+    #[arg(long, default_value = "default", value_parser = TemplateKind::NAMES)]
     template_kind: String,
     /// Write the fitted mesh here (PLY with labels and palette colours, or OBJ with segment groups).
     #[arg(short, long, value_name = "FITTED")]

@@ -11,8 +11,9 @@ pub struct Args {
     /// Output file, .ply (labels and palette colours) or .obj (segment groups).
     #[arg(short, long, default_value = "template.ply")]
     output: PathBuf,
-    /// Which template: default (9 segments, 4,177 vertices), fine (subdivided, 16,702), full (14 segments).
-    #[arg(long, default_value = "default", value_parser = ["default", "fine", "full"])]
+    /// Which template: default (9 segments, 4,177 vertices), fine (subdivided, 16,702), full (14 segments),
+    /// female or male (the default mesh at MakeHuman's female or male end of the gender macro).
+    #[arg(long, default_value = "default", value_parser = TemplateKind::NAMES)]
     kind: String,
     /// Shorthand for --kind full.
     #[arg(long)]

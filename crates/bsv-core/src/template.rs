@@ -6,6 +6,8 @@ use crate::TriMesh;
 static DEFAULT_PLY: &[u8] = include_bytes!("../../../assets/template/template.ply");
 static FINE_PLY: &[u8] = include_bytes!("../../../assets/template/template_fine.ply");
 static FULL_PLY: &[u8] = include_bytes!("../../../assets/template/template_full.ply");
+static FEMALE_PLY: &[u8] = include_bytes!("../../../assets/template/template_female.ply");
+static MALE_PLY: &[u8] = include_bytes!("../../../assets/template/template_male.ply");
 static JOINTS_JSON: &str = include_str!("../../../assets/template/template_joints.json");
 
 /// Which embedded template.
@@ -18,17 +20,27 @@ pub enum TemplateKind {
     Fine,
     /// The whole closed MakeHuman body with all 14 segments, 13,380 vertices.
     Full,
+    /// `Default`'s mesh (same vertices, faces and labels) at MakeHuman's female end of the gender macro.
+    Female,
+    /// `Default`'s mesh at MakeHuman's male end of the gender macro.
+    Male,
 }
 
 impl TemplateKind {
-    /// Parses "default", "fine" or "full".
+    /// Every kind, in the order of [`TemplateKind::NAMES`].
+    pub const ALL: [TemplateKind; 5] =
+        [TemplateKind::Default, TemplateKind::Fine, TemplateKind::Full, TemplateKind::Female, TemplateKind::Male];
+    /// The kinds' names (command lines, Python): "default", "fine", "full", "female", "male".
+    pub const NAMES: [&'static str; 5] = ["default", "fine", "full", "female", "male"];
+
+    /// Parses one of [`TemplateKind::NAMES`].
     pub fn parse(s: &str) -> Option<TemplateKind> {
-        match s {
-            "default" => Some(TemplateKind::Default),
-            "fine" => Some(TemplateKind::Fine),
-            "full" => Some(TemplateKind::Full),
-            _ => None,
-        }
+        Self::NAMES.iter().position(|&n| n == s).map(|i| Self::ALL[i])
+    }
+
+    /// This kind's name in [`TemplateKind::NAMES`].
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
     }
 
     /// The key of this template in `template_joints.json`.
@@ -37,6 +49,8 @@ impl TemplateKind {
             TemplateKind::Default => "template",
             TemplateKind::Fine => "template_fine",
             TemplateKind::Full => "template_full",
+            TemplateKind::Female => "template_female",
+            TemplateKind::Male => "template_male",
         }
     }
 
@@ -46,6 +60,8 @@ impl TemplateKind {
             TemplateKind::Default => DEFAULT_PLY,
             TemplateKind::Fine => FINE_PLY,
             TemplateKind::Full => FULL_PLY,
+            TemplateKind::Female => FEMALE_PLY,
+            TemplateKind::Male => MALE_PLY,
         }
     }
 }
@@ -109,7 +125,13 @@ mod tests {
 
     #[test]
     fn embedded_templates_are_closed_and_labelled() {
-        for (kind, n_segments) in [(TemplateKind::Default, 9), (TemplateKind::Fine, 9), (TemplateKind::Full, 14)] {
+        for (kind, n_segments) in [
+            (TemplateKind::Default, 9),
+            (TemplateKind::Fine, 9),
+            (TemplateKind::Full, 14),
+            (TemplateKind::Female, 9),
+            (TemplateKind::Male, 9),
+        ] {
             let m = template(kind).expect("embedded template parses");
             assert!(edge_map(&m.triangles).values().all(|e| e.faces.len() == 2), "{kind:?} closed");
             let labels = m.vertex_labels.as_ref().expect("vertex labels");
@@ -123,7 +145,13 @@ mod tests {
 
     #[test]
     fn joint_rings_reproduce_their_centres_on_each_template() {
-        for (kind, n_joints) in [(TemplateKind::Default, 10), (TemplateKind::Fine, 10), (TemplateKind::Full, 12)] {
+        for (kind, n_joints) in [
+            (TemplateKind::Default, 10),
+            (TemplateKind::Fine, 10),
+            (TemplateKind::Full, 12),
+            (TemplateKind::Female, 10),
+            (TemplateKind::Male, 10),
+        ] {
             let m = template(kind).expect("embedded template parses");
             let rings = template_joints(kind);
             assert_eq!(rings.len(), n_joints, "{kind:?}");
@@ -134,6 +162,21 @@ mod tests {
                 let d = crate::geometry::sub(p, r.centre);
                 assert!(crate::geometry::dot(d, d).sqrt() < 1e-6, "{kind:?} {} off by {d:?}", r.name);
             }
+        }
+    }
+
+    #[test]
+    fn the_sexed_templates_share_the_default_mesh_and_names_round_trip() {
+        for k in TemplateKind::ALL {
+            assert_eq!(TemplateKind::parse(k.name()), Some(k));
+        }
+        assert_eq!(TemplateKind::parse("neutral"), None);
+        let d = template(TemplateKind::Default).expect("default");
+        for kind in [TemplateKind::Female, TemplateKind::Male] {
+            let m = template(kind).expect("sexed template");
+            assert_eq!(m.triangles, d.triangles, "{kind:?}");
+            assert_eq!(m.vertex_labels, d.vertex_labels, "{kind:?}");
+            assert_ne!(m.vertices, d.vertices, "{kind:?}");
         }
     }
 }

@@ -116,25 +116,35 @@ fn volumes(
     Ok(PyVolumeReport { inner })
 }
 
-/// The embedded template (9 segments, or 14 with `full`).
+/// The embedded template (9 segments, or 14 with `full`), or the one named `kind` (`TemplateKind::NAMES`).
 #[pyfunction]
-#[pyo3(signature = (full=false))]
-fn default_template<'py>(py: Python<'py>, full: bool) -> PyResult<Bound<'py, PyTuple>> {
-    let kind = if full { TemplateKind::Full } else { TemplateKind::Default };
+#[pyo3(signature = (full=false, kind=None))]
+fn default_template<'py>(py: Python<'py>, full: bool, kind: Option<&str>) -> PyResult<Bound<'py, PyTuple>> {
+    let kind = match kind {
+        Some(k) => parse_kind(k)?,
+        None if full => TemplateKind::Full,
+        None => TemplateKind::Default,
+    };
     let mesh = template(kind).map_err(py_err)?;
     mesh_to(py, &mesh)
 }
 
-/// The joint rings of the embedded template `kind` ("default", "fine" or "full"): a list of
+/// `kind` as a template kind, or a ValueError naming the accepted ones.
+fn parse_kind(kind: &str) -> PyResult<TemplateKind> {
+    TemplateKind::parse(kind).ok_or_else(|| {
+        pyo3::exceptions::PyValueError::new_err(format!(
+            "template kind {kind:?}: expected one of {:?}",
+            TemplateKind::NAMES
+        ))
+    })
+}
+
+/// The joint rings of the embedded template `kind` (`TemplateKind::NAMES`): a list of
 /// `(name, vertex indices, weights, centre)`, sorted by name.
 #[pyfunction]
 #[allow(clippy::type_complexity)]
 fn template_joints(kind: &str) -> PyResult<Vec<(String, Vec<usize>, Vec<f64>, [f64; 3])>> {
-    let Some(k) = TemplateKind::parse(kind) else {
-        return Err(pyo3::exceptions::PyValueError::new_err(format!(
-            "template kind {kind:?}: expected \"default\", \"fine\" or \"full\""
-        )));
-    };
+    let k = parse_kind(kind)?;
     Ok(bsv_core::template::template_joints(k).into_iter().map(|r| (r.name, r.vertices, r.weights, r.centre)).collect())
 }
 

@@ -62,12 +62,21 @@ def cloud_far_pct(cloud: PointCloud, truth: Mesh) -> tuple[float, float]:
     return float(np.mean(d > near) * 100.0), float(np.mean(d > far) * 100.0)
 
 
-def load_template(name: str) -> Mesh:
-    """``default`` (9 segments, 4,177 vertices), ``fine`` (its midpoint subdivision) or a mesh file path."""
+#: ``--template`` value that takes each subject's sex's embedded template (:func:`bsv.default_template`).
+SEX_TEMPLATE = "sex"
+
+
+def load_template(name: str, sex: str | None = None) -> Mesh:
+    """``default`` (9 segments, 4,177 vertices), ``fine`` (its midpoint subdivision), ``sex`` (the template of
+    the subject's ``sex``, as ``bsv process --sex`` takes it) or a mesh file path."""
     from .. import default_template, read_mesh
 
     if name == "default":
         return default_template()
+    if name == SEX_TEMPLATE:
+        if sex is None:
+            raise BenchError("--template sex needs the subject's sex")
+        return default_template(sex=sex)
     if name == "fine":
         from ..bodies.template import subdivide_midpoint
 
@@ -77,7 +86,7 @@ def load_template(name: str) -> Mesh:
         return subdivide_midpoint(t)
     p = Path(name)
     if not p.is_file():
-        raise BenchError(f"template {name!r}: use 'default', 'fine' or the path of a labelled PLY/OBJ mesh")
+        raise BenchError(f"template {name!r}: use 'default', 'fine', 'sex' or the path of a labelled PLY/OBJ mesh")
     return read_mesh(p)
 
 

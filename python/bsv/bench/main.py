@@ -81,7 +81,9 @@ def parser() -> argparse.ArgumentParser:
                    "cloud built with it again and report the intervals with the refined covariance next to the "
                    "paper's, and the floor before and after (a board scan and a second registration per "
                    "calibrated run: ~1.5 s each)")
-    s.add_argument("--template", default="default", help="default, fine or a labelled mesh path")
+    s.add_argument("--template", default="default",
+                   help="default, fine, sex (each subject's sex's template, as bsv process --sex) or a labelled "
+                        "mesh path")
     s.add_argument("--no-local", action="store_true", help="cohort without MakeHuman local modifiers")
     s.add_argument("--arm-down", type=arm_range_arg, default=ARM_DOWN_RANGE_DEG, metavar="LOW,HIGH",
                    help=f"{arm_down_help()}; the camera path's shoulder boundary moves with the arms")

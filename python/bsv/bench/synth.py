@@ -348,7 +348,7 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] |
     info = {"subject": name, **s.info()}
     info["body_seconds"] = time.perf_counter() - t0
     truth = {k: float(v) for k, v in s.volumes_l().items()}
-    template = load_template(cfg.template)
+    template = load_template(cfg.template, s.sex)
     mesh = s.body.mesh()
     from ..bodies.joints import rig_joints
 

@@ -25,10 +25,11 @@ from .. import _bsv
 from ..errors import BsipError
 from ..interop import as_mesh
 from ..types import SEGMENT_IDS, Mesh
+from ..types import SEXES as TYPES_SEXES
 from .tables import DE_LEVA, DE_LEVA_SOURCE, DEMPSTER_DENSITY_KG_M3, DENSITY_SOURCE, JOINTS, DeLeva, kind
 
-#: Sexes of the de Leva table.
-SEXES = ("male", "female")
+#: Sexes of the de Leva table (one table for the package: :data:`bsv.types.SEXES`).
+SEXES = TYPES_SEXES
 
 Density = float | Mapping[str, float] | None
 

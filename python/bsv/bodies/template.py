@@ -1,7 +1,8 @@
 """The default registration templates: the MakeHuman body of average characteristics (gender 0.5, other
 macros at their defaults) in the default A-pose, with 14 segments (``full``) or with head, hands and feet
-removed and every hole capped (the paper's template, 9 segments), and a finer, midpoint-subdivided
-version of the latter. Written as labelled PLY and OBJ into assets/template/.
+removed and every hole capped (the paper's template, 9 segments), a finer, midpoint-subdivided version of
+the latter, and the 9-segment template at MakeHuman's female and male ends of the gender macro
+(``template_female``, ``template_male``: chosen by ``bsv process --sex``). Written as labelled PLY and OBJ into assets/template/.
 
 Run ``python -m bsv.bodies.template OUT_DIR --overwrite`` (or scripts/make_assets.py --templates) to regenerate.
 """
@@ -156,17 +157,25 @@ def default_pose() -> Pose:
     return Pose()
 
 
+#: MakeHuman's gender macro of each template (0 female, 1 male; every other macro at its default).
+TEMPLATE_GENDER: dict[str, float] = {"template": 0.5, "template_full": 0.5, "template_fine": 0.5,
+                                     "template_female": 0.0, "template_male": 1.0}
+
+
 def templates() -> dict[str, Mesh]:
-    """The default templates: 'template' (9 segments), 'template_full' (14), 'template_fine' (9, x4 faces)."""
-    body = make_body(Phenotype(gender=0.5), default_pose())
-    full = body.mesh()
-    check_watertight(full.vertices, full.faces)
-    trunk = trunk_limbs_mesh(full)
-    return {"template": trunk, "template_full": full, "template_fine": subdivide_midpoint(trunk)}
+    """The default templates: 'template' (9 segments), 'template_full' (14), 'template_fine' (9, x4 faces),
+    and the 9-segment 'template_female' and 'template_male' (the same mesh at MakeHuman's female and male
+    ends of the gender macro: the same vertices, faces and labels, another shape)."""
+    full = {g: make_body(Phenotype(gender=g), default_pose()).mesh() for g in sorted(set(TEMPLATE_GENDER.values()))}
+    for m in full.values():
+        check_watertight(m.vertices, m.faces)
+    trunk = {g: trunk_limbs_mesh(m) for g, m in full.items()}
+    return {"template": trunk[0.5], "template_full": full[0.5], "template_fine": subdivide_midpoint(trunk[0.5]),
+            "template_female": trunk[0.0], "template_male": trunk[1.0]}
 
 
 #: Names of the default templates (each written as NAME.ply and NAME.obj).
-TEMPLATE_NAMES = ("template", "template_full", "template_fine")
+TEMPLATE_NAMES = ("template", "template_full", "template_fine", "template_female", "template_male")
 #: The joint rings of every template (:mod:`bsv.bodies.template_joints`), written beside them.
 JOINTS_FILE = "template_joints.json"
 
@@ -185,14 +194,15 @@ def write_templates(out_dir: str | Path, overwrite: bool = False) -> dict[str, t
     counts = {}
     for name, m in built.items():
         (out / f"{name}.ply").write_bytes(ply_bytes(m.vertices, m.faces, m.vertex_labels, m.face_labels))
-        note = (f"BSV {name}: MakeHuman (CC0) gender 0.5, default macros, A-pose; metres, Y up, faces +Z.\n"
+        note = (f"BSV {name}: MakeHuman (CC0) gender {TEMPLATE_GENDER[name]:g}, default macros, A-pose; metres, Y up, "
+                "faces +Z.\n"
                 f"{len(m.vertices)} vertices, {len(m.faces)} triangles. Regenerate: python -m bsv.bodies.template")
         (out / f"{name}.obj").write_text(obj_text(m.vertices, m.faces, _face_labels(m), note))
         counts[name] = (len(m.vertices), len(m.faces))
-    centres = rig_joints(Phenotype(gender=0.5), default_pose())
+    centres = {g: rig_joints(Phenotype(gender=g), default_pose()) for g in set(TEMPLATE_GENDER.values())}
     doc = {"about": "Joint centres of each template as convex combinations of its vertices (bsv.bodies.template_joints;"
                     " the MakeHuman rig's bone heads). Regenerate: python -m bsv.bodies.template",
-           "templates": {name: template_joints(m, centres) for name, m in built.items()}}
+           "templates": {name: template_joints(m, centres[TEMPLATE_GENDER[name]]) for name, m in built.items()}}
     (out / JOINTS_FILE).write_text(json.dumps(doc, indent=1) + "\n")
     return counts
 

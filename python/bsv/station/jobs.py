@@ -25,7 +25,8 @@ from typing import Any
 
 from sqlalchemy import select
 
-from .models import Job, Result, Session, utcnow
+from ..types import SEXES
+from .models import Job, Result, Session, Subject, utcnow
 
 log = logging.getLogger("bsv.station")
 
@@ -146,7 +147,6 @@ def run_job(db_url: str, data_dir: str, job_id: int) -> None:
         try:
             with factory() as db:
                 from .charts import subject_chart
-                from .models import Subject
 
                 subj = db.get(Subject, subject_id)
                 if subj is not None:
@@ -232,14 +232,18 @@ def _process(data: Path, cap: Path, calib: Path, session_id: int, params: dict[s
     tmp, final = new_dir(data, RESULTS)
     tmp_dirs.append(tmp)
     seg = str(params.get("segmentation", "camera"))
+    with factory() as db:  # the subject's recorded sex picks the template of that sex ("other": the average one)
+        ses = db.get(Session, session_id)
+        subj = db.get(Subject, ses.subject_id) if ses is not None else None
+        sex = subj.sex if subj is not None and subj.sex in SEXES else None
     writer = _StepWriter(update, PROCESS_STEPS)
     with contextlib.redirect_stdout(writer):
-        res = process(cap, calib, tmp, segmentation=seg, progress=True, title="BSV Station report")
+        res = process(cap, calib, tmp, segmentation=seg, progress=True, title="BSV Station report", sex=sex)
     tmp.rename(final)
     tmp_dirs.remove(tmp)
     with factory() as db:
         r = Result(session_id=session_id, volumes=res.volumes, report_dir=str(final.relative_to(data)),
-                   software_version=__version__, operator=operator, parameters={"segmentation": seg})
+                   software_version=__version__, operator=operator, parameters={"segmentation": seg, "sex": sex})
         db.add(r)
         db.commit()
         return int(r.id)

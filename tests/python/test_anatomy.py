@@ -71,3 +71,5 @@ def test_the_report_says_how_this_results_boundaries_were_placed() -> None:
     assert tpl.count("<tr>") == len(anatomy.BOUNDARIES) + 1
     assert "through the armpit" in tpl and "centroid +38 mm" in tpl
     assert "Segment boundaries in this result" not in report.definitions_html({})
+    pdf = report.definitions_html({"registration": {"params": {"labels": "template"}}}, "pdf")
+    assert "<table" not in pdf and "knee" in pdf and "same anatomical loop" in pdf

@@ -123,15 +123,18 @@ mod tests {
     use super::*;
     use crate::topology::edge_map;
 
+    /// Every embedded template with its segment and joint-ring counts.
+    const EXPECTED: [(TemplateKind, usize, usize); 5] = [
+        (TemplateKind::Default, 9, 10),
+        (TemplateKind::Fine, 9, 10),
+        (TemplateKind::Full, 14, 12),
+        (TemplateKind::Female, 9, 10),
+        (TemplateKind::Male, 9, 10),
+    ];
+
     #[test]
     fn embedded_templates_are_closed_and_labelled() {
-        for (kind, n_segments) in [
-            (TemplateKind::Default, 9),
-            (TemplateKind::Fine, 9),
-            (TemplateKind::Full, 14),
-            (TemplateKind::Female, 9),
-            (TemplateKind::Male, 9),
-        ] {
+        for (kind, n_segments, _) in EXPECTED {
             let m = template(kind).expect("embedded template parses");
             assert!(edge_map(&m.triangles).values().all(|e| e.faces.len() == 2), "{kind:?} closed");
             let labels = m.vertex_labels.as_ref().expect("vertex labels");
@@ -145,13 +148,7 @@ mod tests {
 
     #[test]
     fn joint_rings_reproduce_their_centres_on_each_template() {
-        for (kind, n_joints) in [
-            (TemplateKind::Default, 10),
-            (TemplateKind::Fine, 10),
-            (TemplateKind::Full, 12),
-            (TemplateKind::Female, 10),
-            (TemplateKind::Male, 10),
-        ] {
+        for (kind, _, n_joints) in EXPECTED {
             let m = template(kind).expect("embedded template parses");
             let rings = template_joints(kind);
             assert_eq!(rings.len(), n_joints, "{kind:?}");

@@ -38,34 +38,33 @@ def kind_name(segment_kind: str) -> str:
 
 @dataclass(frozen=True)
 class Boundary:
-    """One joint's boundary loop between two segment kinds (proximal first)."""
+    """One joint's boundary loop (its two segments: :data:`bsv.biomech.tables.JOINTS`)."""
 
     #: Joint kind (``shoulder``, ``hip``, ...; :data:`bsv.biomech.tables.JOINTS` without the side).
     joint: str
-    #: The proximal and the distal segment kind.
-    segments: tuple[str, str]
     #: Where the loop runs (checked against :func:`measure_boundaries` by the tests).
     text: str
+
+    @property
+    def segments(self) -> tuple[str, str]:
+        """The two segment kinds the loop separates, in :data:`bsv.biomech.tables.JOINTS`'s order."""
+        a, b = JOINTS[self.joint if self.joint in JOINTS else f"{self.joint}_l"]
+        return kind(a), kind(b)
 
 
 #: The seven boundaries by joint kind.
 BOUNDARIES: dict[str, Boundary] = {b.joint: b for b in (
-    Boundary("neck", ("torso", "head"),
-             "around the base of the neck (the neck goes with the head, the clavicles with the torso)"),
-    Boundary("shoulder", ("torso", "upper_arm"),
-             "an oblique loop from the top of the shoulder, medial to and above the shoulder joint centre, "
+    Boundary("neck", "around the base of the neck (the neck goes with the head, the clavicles with the torso)"),
+    Boundary("shoulder", "an oblique loop from the top of the shoulder, medial to and above the shoulder joint centre, "
              "down through the armpit: the deltoid goes with the upper arm"),
-    Boundary("elbow", ("upper_arm", "forearm"),
-             "around the elbow near its joint centre, higher on the inner and back side"),
-    Boundary("wrist", ("forearm", "hand"), "around the wrist at its joint centre"),
-    Boundary("hip", ("torso", "thigh"),
-             "an oblique loop from the side of the hip, level with the hip joint centre, through the groin at "
+    Boundary("elbow", "around the elbow near its joint centre, higher on the inner and back side"),
+    Boundary("wrist", "around the wrist at its joint centre"),
+    Boundary("hip", "an oblique loop from the side of the hip, level with the hip joint centre, through the groin at "
              "the front and across the buttock at the back to the crotch on the inner side: the buttock's "
              "upper part goes with the torso"),
-    Boundary("knee", ("thigh", "shin"),
-             "around the knee just below its joint centre, lower at the front than at the back (the hollow "
+    Boundary("knee", "around the knee just below its joint centre, lower at the front than at the back (the hollow "
              "of the knee)"),
-    Boundary("ankle", ("shin", "foot"), "around the ankle above its joint centre, higher at the front than at the heel"),
+    Boundary("ankle", "around the ankle above its joint centre, higher at the front than at the heel"),
 )}
 
 #: How a result's segment boundaries were placed, by its label source (the registration's ``labels``).
@@ -79,9 +78,9 @@ LABEL_SOURCE_TEXT: dict[str, str] = {
 
 #: The templates a result can be fitted with (volumes.json ``template.kind``), in words.
 TEMPLATE_TEXT: dict[str, str] = {
-    "default": "the average MakeHuman body (no sex given)",
-    "female": "the female MakeHuman body (--sex female)",
-    "male": "the male MakeHuman body (--sex male)",
+    "default": "the average MakeHuman body",
+    "female": "the female MakeHuman body (the subject's sex)",
+    "male": "the male MakeHuman body (the subject's sex)",
     "fine": "the average MakeHuman body, subdivided",
     "full": "the average MakeHuman body with head, hands and feet",
     "custom": "a template given by the user",
@@ -90,8 +89,8 @@ TEMPLATE_TEXT: dict[str, str] = {
 
 def bounds(segment_kind: str) -> tuple[list[str], list[str]]:
     """The joint kinds at the proximal and at the distal end of a segment kind (from
-    :data:`bsv.biomech.tables.JOINTS`); the head and the torso have no proximal joint, their loops are all
-    listed as distal."""
+    :data:`bsv.biomech.tables.JOINTS`, whose pairs are (proximal, distal) but for the neck's (head, torso)):
+    the torso's neck loop is its proximal end, the head's is listed as distal."""
     prox: list[str] = []
     dist: list[str] = []
     for joint, (a, b) in JOINTS.items():
@@ -99,7 +98,7 @@ def bounds(segment_kind: str) -> tuple[list[str], list[str]]:
         if joint.endswith("_r"):
             continue
         if kind(b) == segment_kind:
-            (dist if segment_kind == "head" else prox).append(j)
+            prox.append(j)
         if kind(a) == segment_kind:
             dist.append(j)
     return prox, dist
@@ -114,8 +113,8 @@ def segment_rows() -> list[tuple[str, str, str]]:
         if prox:
             ends = ", ".join(f"{j} loop ({where})" for joints, where in ((prox, "proximal"), (dist, "distal"))
                              for j in joints)
-        else:  # the head and the torso: the loops around them
-            ends = (", ".join(dist[:-1]) + " and " if len(dist) > 1 else "") + dist[-1] + " loop" + "s" * (len(dist) > 1)
+        else:  # the head: its one loop
+            ends = ", ".join(f"{j} loop" for j in dist)
         lev = DE_LEVA["male"][k]
         rows.append((kind_name(k), ends, f"{lev.origin} to {lev.other}"))
     return rows

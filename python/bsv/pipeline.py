@@ -387,8 +387,10 @@ def process(
     ``bsip_density``, de Leva's values for ``bsip_sex``, default ``sex``, else male): bsip.json, bsip.csv
     and model.osim (OpenSim).
 
-    ``sex`` ("female" or "male", ``--sex``): the embedded template of that sex (:func:`bsv.default_template`;
-    the camera path's torso and thighs fit better, ``docs/DESIGN.md``); None: the average template.
+    ``sex`` ("female" or "male", ``--sex``): when the result keeps the template's segments (the camera path)
+    the embedded template of that sex (:func:`bsv.default_template`; the torso and thighs fit better,
+    ``docs/DESIGN.md``); with the cloud's labels the average template still (it fits the limbs better
+    there); None: the average template. volumes.json's ``template`` says which was fitted.
 
     ``refine_floor`` (``--refine-floor``): correct each camera's pitch, roll and height with the floor it
     sees (:func:`bsv.frontend.floorplane.refine_extrinsics`; the camera must see the floor) before building
@@ -403,8 +405,8 @@ def process(
     joints in the first iterations (``bsv.register``'s keypoint term): None (the default) the shoulders and
     wrists only (:data:`bsv.keypoints.CAMERA_KEYPOINT_KINDS`, where the measurements on the synthetic cohort
     say why), True (``--keypoints``) every joint, False (``--no-keypoints``) none."""
+    from . import default_template, write_mesh, write_point_cloud
     from . import register as bsv_register
-    from . import write_mesh, write_point_cloud
     from .frontend.capture import read_capture
     from .report import render_report, require_pdf, write_rendered
 
@@ -414,10 +416,11 @@ def process(
         err = InputError("sex chooses one of the embedded templates: give sex or template, not both")
         err.argument = "sex"
         raise err
-    if template is None and sex is not None:
-        from . import default_template
-
-        template = default_template(sex=sex)  # a bad sex fails here, before any work
+    if sex is not None and sex not in SEXES:
+        err = InputError(f"sex {sex!r}: give one of {', '.join(SEXES)}, or None for the average template")
+        err.argument = "sex"
+        raise err
+    template = None if template is None else as_mesh(template)  # a bad template fails here, before any work
     bsip_sex = bsip_sex or sex or "male"
     _bsv.RegisterParams(**register_params)  # bad registration parameters fail here, before any work
     cap = Path(capture_dir)
@@ -425,7 +428,7 @@ def process(
     _check_outputs(out, overwrite, cameras, bsip=bsip)
     require_pdf()  # report.pdf: WeasyPrint must be there before the work, not after it
     if bsip:
-        from .biomech import SEXES, densities
+        from .biomech import densities
 
         if bsip_sex not in SEXES:
             raise BsipError(f"bsip_sex must be one of {SEXES}, got {bsip_sex!r}")
@@ -487,6 +490,10 @@ def process(
     # Camera labels: an upper-arm patch far from the measured arm is the torso a hanging arm covers in one view.
     cloud, arm_relabelled = confine_cloud_upper_arms(cloud, joints if segmentation == "camera" else None)
     label_source = register_params.pop("labels", CAMERA_LABEL_SOURCE if segmentation == "camera" else None)
+    if template is None and sex is not None and label_source == "template":
+        # the template's own segments carried onto this sex's body; with the cloud's labels the average
+        # template fits the limbs better (benchmarks/BENCH.md, round 2 session 11)
+        template = default_template(sex=sex)
     measured = camera_joints(joints, keypoints)
     reg: Registration = steps.run(
         "register", "registering the template (ARAP)",
@@ -510,8 +517,7 @@ def process(
                      "upper_arm_points_relabelled_torso": arm_relabelled}
     vols["joints_m"] = {name: j.to_json() for name, j in joints.items()}
     vols["warnings"] = landmark_warnings
-    vols["template"] = {"kind": "default" if template is None else template_kind(as_mesh(template)) or "custom",
-                        "sex": sex}
+    vols["template"] = {"kind": "default" if template is None else template_kind(template) or "custom", "sex": sex}
     out.mkdir(parents=True, exist_ok=True)
     files = {"cloud": out / "cloud.ply", "fitted": out / "fitted.ply", "volumes": out / "volumes.json",
              "report": out / "report.html"}
@@ -656,11 +662,12 @@ def main_process(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("-o", "--out", required=True, help="output folder (cloud.ply, fitted.ply, volumes.json, report.html)")
     ap.add_argument("--segmentation", choices=SEGMENTATIONS, default="camera",
                     help="camera: MediaPipe on the colour images (default); oracle: the virtual scanner's labels.png")
-    ap.add_argument("--template", help="template mesh (PLY/OBJ with segment labels); default: the embedded one")
-    ap.add_argument("--sex", choices=SEXES,
-                    help="the subject's sex: the embedded template of that sex (MakeHuman's female or male body; "
-                         "the torso and thighs fit better) and, with --bsip, de Leva's column; default: the "
-                         "average template")
+    which = ap.add_mutually_exclusive_group()
+    which.add_argument("--template", help="template mesh (PLY/OBJ with segment labels); default: the embedded one")
+    which.add_argument("--sex", choices=SEXES,
+                       help="the subject's sex: with camera segmentation the embedded template of that sex "
+                            "(MakeHuman's female or male body; the torso and thighs fit better) and, with --bsip, "
+                            "de Leva's column; default: the average template")
     ap.add_argument("--keep-extremities", action="store_true", help="keep head, hand and foot points in the cloud")
     ap.add_argument("--sor", action="store_true",
                     help="the paper's statistical outlier removal before merging (off by default: it erodes the "
@@ -709,8 +716,9 @@ def main_process(argv: Sequence[str] | None = None) -> int:
     return run_command("bsv process", run)
 
 
-def _add_bsip_options(ap: argparse.ArgumentParser) -> None:
-    """``--bsip``, ``--bsip-density`` and ``--bsip-sex`` (``bsv process`` and ``bsv demo``)."""
+def _add_bsip_options(ap: argparse.ArgumentParser, sex_default: str = "--sex, else male") -> None:
+    """``--bsip``, ``--bsip-density`` and ``--bsip-sex`` (``bsv process`` and ``bsv demo``; ``sex_default``
+    says where ``--bsip-sex`` defaults from)."""
     ap.add_argument("--bsip", action="store_true",
                     help="also segment masses, centres of mass, inertia, joint centres and lengths: bsip.json, "
                          "bsip.csv (de Leva layout) and model.osim (OpenSim)")
@@ -718,8 +726,7 @@ def _add_bsip_options(ap: argparse.ArgumentParser) -> None:
                     help="with --bsip: one density in kg/m^3, or a JSON mapping by segment or kind, e.g. "
                          "'{\"thigh\": 1060}' (default: Dempster 1955 via Winter 2009 Table 4.1)")
     ap.add_argument("--bsip-sex", choices=SEXES,
-                    help="with --bsip: the column of de Leva's (1996) table to compare with (default: --sex, "
-                         "else male)")
+                    help=f"with --bsip: the column of de Leva's (1996) table to compare with (default: {sex_default})")
 
 
 def _bsip_args(a: argparse.Namespace) -> dict[str, Any]:
@@ -787,7 +794,7 @@ def main_demo(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--no-room", action="store_true",
                     help="render the subject alone on grey instead of in a clinic room (floor, walls)")
     ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT")
-    _add_bsip_options(ap)
+    _add_bsip_options(ap, "the synthetic subject's sex")
     ap.add_argument("--quiet", action="store_true", help="only the final table")
     a = ap.parse_args(list(argv) if argv is not None else None)
     from .exitcodes import run_command

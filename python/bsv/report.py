@@ -663,13 +663,14 @@ def definitions_html(vols: dict[str, Any], target: _Target = "html") -> str:
                 f'<p class="note">{lead}Each boundary is a closed loop of the body surface at a joint ({loops}); '
                 "where each loop runs: report.html, \"Segment definitions\".</p>")
     rows = [[html.escape(c) for c in r] for r in anatomy.boundary_rows()]
+    whose = ("The template's segments" if source != "cloud" else
+             "The template's segments (this result's boundaries follow the measured labels instead)")
     return ("<h2>Segment definitions</h2>"
-            f'<p class="note">{lead}Each boundary is a closed loop of the body surface at a joint (the '
-            "template's segments: each point belongs to the segment whose joints move it most). Where the loops "
-            "run:</p>"
+            f'<p class="note">{lead}{whose}: each boundary is a closed loop of the body surface at a joint, each '
+            "point belonging to the segment whose joints move it most. Where the loops run:</p>"
             + _table(["Boundary", "Between", "Where the loop runs",
-                      "On the template: mm from the joint centre along the limb (+ = towards the hand or foot)"],
-                     rows, cls="prose"))
+                      ("On the average template: mm from the joint centre along the limb (+ = towards the hand "
+                      "or foot)")], rows, cls="prose"))
 
 
 def _bsip_html(b: Any) -> str:

@@ -470,3 +470,13 @@ def test_timing_table_gives_the_median_and_the_peer_ratio_per_subject() -> None:
     ratio = next(line for line in lines if "trimesh / bsv" in line)
     # Subject s2's peer failed: the ratio is the median of 20x and 12x only.
     assert ratio.split("|")[3].strip() == "16.0x"
+
+
+def test_the_sex_template_follows_each_subject() -> None:
+    from bsv.bench.common import BenchError, load_template
+
+    female = load_template("sex", "female")
+    assert np.array_equal(female.vertices, bsv.default_template(sex="female").vertices)
+    assert not np.array_equal(female.vertices, load_template("default").vertices)
+    with pytest.raises(BenchError, match="needs the subject's sex"):
+        load_template("sex")

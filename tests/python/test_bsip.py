@@ -175,14 +175,16 @@ def test_demo_bsip_end_to_end(tmp_path: Path, capsys: pytest.CaptureFixture[str]
     from bsv.pipeline import main_demo
 
     out = tmp_path / "demo"
-    args = ["-o", str(out), "--segmentation", "oracle", "--no-room", "--quiet", "--bsip", "--bsip-sex", "female"]
+    # no --bsip-sex: de Leva's column follows the subject's sex (subject 0: female)
+    args = ["-o", str(out), "--segmentation", "oracle", "--no-room", "--quiet", "--bsip"]
     assert main_demo(args) == 0
     text = capsys.readouterr().out
     assert "rg long %" in text and "body-mass estimate" in text
     data = json.loads((out / "bsip.json").read_text())
     assert data["sex"] == "female"
-    # the demo enters the synthetic subject's sex (subject 0: female), which also picks the female template
-    assert json.loads((out / "volumes.json").read_text())["template"] == {"kind": "female", "sex": "female"}
+    # the demo enters the synthetic subject's sex (subject 0: female); with oracle labels (the cloud's) the
+    # average template is kept
+    assert json.loads((out / "volumes.json").read_text())["template"] == {"kind": "default", "sex": "female"}
     masses = [s["mass_kg"] for s in data["segments"].values()]
     assert sum(masses) == pytest.approx(data["body_mass_kg"], rel=1e-9)
     assert set(data["segments"]) == set(bsv.TRUNK_LIMBS)

@@ -302,9 +302,12 @@ def test_a_failed_camera_run_leaves_nothing_and_can_be_rerun(capture, tmp_path):
         pipeline.process(cap, cap / "calibration.json", out, segmentation="camera", progress=False,
                          schedule="m2p:0")
     assert not out.exists() or not any(out.rglob("*")), sorted(out.rglob("*"))
-    pipeline.process(cap, cap / "calibration.json", out, segmentation="camera", progress=False)
+    pipeline.process(cap, cap / "calibration.json", out, segmentation="camera", progress=False, sex="female")
     assert (out / "segmentation" / "front" / "mask.png").exists() and (out / "volumes.json").exists()
-    relabelled = json.loads((out / "volumes.json").read_text())["cloud"]["upper_arm_points_relabelled_torso"]
+    vols = json.loads((out / "volumes.json").read_text())
+    # the camera path keeps the template's segments: the sex picks the template of that sex
+    assert vols["template"] == {"kind": "female", "sex": "female"}
+    relabelled = vols["cloud"]["upper_arm_points_relabelled_torso"]
     assert isinstance(relabelled, int) and relabelled >= 0  # keypoints.confine_upper_arms ran on the camera labels
 
 

@@ -121,7 +121,16 @@ fn volumes(
 #[pyo3(signature = (full=false, kind=None))]
 fn default_template<'py>(py: Python<'py>, full: bool, kind: Option<&str>) -> PyResult<Bound<'py, PyTuple>> {
     let kind = match kind {
-        Some(k) => parse_kind(k)?,
+        Some(k) => {
+            let k = parse_kind(k)?;
+            if full && k != TemplateKind::Full {
+                return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                    "full=True and kind={:?} ask for two templates: give one",
+                    k.name()
+                )));
+            }
+            k
+        }
         None if full => TemplateKind::Full,
         None => TemplateKind::Default,
     };

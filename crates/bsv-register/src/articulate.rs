@@ -242,20 +242,25 @@ fn hops_from(vertex_labels: &[u8], weights: &CotanWeights, seed: impl Fn(u8) -> 
     d
 }
 
-/// The upper-arm vertices nearer (in mesh hops) to the torso than to the forearm: the shoulder
+/// The upper-arm vertices nearer (in mesh hops) to the torso than to their own forearm: the shoulder
 /// halves that [`articulate`] keeps rigid with their arm. Only an upper arm that has a pose in
-/// `poses` and reaches both a torso and a forearm vertex over the mesh is split; the others hold
+/// `poses` and reaches both a torso and its own side's forearm over the mesh is split; the others hold
 /// nothing (an unposed arm's held half would stay at zero displacement while its elbow follows the
 /// forearm; a template without forearms would hold its whole upper arm).
 pub fn shoulder_halves(vertex_labels: &[u8], weights: &CotanWeights, poses: &[SegmentPose]) -> Vec<bool> {
     let to_torso = hops_from(vertex_labels, weights, |l| l == TORSO);
-    let to_forearm = hops_from(vertex_labels, weights, |l| FOREARMS.contains(&l));
+    // Each arm's own forearm: a template without the left forearm must not reach the right one.
+    let to_forearm = [0, 1].map(|side| hops_from(vertex_labels, weights, |l| l == FOREARMS[side]));
     let posed = |l: u8| poses.iter().any(|p| p.label == l);
     vertex_labels
         .iter()
         .enumerate()
-        .map(|(i, &l)| {
-            UPPER_ARMS.contains(&l) && posed(l) && to_forearm[i] != usize::MAX && to_torso[i] < to_forearm[i]
+        .map(|(i, &l)| match UPPER_ARMS.iter().position(|&u| u == l) {
+            Some(side) => {
+                let f = to_forearm[side][i];
+                posed(l) && f != usize::MAX && to_torso[i] < f
+            }
+            None => false,
         })
         .collect()
 }
@@ -400,5 +405,8 @@ mod tests {
         // No forearm labels: the whole upper arm would be "nearer the torso"; hold nothing instead.
         let no_forearm: Vec<u8> = l.iter().map(|&x| if x == 5 { 7 } else { x }).collect();
         assert!(none(shoulder_halves(&no_forearm, &w, &[arm_up()])));
+        // Only the other side's forearm: not this arm's elbow.
+        let other_side: Vec<u8> = l.iter().map(|&x| if x == 5 { 6 } else { x }).collect();
+        assert!(none(shoulder_halves(&other_side, &w, &[arm_up()])));
     }
 }

@@ -257,6 +257,7 @@ def test_compare_export_session_and_result_files(station: tuple[TestClient, Any,
     flagged = re.findall(r'data-segment="(\w+)" data-significant="yes"', cmp.text)
     assert flagged == ["forearm_l"]
     assert "repeatability table" in cmp.text
+    assert 'id="template-mismatch"' not in cmp.text
     assert c.get(f"/subjects/{sid}/compare?a={s1}&b={s3}").status_code == 409
     assert c.get(f"/subjects/{sid}/compare?a={s1}&b={s4}").status_code == 404
     csv_text = c.get(f"/subjects/{sid}/export.csv").text.splitlines()
@@ -274,6 +275,10 @@ def test_compare_export_session_and_result_files(station: tuple[TestClient, Any,
     with app.state.factory() as db:
         actions = [e.action for e in db.scalars(select(AuditEvent))]
     assert {"view_compare", "export_csv", "export_pdf", "view_session", "queue_process"} <= set(actions)
+    # results fitted with different templates are flagged (a result without the record: the average one)
+    s5 = _session(app, sid, {**_volumes(1.0), "template": {"kind": "female", "sex": "female"}})
+    mixed = c.get(f"/subjects/{sid}/compare?a={s1}&b={s5}").text
+    assert 'id="template-mismatch"' in mixed and "default → female" in mixed
 
 
 def test_login_roles_and_csrf_off_localhost(tmp_path: Path) -> None:

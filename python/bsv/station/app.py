@@ -255,9 +255,12 @@ def create_app(config: StationConfig) -> FastAPI:
             raise HTTPException(409, "a session to compare has no result yet; process it first")
         changes = uncertainty.compare(sa.latest.volumes, sb.latest.volumes)
         label = uncertainty.source_label({s for c in changes for s in c.sources})
+        # a result without the record was fitted with the average template (before sexed templates)
+        kinds = [(r.volumes.get("template") or {}).get("kind", "default") for r in (sa.latest, sb.latest)]
         security.audit(db, who, "view_compare", f"subject:{subj.id}")
         db.commit()
-        return page(request, "compare.html", who, subject=subj, a=sa, b=sb, changes=changes, interval_label=label)
+        return page(request, "compare.html", who, subject=subj, a=sa, b=sb, changes=changes, interval_label=label,
+                    templates=kinds if kinds[0] != kinds[1] else None)
 
     @app.get("/subjects/{subject_id}/export.csv")
     def export_csv(db: Db, who: Who, subject_id: int) -> Response:

@@ -281,6 +281,65 @@ def test_compare_export_session_and_result_files(station: tuple[TestClient, Any,
     assert 'id="template-mismatch"' in mixed and "default → female" in mixed
 
 
+def test_history_shows_the_template_of_every_result(station: tuple[TestClient, Any, str],
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    """The CSV's template column, the subject page's and the PDF's template per result and the chart's
+    change marks: a result without the ``template`` record was fitted with the average ("default") one."""
+    import csv
+
+    c, app, tok = station
+    sid = _subject(c, tok)
+    female = {**_volumes(1.1), "template": {"kind": "female", "sex": "female"}}
+    s1, s2 = _session(app, sid, _volumes(1.0)), _session(app, sid, female)
+    _session(app, sid, None)  # no result: no template, left out of the chart's change marks
+    s4 = _session(app, sid, {**_volumes(1.2), "template": {"kind": "custom", "sex": None}})
+    text = c.get(f"/subjects/{sid}/export.csv").text
+    head, rows = next(csv.reader(io.StringIO(text))), list(csv.DictReader(io.StringIO(text)))
+    assert head[6:9] == ["software_version", "template", "operator"] and head[9] == "interval_source"
+    assert [(int(r["session_id"]), r["template"]) for r in rows] == [(s1, "default"), (s2, "female"), (s4, "custom")]
+    assert all(r["operator"] == "local" and r["software_version"] == "t" for r in rows)
+    page = c.get(f"/subjects/{sid}").text
+    assert re.findall(r'data-template="(\w+)"', page) == ["default", "female", "custom"]
+    assert page.count("(changed)") == 2 and 'id="template-change"' in page and "Dashed line" in page
+    weasyprint = pytest.importorskip("weasyprint")
+    rendered: list[str] = []
+    real_html = weasyprint.HTML
+
+    def html(string: str) -> Any:  # the PDF's HTML, kept to be read here
+        rendered.append(string)
+        return real_html(string=string)
+
+    monkeypatch.setattr(weasyprint, "HTML", html)
+    pdf = c.get(f"/subjects/{sid}/export.pdf")
+    assert pdf.status_code == 200 and pdf.content.startswith(b"%PDF")
+    assert re.search(r"<td>template</td><td>default</td><td>female \(changed\)</td><td>custom \(changed\)</td>",
+                     rendered[0])
+    # one template throughout: no change marked
+    other = _subject(c, tok, "P-002")
+    for vols in (_volumes(1.0), {**_volumes(1.0), "template": {"kind": "default", "sex": None}}):
+        _session(app, other, vols)
+    plain = c.get(f"/subjects/{other}").text
+    assert re.findall(r'data-template="(\w+)"', plain) == ["default", "default"]
+    assert "(changed)" not in plain and 'id="template-change"' not in plain
+
+
+def test_template_kind_and_change_points() -> None:
+    from bsv.station.charts import history_png, result_template_kind, template_changes
+
+    assert result_template_kind(_volumes(1.0)) == "default"  # before the sexed templates: the average one
+    assert result_template_kind({"template": {"kind": "male", "sex": "male"}}) == "male"
+    assert result_template_kind({"template": {"kind": None, "sex": None}}) == "default"
+    assert result_template_kind({"template": None}) == "default"
+    assert template_changes([]) == [] and template_changes(["default"]) == []
+    assert template_changes(["default", "default", "female", "female", "male", "default"]) == [2, 4, 5]
+    vols = [_volumes(1.0), {**_volumes(1.1), "template": {"kind": "female", "sex": "female"}},
+            {**_volumes(1.2), "template": {"kind": "female", "sex": "female"}}, _volumes(1.3)]
+    assert template_changes([result_template_kind(v) for v in vols]) == [1, 3]
+    for labels, v in ((["#1", "#2", "#3", "#4"], vols), (["#1"], vols[1:2])):
+        url = history_png(labels, v)
+        assert url.startswith("data:image/png;base64,") and len(url) > 1000
+
+
 def test_login_roles_and_csrf_off_localhost(tmp_path: Path) -> None:
     from bsv.station.security import add_user
 

@@ -32,7 +32,7 @@ from starlette.middleware.sessions import SessionMiddleware
 from ..errors import LoginRequired
 from . import jobs as jobq
 from . import rig, security, uncertainty
-from .charts import subject_chart
+from .charts import result_template_kind, subject_chart, template_changes
 from .db import default_url, make_engine, migrate, session_factory
 from .models import AuditEvent, Job, Result, Session, Subject, utcnow
 from .posecheck import A_POSE_DEG, pose_check
@@ -96,6 +96,7 @@ def create_app(config: StationConfig) -> FastAPI:
     runner = jobq.JobRunner(config.url, config.data, factory)
     templates = Jinja2Templates(directory=str(HERE / "templates"))
     templates.env.filters["fmt"] = _fmt
+    templates.env.filters["template_kind"] = result_template_kind
     submit_lock = threading.Lock()
 
     @asynccontextmanager
@@ -242,6 +243,7 @@ def create_app(config: StationConfig) -> FastAPI:
         security.audit(db, who, "view_subject", f"subject:{subj.id}")
         db.commit()
         return page(request, "subject.html", who, subject=subj, sessions=sessions, done=done, chart=chart,
+                    template_changed=_template_changed(done),
                     interval_label=uncertainty.source_label(sources) if sources else "", active=active,
                     failed=failed, swellings=sorted(rig.SWELLINGS), sources=rig.SOURCES, segments=uncertainty.SEGMENTS)
 
@@ -255,8 +257,7 @@ def create_app(config: StationConfig) -> FastAPI:
             raise HTTPException(409, "a session to compare has no result yet; process it first")
         changes = uncertainty.compare(sa.latest.volumes, sb.latest.volumes)
         label = uncertainty.source_label({s for c in changes for s in c.sources})
-        # a result without the record was fitted with the average template (before sexed templates)
-        kinds = [(r.volumes.get("template") or {}).get("kind", "default") for r in (sa.latest, sb.latest)]
+        kinds = [result_template_kind(r.volumes) for r in (sa.latest, sb.latest)]
         security.audit(db, who, "view_compare", f"subject:{subj.id}")
         db.commit()
         return page(request, "compare.html", who, subject=subj, a=sa, b=sb, changes=changes, interval_label=label,
@@ -268,7 +269,7 @@ def create_app(config: StationConfig) -> FastAPI:
         buf = io.StringIO()
         w = csv.writer(buf)
         head = ["subject_code", "session_id", "session_utc", "source", "result_id", "result_utc", "software_version",
-                "operator", "interval_source"]
+                "template", "operator", "interval_source"]
         for s in uncertainty.SEGMENTS:
             head += [f"{s}_l", f"{s}_lo_l", f"{s}_hi_l"]
         for r in uncertainty.ASYMMETRIES:
@@ -277,7 +278,7 @@ def create_app(config: StationConfig) -> FastAPI:
         for ses in subj.sessions:
             for res in ses.results:
                 row: list[Any] = [subj.code, ses.id, _fmt(ses.created_at), ses.source, res.id, _fmt(res.created_at),
-                                  res.software_version, res.operator]
+                                  res.software_version, result_template_kind(res.volumes), res.operator]
                 cells: list[Any] = []
                 srcs = set()
                 for s in uncertainty.SEGMENTS:
@@ -308,6 +309,7 @@ def create_app(config: StationConfig) -> FastAPI:
         chart = subject_chart(config.data, done)
         html = templates.get_template("history_pdf.html").render(
             subject=subj, done=done, cells=cells, segments=uncertainty.SEGMENTS, chart=chart, now=utcnow(),
+            template_changed=_template_changed(done),
             interval_label=uncertainty.source_label(sources) if sources else "no result yet")
         pdf = weasyprint.HTML(string=html).write_pdf()
         security.audit(db, who, "export_pdf", f"subject:{subj.id}")
@@ -532,6 +534,13 @@ def create_app(config: StationConfig) -> FastAPI:
         return page(request, "audit.html", who, events=events)
 
     return app
+
+
+def _template_changed(done: list[Session]) -> set[int]:
+    """The ids of the sessions of ``done`` (oldest first, each with a result) whose latest result was fitted
+    with another template than the session before them (:func:`bsv.station.charts.template_changes`)."""
+    kinds = [result_template_kind(s.latest.volumes) if s.latest is not None else "" for s in done]
+    return {done[i].id for i in template_changes(kinds)}
 
 
 def _label_png(path: Path) -> Response:

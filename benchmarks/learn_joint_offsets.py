@@ -5,10 +5,14 @@ For every subject of the training cohorts (seeds ``--train-seeds``) and the eval
 the virtual rig captures the body in a room (noer), the camera path lifts the joints to 3-D WITHOUT the
 offsets, and the signed errors against the rig's joint centres are taken in the body frame. The offset of
 a joint kind is minus the least-squares fit of the training errors (left and right pooled, lateral
-mirrored) as a + b (T - TRUNK_REF_M), T the estimated trunk length; the script prints the table and the
-evaluation cohorts' errors without offsets, with a constant offset (the median) and with the fit.
+mirrored) as a linear function of the kind's predictors (the keys of its row of JOINT_OFFSETS_M: the
+constant, the trunk length, for the hip also the hip and shoulder widths and the leg length, each minus its
+reference: bsv.frontend.landmarks.offset_predictors); the script prints the table and the evaluation
+cohorts' errors without offsets, with a constant offset (the median), with the trunk length alone and with
+the fit.
 
-    .venv/bin/python benchmarks/learn_joint_offsets.py --n 6 --train-seeds 11,13 --eval-seeds 12,14
+    .venv/bin/python benchmarks/learn_joint_offsets.py --n 10 --train-seeds 11,12,13,14,15,16,17,18 \
+        --eval-seeds 0,2,4,6
 
 ``--cache FILE`` keeps the uncorrected joint centres (JSON) so that a second run re-learns without MediaPipe.
 """
@@ -26,7 +30,7 @@ from tqdm import tqdm
 import bsv
 from bsv.bench.joints import KINDS, camera_segmentations, joint_errors
 from bsv.bodies.joints import rig_joints
-from bsv.frontend.landmarks import TRUNK_REF_M, apply_offsets, trunk_length
+from bsv.frontend.landmarks import JOINT_OFFSETS_M, apply_offsets, offset_predictors
 
 
 def raw_joints(n: int, seed: int, condition: str, cache: dict) -> list[tuple[dict, dict]]:
@@ -47,8 +51,10 @@ def raw_joints(n: int, seed: int, condition: str, cache: dict) -> list[tuple[dic
     return out
 
 
-def table(pairs: list[tuple[dict, dict]], offsets: dict | None) -> dict[str, tuple[float, float, list[float]]]:
-    """kind -> (median, p95 of the 3-D error mm, median signed [lat, up, fwd] mm), offsets applied if given."""
+def table(pairs: list[tuple[dict, dict]], offsets: dict | None,
+          ) -> dict[str, tuple[float, float, list[float], list[float]]]:
+    """kind -> (median, p95 of the 3-D error mm, median signed [lat, up, fwd] mm, their sd), offsets applied
+    if given."""
     errs: dict[str, list[list[float]]] = {k: [] for k in KINDS}
     for est, truth in pairs:
         moved = apply_offsets(est, offsets) if offsets is not None else est
@@ -60,19 +66,21 @@ def table(pairs: list[tuple[dict, dict]], offsets: dict | None) -> dict[str, tup
         a = np.array(v)
         allv += v
         d = np.linalg.norm(a, axis=1)
-        out[k] = (float(np.median(d)), float(np.percentile(d, 95)), np.median(a, axis=0).round(1).tolist())
+        out[k] = (float(np.median(d)), float(np.percentile(d, 95)), np.median(a, axis=0).round(1).tolist(),
+                  a.std(axis=0).round(1).tolist())
     a = np.array(allv)
     d = np.linalg.norm(a, axis=1)
-    out["all"] = (float(np.median(d)), float(np.percentile(d, 95)), np.median(a, axis=0).round(1).tolist())
+    out["all"] = (float(np.median(d)), float(np.percentile(d, 95)), np.median(a, axis=0).round(1).tolist(),
+                  a.std(axis=0).round(1).tolist())
     return out
 
 
 def main() -> None:
     """Command line: learn on one seed, evaluate on another, print the tables."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, default=6)
-    ap.add_argument("--train-seeds", default="11,13")
-    ap.add_argument("--eval-seeds", default="12,14")
+    ap.add_argument("--n", type=int, default=10)
+    ap.add_argument("--train-seeds", default="11,12,13,14,15,16,17,18")
+    ap.add_argument("--eval-seeds", default="0,2,4,6")
     ap.add_argument("--condition", default="noer")
     ap.add_argument("--cache", help="JSON file of uncorrected joint centres (read if present, then written)")
     a = ap.parse_args()
@@ -83,34 +91,40 @@ def main() -> None:
     evaluation = [p for s in a.eval_seeds.split(",") for p in raw_joints(a.n, int(s), a.condition, cache)]
     if a.cache:
         Path(a.cache).write_text(json.dumps(cache))
-    constant = {k: (tuple(-c / 1000.0 for c in v[2]), (0.0, 0.0, 0.0)) for k, v in table(train, None).items()
-                if k != "all"}
-    learned = fit(train)
+    constant = {k: {"1": tuple(-c / 1000.0 for c in v[2])} for k, v in table(train, None).items() if k != "all"}
+    trunk_only = fit(train, dict.fromkeys(KINDS, ("1", "trunk")))
+    learned = fit(train, {k: tuple(JOINT_OFFSETS_M[k]) for k in KINDS})
     print("JOINT_OFFSETS_M = {")
-    for k, (av, bv) in learned.items():
-        print(f'    "{k}": (({av[0]:.4f}, {av[1]:.4f}, {av[2]:.4f}), ({bv[0]:.4f}, {bv[1]:.4f}, {bv[2]:.4f})),')
+    for k, row in learned.items():
+        cells = ", ".join(f'"{p}": ({c[0]:.4f}, {c[1]:.4f}, {c[2]:.4f})' for p, c in row.items())
+        print(f'    "{k}": {{{cells}}},')
     print("}")
     for name, pairs, off in (("train, raw", train, None), ("eval, raw", evaluation, None),
-                             ("eval, constant offset", evaluation, constant), ("eval, fitted", evaluation, learned)):
-        print(f"\n{name}: joint | median mm | p95 mm | signed median lat/up/fwd mm")
-        for k, (med, p95, signed) in table(pairs, off).items():
-            print(f"  {k:9s} {med:6.1f} {p95:6.1f}  {signed}")
+                             ("eval, constant offset", evaluation, constant),
+                             ("eval, trunk length only", evaluation, trunk_only), ("eval, fitted", evaluation, learned)):
+        print(f"\n{name}: joint | median mm | p95 mm | signed median lat/up/fwd mm | sd lat/up/fwd mm")
+        for k, (med, p95, signed, sd) in table(pairs, off).items():
+            print(f"  {k:9s} {med:6.1f} {p95:6.1f}  {signed}  {sd}")
 
 
-def fit(pairs: list[tuple[dict, dict]]) -> dict[str, tuple[tuple[float, ...], tuple[float, ...]]]:
-    """Per kind (a, b): minus the least-squares fit of the signed errors (m) as a + b (T - TRUNK_REF_M)."""
-    rows: dict[str, list[tuple[float, list[float]]]] = {k: [] for k in KINDS}
+def fit(pairs: list[tuple[dict, dict]], predictors: dict[str, tuple[str, ...]],
+        ) -> dict[str, dict[str, tuple[float, float, float]]]:
+    """Per kind ``{predictor: c}``: minus the least-squares fit of the signed errors (m) as a linear function
+    of the kind's ``predictors`` (names of bsv.frontend.landmarks.OFFSET_PREDICTORS)."""
+    rows: dict[str, list[tuple[dict[str, float], list[float]]]] = {k: [] for k in KINDS}
     for est, truth in pairs:
-        t = trunk_length(est) - TRUNK_REF_M
+        m = offset_predictors(est)
         for j, e in joint_errors(est, truth).items():
-            rows[j.rsplit("_", 1)[0]].append((t, e))
+            rows[j.rsplit("_", 1)[0]].append((m, e))
     out = {}
     for k, r in rows.items():
-        x = np.array([[1.0, t] for t, _ in r])
+        names = predictors[k]
+        x = np.array([[m[p] for p in names] for m, _ in r])
         y = np.array([e for _, e in r]) / 1000.0
         coef = np.linalg.lstsq(x, y, rcond=None)[0]
-        out[k] = (tuple(round(float(-c), 4) for c in coef[0]), tuple(round(float(-c), 4) for c in coef[1]))
+        out[k] = {p: tuple(round(float(-c), 4) for c in coef[i]) for i, p in enumerate(names)}
     return out
+
 
 if __name__ == "__main__":
     main()

@@ -89,13 +89,17 @@ def as_keypoints(keypoints: Mapping[str, Any]) -> list[tuple[str, list[float], f
 
 
 #: The joint kinds the camera path lets pull the template by default (``bsv process``, ``bench synth
-#: --segmentation camera``): the shoulders and the wrists. Measured on the synthetic cohort (seeds 0, 2,
-#: 4; noer and l515; benchmarks/BENCH.md): they lower the upper arms' mean error on five of the six runs
-#: (by 0.3-0.6 points) and change the other segments by less than 0.4. Left out: the hips and knees (better
-#: on seeds 0 and 2, worse on seed 4, whose measured hips lie 12-31 mm low on five subjects: thighs
-#: 3.6 -> 4.2 %) and the elbows (a little better on average, but where one view's elbow cut lies 5 cm up the
-#: arm, seed 6 subject 9, the elbow's pull against the mislabelled points collapses the forearm: -11 -> -40 %).
-CAMERA_KEYPOINT_KINDS: tuple[str, ...] = ("shoulder", "wrist")
+#: --segmentation camera``): the shoulders, the wrists and the hips. Measured on the synthetic cohort
+#: (benchmarks/BENCH.md): the shoulders and wrists lower the upper arms' mean error on five of six runs (by
+#: 0.3-0.6 points, seeds 0, 2, 4; round 2 session 5); the hips, since their offsets depend on the body's
+#: build (:data:`bsv.frontend.landmarks.JOINT_OFFSETS_M`, session 12: vertical error sd 10 -> 6.6 mm), lower
+#: the torso's error and the eight limbs' mean on all eight runs of seeds 0, 2, 4, 6 x noer, l515 (thighs on 15
+#: of 16 sides: seed 0 2.5-2.8 -> 1.3-2.0 %, seed 2 3.7-3.9 -> 2.6-3.1 %); with the trunk-only offsets they made seed 4 worse (its
+#: measured hips lay 12-31 mm low on five subjects: thighs 3.9 -> 4.5 %). Left out: the knees (their
+#: vertical error, sd 11 mm, is not explained by the build; no gain on seeds 0, 2, 4, 6) and the elbows (a
+#: little better on average, but where one view's elbow cut lies 5 cm up the arm, seed 6 subject 9, the
+#: elbow's pull against the mislabelled points collapses the forearm: -11 -> -40 %).
+CAMERA_KEYPOINT_KINDS: tuple[str, ...] = ("shoulder", "wrist", "hip")
 
 
 def select_joints(joints: Mapping[str, Any], kinds: Sequence[str] | None) -> dict[str, Any]:

@@ -402,8 +402,8 @@ def process(
     measured shoulder-elbow segment are relabelled torso before the registration
     (:func:`bsv.keypoints.confine_upper_arms`; counted in volumes.json's ``cloud``).
     ``keypoints`` (camera segmentation): the joint centres lifted from both views pull the template's
-    joints in the first iterations (``bsv.register``'s keypoint term): None (the default) the shoulders and
-    wrists only (:data:`bsv.keypoints.CAMERA_KEYPOINT_KINDS`, where the measurements on the synthetic cohort
+    joints in the first iterations (``bsv.register``'s keypoint term): None (the default) the shoulders,
+    wrists and hips only (:data:`bsv.keypoints.CAMERA_KEYPOINT_KINDS`, where the measurements on the synthetic cohort
     say why), True (``--keypoints``) every joint, False (``--no-keypoints``) none."""
     from . import default_template, write_mesh, write_point_cloud
     from . import register as bsv_register
@@ -685,7 +685,7 @@ def main_process(argv: Sequence[str] | None = None) -> int:
                     help="correct each camera's pitch, roll and height with the floor it sees (the cameras must see it)")
     ap.add_argument("--keypoints", action=argparse.BooleanOptionalAction, default=None,
                     help="camera segmentation: let the joint centres lifted from both views pull the template's "
-                         "joints; default: the shoulders and wrists only, --keypoints: every "
+                         "joints; default: the shoulders, wrists and hips only, --keypoints: every "
                          "joint, --no-keypoints: none")
     ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT")
     _add_bsip_options(ap)

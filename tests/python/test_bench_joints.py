@@ -3,11 +3,21 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from bsv.bench.common import Run
 from bsv.bench.joints import INFO_KEY, joint_errors, joints_markdown, summarise
 from bsv.bodies.joints import rig_joints
-from bsv.frontend.landmarks import JOINT_OFFSETS_M, TRUNK_REF_M, apply_offsets, body_frame, trunk_length
+from bsv.errors import SegmentationError
+from bsv.frontend.landmarks import (
+    JOINT_OFFSETS_M,
+    OFFSET_PREDICTORS,
+    TRUNK_REF_M,
+    apply_offsets,
+    body_frame,
+    offset_predictors,
+    trunk_length,
+)
 
 
 def test_errors_are_signed_in_the_body_frame_and_mirrored() -> None:
@@ -26,16 +36,46 @@ def test_errors_are_signed_in_the_body_frame_and_mirrored() -> None:
 
 def test_offsets_move_each_side_outward_alike() -> None:
     truth = rig_joints()
-    moved = apply_offsets(truth, {"knee": ((0.01, -0.02, 0.005), (0.0, 0.0, 0.0))})
+    moved = apply_offsets(truth, {"knee": {"1": (0.01, -0.02, 0.005)}})
     e = joint_errors(moved, truth)
     assert np.allclose(e["knee_l"], [10, -20, 5], atol=0.05) and np.allclose(e["knee_r"], [10, -20, 5], atol=0.05)
     assert np.allclose(e["ankle_l"], 0.0)
     # the trunk-length term: b (T - T_ref)
     t = trunk_length(truth)
     assert 0.3 < t < 0.7
-    moved = apply_offsets(truth, {"hip": ((0.0, 0.0, 0.0), (0.0, 0.1, 0.0))})
+    moved = apply_offsets(truth, {"hip": {"trunk": (0.0, 0.1, 0.0)}})
     assert np.allclose(joint_errors(moved, truth)["hip_r"], [0, 100 * (t - TRUNK_REF_M), 0], atol=0.05)
     assert set(JOINT_OFFSETS_M) == {"shoulder", "elbow", "wrist", "hip", "knee", "ankle"}
+    assert all(set(row) <= set(OFFSET_PREDICTORS) and "1" in row for row in JOINT_OFFSETS_M.values())
+
+
+def test_offset_predictors_are_the_build_minus_its_reference() -> None:
+    truth = rig_joints()
+    m = offset_predictors(truth)
+    assert list(m) == list(OFFSET_PREDICTORS) and m["1"] == 1.0
+    width = float(np.linalg.norm(truth["hip_l"] - truth["hip_r"]))
+    assert np.isclose(m["hip_width"], width - OFFSET_PREDICTORS["hip_width"])
+    assert np.isclose(m["trunk"], trunk_length(truth) - TRUNK_REF_M)
+    legs = [float(np.linalg.norm(truth[f"hip_{s}"] - truth[f"ankle_{s}"])) for s in "lr"]
+    assert np.isclose(m["leg_length"], np.mean(legs) - OFFSET_PREDICTORS["leg_length"])
+    # a build measurement whose joints are missing is the reference (0): the other terms still act
+    no_ankles = {k: v for k, v in truth.items() if not k.startswith("ankle")}
+    assert offset_predictors(no_ankles)["leg_length"] == 0.0
+    # a wider pelvis moves the hip by the hip-width coefficient times the extra width, mirrored per side
+    wide = {k: v.copy() for k, v in truth.items()}
+    frame = body_frame(truth)
+    assert frame is not None
+    wide["hip_l"] = truth["hip_l"] + frame[0] * 0.01
+    wide["hip_r"] = truth["hip_r"] - frame[0] * 0.01
+    table = {"hip": {"hip_width": (0.0, -0.5, 0.0)}}
+    e = joint_errors(apply_offsets(wide, table), wide)
+    assert np.allclose(e["hip_l"], [0, -0.5 * (m["hip_width"] + 0.02) * 1000, 0], atol=0.5)
+    assert np.allclose(e["hip_r"], e["hip_l"], atol=1e-6)
+
+
+def test_an_unknown_offset_predictor_is_refused_by_name() -> None:
+    with pytest.raises(SegmentationError, match="knee_height"):
+        apply_offsets(rig_joints(), {"hip": {"knee_height": (0.0, 0.01, 0.0)}})
 
 
 def test_tables_pool_sides_and_name_the_worst_subject() -> None:

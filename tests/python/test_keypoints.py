@@ -181,14 +181,15 @@ def test_confine_upper_arms_refuses_bad_input() -> None:
         confine_upper_arms(pts, lab, {"shoulder_l": [np.nan, 0, 0], "elbow_l": joints["elbow_l"]})
 
 
-def test_select_joints_and_the_camera_paths_default_of_arm_joints(monkeypatch) -> None:
-    """The camera path lets the shoulders and wrists pull by default; ``keypoints=true`` every joint, ``false`` none."""
+def test_select_joints_and_the_camera_paths_default_joints(monkeypatch) -> None:
+    """The camera path lets the shoulders, wrists and hips pull by default; ``keypoints=true`` every joint,
+    ``false`` none."""
     from bsv.bench import common
     from bsv.keypoints import CAMERA_KEYPOINT_KINDS, JOINT_NAMES, select_joints
 
     joints = {n: [0.0, 1.0, 0.0] for n in JOINT_NAMES}
     arms = select_joints(joints, CAMERA_KEYPOINT_KINDS)
-    assert sorted(arms) == sorted(f"{j}_{s}" for j in ("shoulder", "wrist") for s in "lr")
+    assert sorted(arms) == sorted(f"{j}_{s}" for j in ("shoulder", "wrist", "hip") for s in "lr")
     assert select_joints(joints, None) == joints and select_joints(joints, ()) == {}
     seen: list[object] = []
 

@@ -102,7 +102,7 @@ class Fit:
 
 
 #: ``--param`` keys the bench itself reads (not registration parameters): the camera path's measured
-#: joints pull the template's as in ``bsv process``: by default the shoulders and wrists only
+#: joints pull the template's as in ``bsv process``: by default the shoulders, wrists and hips only
 #: (:data:`bsv.keypoints.CAMERA_KEYPOINT_KINDS`), ``keypoints=true`` every joint (``--keypoints``),
 #: ``keypoints=false`` none (``--no-keypoints``); ``keypoint_joints=elbow+knee`` keeps only those joints.
 BENCH_ONLY_PARAMS: tuple[str, ...] = ("keypoints", "keypoint_joints")
@@ -111,7 +111,7 @@ BENCH_ONLY_PARAMS: tuple[str, ...] = ("keypoints", "keypoint_joints")
 def register_bsv(cloud: PointCloud, template: Mesh, params: Mapping[str, Any] | None = None,
                  keypoints: Mapping[str, Any] | None = None) -> Fit:
     """BSV's regularized ARAP registration (:func:`bsv.register`) of ``template`` to the labelled cloud,
-    with the measured joint centres ``keypoints`` when given (the shoulders' and wrists' by default, every joint with
+    with the measured joint centres ``keypoints`` when given (the shoulders', wrists' and hips' by default, every joint with
     ``--param keypoints=true``, none with ``keypoints=false``)."""
     from .. import register
 

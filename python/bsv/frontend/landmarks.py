@@ -21,9 +21,9 @@ per view, the surface point under the landmark (the median depth of that side's 
 segments meeting at the joint, within :data:`DEPTH_RADIUS_PX`); seen from both views, the centre is the
 midpoint of the front and back surface points (the joint lies midway between the two opposite surfaces
 of the limb's cross-section); seen usably by one view only, the surface point pushed along the ray by the
-limb's half-thickness. An offset per joint kind in the body's own frame, linear in the trunk length
-(:data:`JOINT_OFFSETS_M`, learned on synthetic subjects, see there), then moves MediaPipe's landmark to the
-anatomical joint centre.
+limb's half-thickness. An offset per joint kind in the body's own frame, linear in the body's measurements
+(trunk length; for the hip also the hip and shoulder widths and the leg length: :data:`JOINT_OFFSETS_M`,
+learned on synthetic subjects, see there), then moves MediaPipe's landmark to the anatomical joint centre.
 """
 
 from __future__ import annotations
@@ -79,30 +79,56 @@ LANDMARK_SD_M = 0.01
 #: A view whose weight (see :data:`LANDMARK_SD_M`) is this many times smaller than the other view's is left
 #: out of that joint (its landmark is about 3 cm from repeatable or worse): the other view places it alone.
 UNRELIABLE_WEIGHT_RATIO = 10.0
-#: Trunk length (metres, mid-hip to mid-shoulder of the uncorrected estimates) at which the offsets of
-#: :data:`JOINT_OFFSETS_M` are the constant term.
+#: Trunk length (metres, mid-hip to mid-shoulder of the uncorrected estimates) at which the trunk term of
+#: :data:`JOINT_OFFSETS_M` is zero.
 TRUNK_REF_M = 0.48
+#: The measurements of the uncorrected joint centres an offset of :data:`JOINT_OFFSETS_M` may depend on,
+#: each with the reference value (metres, about the cohort's mean) at which its term is zero
+#: (:func:`offset_predictors`): the trunk length (mid-hip to mid-shoulder), the hip width (hip to hip), the
+#: shoulder width and the leg length (hip to ankle, mean of the sides). ``"1"`` is the constant term.
+OFFSET_PREDICTORS: dict[str, float] = {"1": 0.0, "trunk": TRUNK_REF_M, "hip_width": 0.17, "shoulder_width": 0.33,
+                                       "leg_length": 0.80}
 #: Offset (metres) from the landmark-based estimate to the anatomical joint centre, per joint kind, in the
 #: body frame (x: lateral, toward the joint's own side; y: up, hips to shoulders; z: forward, the
-#: subject's facing direction), linear in the trunk length T (an anthropometric scaling, like the
-#: regression hip-joint-centre models of gait labs): offset = a + b (T - :data:`TRUNK_REF_M`), as
-#: ``(a, b)``. Least squares on cohort seeds 11 and 13 (12 subjects, clinic room, noer; left and right
-#: pooled; MediaPipe on each image and its mirror image, averaged: ``SegmentParams.flip_average``) by
-#: ``benchmarks/learn_joint_offsets.py``; on the held-out seeds 12 and 14 the median 3-D error over the six
-#: joints goes from 18.1 mm (no offset) and 10.0 mm (a constant offset) to 8.6 mm, the hip's from 26.0 and
-#: 19.1 to 11.8 mm (95th percentile over all joints 48.4, 30.4, 24.1 mm; without the mirror average the
-#: fitted offsets gave 9.3 mm, the hip 13.9 mm). What it corrects: MediaPipe's ankle is the malleoli's outline, about
-#: 40 mm above the rig's ankle joint (the head of the foot bone); its hip, knee, elbow and shoulder lie
-#: 10-15 mm medial of the joint centres; its hip marks the hip's outline, not the femoral head, and the
-#: vertical gap grows with the trunk's length.
-JOINT_OFFSETS_M: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
-    "shoulder": ((0.0139, -0.0028, 0.0066), (0.2088, 0.1021, -0.1397)),
-    "elbow": ((0.0138, -0.0029, -0.0065), (0.0641, -0.0567, -0.1128)),
-    "wrist": ((0.0025, -0.0032, -0.0004), (0.0322, -0.0249, 0.0635)),
-    "hip": ((0.0158, -0.0037, -0.0067), (0.1972, 0.2708, -0.1651)),
-    "knee": ((0.0097, -0.0131, 0.0021), (0.0605, -0.1513, 0.0645)),
-    "ankle": ((0.0051, -0.0474, 0.0017), (0.0243, -0.3390, 0.0131)),
+#: subject's facing direction), linear in the body's measurements (an anthropometric regression, like the
+#: hip-joint-centre models of gait labs, which take the pelvis width and the leg length):
+#: offset = sum over the kind's predictors p of c_p * (m_p - reference_p), with the measurements m_p of
+#: :data:`OFFSET_PREDICTORS`, as ``{predictor: c_p}``. Each kind's predictors are the ones that lower its
+#: held-out error (the hip: all four; the others: the trunk length, as the hip's before). Least squares on
+#: cohort seeds 11-18 (80 subjects, clinic room, noer; left and right pooled; MediaPipe on each image and
+#: its mirror image, averaged: ``SegmentParams.flip_average``) by ``benchmarks/learn_joint_offsets.py``;
+#: held out, seeds 0, 2, 4 and 6 (40 subjects): see benchmarks/BENCH.md, round 2 session 12 (the hip's
+#: vertical error sd 9.8 mm with the trunk length alone, 6.6 mm with the four; its p95 3-D error 23.6 ->
+#: 19.3 mm). What it corrects: MediaPipe's ankle is the malleoli's outline, about 40 mm above the rig's
+#: ankle joint (the head of the foot bone); its hip, knee, elbow and shoulder lie 10-15 mm medial of the
+#: joint centres; its hip marks the hip's outline, not the femoral head, and where the femoral head lies
+#: below it depends on the build (trunk, pelvis and shoulder widths, legs).
+JOINT_OFFSETS_M: dict[str, dict[str, tuple[float, float, float]]] = {
+    "shoulder": {"1": (0.0130, -0.0036, 0.0053), "trunk": (0.1174, 0.1263, -0.1075)},
+    "elbow": {"1": (0.0123, -0.0017, -0.0076), "trunk": (0.0495, 0.0095, -0.1236)},
+    "wrist": {"1": (0.0009, -0.0018, -0.0008), "trunk": (0.0635, -0.0179, 0.0516)},
+    "hip": {"1": (0.0214, 0.0083, -0.0110), "trunk": (0.0343, 0.6672, -0.1229), "hip_width": (-0.3599, -0.4192, 0.1737),
+            "shoulder_width": (0.0484, 0.1780, -0.1010), "leg_length": (0.0903, -0.2016, -0.0109)},
+    "knee": {"1": (0.0083, -0.0152, 0.0024), "trunk": (-0.0018, -0.1841, 0.1075)},
+    "ankle": {"1": (0.0047, -0.0446, 0.0023), "trunk": (0.0252, -0.2096, 0.0217)},
 }
+
+
+def offset_predictors(joints: Mapping[str, np.ndarray]) -> dict[str, float]:
+    """The measurements of :data:`OFFSET_PREDICTORS` of joint centres by name, each minus its reference
+    (``"1"``: 1). A measurement whose joints are missing is 0 (its reference value: the cohort's mean
+    build), so a joint without ankles is still moved by the other terms."""
+
+    def dist(a: str, b: str) -> float:
+        if a not in joints or b not in joints:
+            return float("nan")
+        return float(np.linalg.norm(np.asarray(joints[a], dtype=np.float64) - np.asarray(joints[b], dtype=np.float64)))
+
+    legs = [dist(f"hip_{s}", f"ankle_{s}") for s in ("l", "r")]
+    legs = [x for x in legs if np.isfinite(x)]
+    m = {"1": 1.0, "trunk": trunk_length(joints), "hip_width": dist("hip_l", "hip_r"),
+         "shoulder_width": dist("shoulder_l", "shoulder_r"), "leg_length": float(np.mean(legs)) if legs else np.nan}
+    return {k: (m[k] - ref if np.isfinite(m[k]) else 0.0) if k != "1" else 1.0 for k, ref in OFFSET_PREDICTORS.items()}
 
 
 @dataclass(frozen=True)
@@ -415,25 +441,30 @@ def trunk_length(joints: Mapping[str, np.ndarray]) -> float:
 
 
 def apply_offsets(joints: Mapping[str, np.ndarray],
-                  offsets: Mapping[str, tuple[Sequence[float], Sequence[float]]] | None = None,
+                  offsets: Mapping[str, Mapping[str, Sequence[float]]] | None = None,
                   ) -> dict[str, np.ndarray]:
-    """Joint centres moved by the per-kind offsets ``(a, b)`` (default :data:`JOINT_OFFSETS_M`):
-    a + b (T - :data:`TRUNK_REF_M`) in the body frame of the given joints (x mirrored for the right side),
-    T their trunk length; unchanged without hips and shoulders to build the frame. Joints that are not
-    of :data:`JOINTS` (e.g. the neck) are not moved."""
+    """Joint centres moved by the per-kind offsets ``{predictor: c}`` (default :data:`JOINT_OFFSETS_M`):
+    the sum of c times the predictor's measurement (:func:`offset_predictors` of the given joints) in
+    their body frame (x mirrored for the right side); unchanged without hips and shoulders to build the
+    frame. Joints that are not of :data:`JOINTS` (e.g. the neck) are not moved."""
     table = JOINT_OFFSETS_M if offsets is None else offsets
     frame = _body_frame(joints)
-    trunk = trunk_length(joints)
-    if frame is None or not np.isfinite(trunk):
+    if frame is None or not np.isfinite(trunk_length(joints)):
         return {j: np.asarray(p, dtype=np.float64) for j, p in joints.items()}
+    measured = offset_predictors(joints)
     out = {}
     for j, p in joints.items():
         if j not in JOINTS or _kind(j)[0] not in table:
             out[j] = np.asarray(p, dtype=np.float64)
             continue
         kind, side = _kind(j)
-        a, b = (np.asarray(v, dtype=np.float64) for v in table[kind])
-        off = (a + b * (trunk - TRUNK_REF_M)) * np.array([1.0 if side == "left" else -1.0, 1.0, 1.0])
+        unknown = set(table[kind]) - set(measured)
+        if unknown:
+            raise SegmentationError(f"joint offsets of {kind!r}: unknown predictor(s) {sorted(unknown)}; use "
+                                    f"{', '.join(OFFSET_PREDICTORS)}")
+        off = sum((measured[name] * np.asarray(c, dtype=np.float64) for name, c in table[kind].items()),
+                  np.zeros(3))
+        off = off * np.array([1.0 if side == "left" else -1.0, 1.0, 1.0])
         out[j] = np.asarray(p, dtype=np.float64) + off @ frame
     return out
 
@@ -470,6 +501,7 @@ __all__ = [
     "JOINTS",
     "JOINT_OFFSETS_M",
     "LIMBS",
+    "OFFSET_PREDICTORS",
     "TRUNK_REF_M",
     "Camera",
     "JointCentre",
@@ -477,6 +509,7 @@ __all__ = [
     "body_frame",
     "capture_joints",
     "joint_centres",
+    "offset_predictors",
     "segment_views",
     "trunk_length",
 ]

@@ -94,17 +94,18 @@ OFFSET_PREDICTORS: dict[str, float] = {"1": 0.0, "trunk": TRUNK_REF_M, "hip_widt
 #: hip-joint-centre models of gait labs, which take the pelvis width and the leg length):
 #: offset = sum over the kind's predictors p of c_p * (m_p - reference_p), with the measurements m_p of
 #: :data:`OFFSET_PREDICTORS`, as ``{predictor: c_p}``. Each kind's predictors are the ones that lower its
-#: held-out error (the hip: all four; the others: the trunk length, as the hip's before). Least squares on
+#: held-out error (the hip and the shoulder: all four; the others: the trunk length, as all kinds before). Least squares on
 #: cohort seeds 11-18 (80 subjects, clinic room, noer; left and right pooled; MediaPipe on each image and
 #: its mirror image, averaged: ``SegmentParams.flip_average``) by ``benchmarks/learn_joint_offsets.py``;
 #: held out, seeds 0, 2, 4 and 6 (40 subjects): see benchmarks/BENCH.md, round 2 session 12 (the hip's
-#: vertical error sd 9.8 mm with the trunk length alone, 6.6 mm with the four; its p95 3-D error 23.6 ->
-#: 19.3 mm). What it corrects: MediaPipe's ankle is the malleoli's outline, about 40 mm above the rig's
+#: vertical error sd 9.9 mm with the trunk length alone, 6.6 mm with the four, its p95 3-D error 24.0 ->
+#: 19.2 mm; the shoulder's lateral error sd 7.3 -> 6.1 mm). What it corrects: MediaPipe's ankle is the malleoli's outline, about 40 mm above the rig's
 #: ankle joint (the head of the foot bone); its hip, knee, elbow and shoulder lie 10-15 mm medial of the
 #: joint centres; its hip marks the hip's outline, not the femoral head, and where the femoral head lies
 #: below it depends on the build (trunk, pelvis and shoulder widths, legs).
 JOINT_OFFSETS_M: dict[str, dict[str, tuple[float, float, float]]] = {
-    "shoulder": {"1": (0.0130, -0.0036, 0.0053), "trunk": (0.1174, 0.1263, -0.1075)},
+    "shoulder": {"1": (0.0167, -0.0015, 0.0045), "trunk": (0.0368, 0.0975, -0.1361), "hip_width": (-0.2865, -0.1468, 0.0429),
+                 "shoulder_width": (0.3410, 0.0757, -0.0706), "leg_length": (-0.0492, 0.0077, 0.0420)},
     "elbow": {"1": (0.0123, -0.0017, -0.0076), "trunk": (0.0495, 0.0095, -0.1236)},
     "wrist": {"1": (0.0009, -0.0018, -0.0008), "trunk": (0.0635, -0.0179, 0.0516)},
     "hip": {"1": (0.0214, 0.0083, -0.0110), "trunk": (0.0343, 0.6672, -0.1229), "hip_width": (-0.3599, -0.4192, 0.1737),

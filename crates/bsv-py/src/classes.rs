@@ -51,7 +51,7 @@ fn repr_changed(name: &str, d: &Bound<'_, PyAny>, default: &Bound<'_, PyAny>) ->
     Ok(format!("{name}({})", parts.join(", ")))
 }
 
-/// Registration parameters (`bsv_register::RegisterParams`): `RegisterParams(alpha=1e6, schedule="m2p:5,p2m:5,m2p:10", ...)`.
+/// Registration parameters (`bsv_register::RegisterParams`): `RegisterParams(alpha=1e6, schedule="m2p:5,p2m:5,m2p:4,p2m:2", ...)`.
 /// Unknown names, wrong types and out-of-range values raise `RegistrationParameterError` naming the
 /// parameter. Read a value as an attribute (`p.alpha`), all of them with `to_dict()`.
 #[pyclass(name = "RegisterParams", module = "bsv._bsv", frozen)]

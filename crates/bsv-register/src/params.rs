@@ -357,7 +357,7 @@ pub struct RegisterParams {
     /// The energy's weights.
     #[serde(flatten)]
     pub energy: EnergyParams,
-    /// Correspondence schedule. Default `m2p:5,p2m:5,m2p:10`.
+    /// Correspondence schedule. Default [`crate::DEFAULT_SCHEDULE`], `m2p:5,p2m:5,m2p:4,p2m:2`.
     pub schedule: Schedule,
     /// The schedule's last stage ends early, after at least [`MIN_FINAL_ITERATIONS`] of its
     /// iterations, at the first iteration that moves the vertices by less than this RMS distance
@@ -719,7 +719,7 @@ mod tests {
         assert_eq!(p.schedule.to_string(), "m2p:3,p2m:2");
         let d = RegisterParams::default();
         let text = serde_json::to_string(&d).unwrap();
-        assert!(text.contains("\"schedule\":\"m2p:5,p2m:5,m2p:10\""), "{text}");
+        assert!(text.contains("\"schedule\":\"m2p:5,p2m:5,m2p:4,p2m:2\""), "{text}");
         assert_eq!(serde_json::from_str::<RegisterParams>(&text).unwrap(), d);
         // Bad strings and shapes are errors that say what was wrong.
         let e = serde_json::from_str::<Schedule>("\"m2p:x\"").unwrap_err().to_string();

@@ -82,7 +82,7 @@ fn bad_inputs_are_typed_errors() {
     assert!(matches!(Schedule::parse("m2p5").unwrap_err(), ParameterError::BadSchedule { .. }));
     assert!(matches!(Schedule::parse("m2p:-1").unwrap_err(), ParameterError::BadSchedule { .. }));
     assert!(matches!(Schedule::parse("").unwrap_err(), ParameterError::BadSchedule { .. }));
-    assert_eq!(Schedule::parse(" M2P:5, p2m:5 ,m2p:10").unwrap(), Schedule::default());
+    assert_eq!(Schedule::parse(" M2P:5, p2m:5 ,m2p:4, P2M:2").unwrap(), Schedule::default());
 
     let neg = RegisterParams { energy: EnergyParams { alpha: -1.0, ..Default::default() }, ..Default::default() };
     assert!(matches!(

@@ -10,17 +10,30 @@ fn template_registered_to_itself_stays_put() {
     let template = icosphere(0.25, 4);
     let cloud = cloud_of(&template, 100_000, 1);
     // The surface correction moves vertices off the sampled surface by design (h^2 H / 8,
-    // ~0.1 mm here): this test checks that the fit itself stays put.
-    let params = RegisterParams { surface_correction: false, ..Default::default() };
-    let reg = run(&template, &cloud, &params);
-    let max = template
-        .vertices
-        .iter()
-        .zip(&reg.mesh.vertices)
-        .map(|(a, b)| bsv_core::geometry::dist2(*a, *b).sqrt())
-        .fold(0.0, f64::max);
-    println!("self-registration: max vertex displacement {:.4} mm, prealign {:?}", max * 1e3, reg.prealign);
-    assert!(max < 1e-4, "max displacement {:.4} mm", max * 1e3);
+    // ~0.1 mm here): this test checks that the fit itself stays put. With the paper's schedule (m2p
+    // last: each vertex's nearest sample is the vertex itself) it does to 0.1 mm; the default's p2m
+    // tail moves a vertex to the mean of its samples, which lie on the flat faces around it, lifted by
+    // the curvature correction that assumes a smooth surface: 0.15 mm at most here.
+    for (schedule, limit_mm) in [("m2p:5,p2m:5,m2p:10", 0.1), (bsv_register::DEFAULT_SCHEDULE, 0.2)] {
+        let params = RegisterParams {
+            surface_correction: false,
+            schedule: bsv_register::Schedule::parse(schedule).unwrap(),
+            ..Default::default()
+        };
+        let reg = run(&template, &cloud, &params);
+        let max = template
+            .vertices
+            .iter()
+            .zip(&reg.mesh.vertices)
+            .map(|(a, b)| bsv_core::geometry::dist2(*a, *b).sqrt())
+            .fold(0.0, f64::max);
+        println!(
+            "self-registration ({schedule}): max vertex displacement {:.4} mm, prealign {:?}",
+            max * 1e3,
+            reg.prealign
+        );
+        assert!(max * 1e3 < limit_mm, "{schedule}: max displacement {:.4} mm", max * 1e3);
+    }
 }
 
 #[test]
@@ -77,7 +90,9 @@ fn straight_capsule_to_bent_capsule() {
     let max = reg.mesh.vertices.iter().map(|&p| bent_capsule_distance(p, r, length, radius)).fold(0.0, f64::max);
     let err = rel_pct(volume(&reg.mesh), volume(&ideal));
     println!("bent capsule: max vertex error {:.3} mm, volume error {:.3} %", max * 1e3, err);
-    assert!(max < 2e-3, "max vertex error {:.3} mm", max * 1e3);
+    // Under 2 mm with the paper's schedule (the previous bound); the default's p2m tail leaves the
+    // worst vertex at 2.3 mm, the volume within 0.07 %.
+    assert!(max < 2.5e-3, "max vertex error {:.3} mm", max * 1e3);
     assert!(err.abs() < 0.5);
 }
 

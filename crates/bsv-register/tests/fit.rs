@@ -17,7 +17,7 @@ fn template_registered_to_itself_stays_put() {
     for (schedule, limit_mm) in [("m2p:5,p2m:5,m2p:10", 0.1), (bsv_register::DEFAULT_SCHEDULE, 0.2)] {
         let params = RegisterParams {
             surface_correction: false,
-            schedule: bsv_register::Schedule::parse(schedule).unwrap(),
+            schedule: bsv_register::Schedule::parse(schedule).expect("a valid schedule"),
             ..Default::default()
         };
         let reg = run(&template, &cloud, &params);

@@ -6,7 +6,7 @@ the virtual rig captures the body in a room (noer), the camera path lifts the jo
 offsets, and the signed errors against the rig's joint centres are taken in the body frame. The offset of
 a joint kind is minus the least-squares fit of the training errors (left and right pooled, lateral
 mirrored) as a linear function of the kind's predictors (the keys of its row of JOINT_OFFSETS_M: the
-constant, the trunk length, for the hip also the hip and shoulder widths and the leg length, each minus its
+constant, the trunk length, for the hip and the shoulder also the hip and shoulder widths and the leg length, each minus its
 reference: bsv.frontend.landmarks.offset_predictors); the script prints the table and the evaluation
 cohorts' errors without offsets, with a constant offset (the median), with the trunk length alone and with
 the fit.
@@ -30,7 +30,14 @@ from tqdm import tqdm
 import bsv
 from bsv.bench.joints import KINDS, camera_segmentations, joint_errors
 from bsv.bodies.joints import rig_joints
-from bsv.frontend.landmarks import JOINT_OFFSETS_M, apply_offsets, offset_predictors
+from bsv.frontend.landmarks import (
+    JOINT_OFFSETS_M,
+    OFFSET_PREDICTORS,
+    apply_offsets,
+    body_frame,
+    offset_predictors,
+    trunk_length,
+)
 
 
 def raw_joints(n: int, seed: int, condition: str, cache: dict) -> list[tuple[dict, dict]]:
@@ -76,7 +83,7 @@ def table(pairs: list[tuple[dict, dict]], offsets: dict | None,
 
 
 def main() -> None:
-    """Command line: learn on one seed, evaluate on another, print the tables."""
+    """Command line: learn on the training seeds, evaluate on the others, print the tables."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=10)
     ap.add_argument("--train-seeds", default="11,12,13,14,15,16,17,18")
@@ -94,6 +101,10 @@ def main() -> None:
     constant = {k: {"1": tuple(-c / 1000.0 for c in v[2])} for k, v in table(train, None).items() if k != "all"}
     trunk_only = fit(train, dict.fromkeys(KINDS, ("1", "trunk")))
     learned = fit(train, {k: tuple(JOINT_OFFSETS_M[k]) for k in KINDS})
+    print("OFFSET_PREDICTOR_RANGE = {")
+    for name, (lo, hi) in predictor_range(train).items():
+        print(f'    "{name}": ({lo:.3f}, {hi:.3f}),')
+    print("}")
     print("JOINT_OFFSETS_M = {")
     for k, row in learned.items():
         cells = ", ".join(f'"{p}": ({c[0]:.4f}, {c[1]:.4f}, {c[2]:.4f})' for p, c in row.items())
@@ -107,12 +118,36 @@ def main() -> None:
             print(f"  {k:9s} {med:6.1f} {p95:6.1f}  {signed}  {sd}")
 
 
+def predictor_range(pairs: list[tuple[dict, dict]]) -> dict[str, tuple[float, float]]:
+    """Per build measurement of OFFSET_PREDICTORS (minus its reference, unclipped): the training range widened
+    by a quarter of its span on each side (bsv.frontend.landmarks.OFFSET_PREDICTOR_RANGE)."""
+    def dist(est: dict, a: str, b: str) -> float:
+        return float(np.linalg.norm(est[a] - est[b])) if a in est and b in est else float("nan")
+
+    values: dict[str, list[float]] = {k: [] for k in OFFSET_PREDICTORS if k != "1"}
+    for est, _ in pairs:
+        legs = [dist(est, f"hip_{s}", f"ankle_{s}") for s in "lr"]
+        legs = [x for x in legs if np.isfinite(x)]
+        m = {"trunk": trunk_length(est), "hip_width": dist(est, "hip_l", "hip_r"),
+             "shoulder_width": dist(est, "shoulder_l", "shoulder_r"), "leg_length": np.mean(legs) if legs else np.nan}
+        for k in values:
+            if np.isfinite(m[k]):
+                values[k].append(float(m[k]) - OFFSET_PREDICTORS[k])
+    out = {}
+    for k, v in values.items():
+        lo, hi = min(v), max(v)
+        out[k] = (lo - (hi - lo) / 4, hi + (hi - lo) / 4)
+    return out
+
+
 def fit(pairs: list[tuple[dict, dict]], predictors: dict[str, tuple[str, ...]],
         ) -> dict[str, dict[str, tuple[float, float, float]]]:
     """Per kind ``{predictor: c}``: minus the least-squares fit of the signed errors (m) as a linear function
     of the kind's ``predictors`` (names of bsv.frontend.landmarks.OFFSET_PREDICTORS)."""
     rows: dict[str, list[tuple[dict[str, float], list[float]]]] = {k: [] for k in KINDS}
     for est, truth in pairs:
+        if body_frame(est) is None:  # apply_offsets leaves such joints unmoved: they teach nothing
+            continue
         m = offset_predictors(est)
         for j, e in joint_errors(est, truth).items():
             rows[j.rsplit("_", 1)[0]].append((m, e))

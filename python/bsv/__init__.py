@@ -190,8 +190,8 @@ def register(
     (default: the embedded template). Cloud normals, when present, must point outward: they are used
     as oriented (correspondence pruning, point-to-plane data term); unoriented normals (Open3D's
     ``estimate_normals`` without ``orient_normals_*``) cost 2-3 % of trunk_limbs. A cloud without
-    normals gets unoriented PCA normals in the registration. ``params``: alpha, cell_weight, data_weight, schedule (e.g.
-    "m2p:5,p2m:5,m2p:10"), prealign ("isotropic", "per_axis", "auto"), threads, ... (see
+    normals gets unoriented PCA normals in the registration. ``params``: alpha, cell_weight, data_weight, schedule (default
+    "m2p:5,p2m:5,m2p:4,p2m:2"; the paper's "m2p:5,p2m:5,m2p:10"), prealign ("isotropic", "per_axis", "auto"), threads, ... (see
     ``bsv-cli register --help``). ``label_source``: "cloud" (each fitted vertex takes its nearest cloud
     point's label, the paper; default for labelled clouds) or "template" (the template's own labels).
     The GIL is released while the solver runs.

@@ -35,7 +35,7 @@ from .errors import BsipError, InputError, OutputExistsError, PersonIsolationErr
 from .extras import require
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
 from .interop import as_mesh
-from .keypoints import camera_joints, confine_cloud_upper_arms, template_kind
+from .keypoints import CAMERA_KEYPOINT_KINDS, camera_joints, confine_cloud_upper_arms, template_kind
 from .types import SEGMENT_IDS, SEXES, TRUNK_LIMBS, Mesh, PointCloud, Registration
 
 PathLike = str | Path
@@ -685,8 +685,8 @@ def main_process(argv: Sequence[str] | None = None) -> int:
                     help="correct each camera's pitch, roll and height with the floor it sees (the cameras must see it)")
     ap.add_argument("--keypoints", action=argparse.BooleanOptionalAction, default=None,
                     help="camera segmentation: let the joint centres lifted from both views pull the template's "
-                         "joints; default: the shoulders, wrists and hips only, --keypoints: every "
-                         "joint, --no-keypoints: none")
+                         f"joints; default: the {', '.join(k + 's' for k in CAMERA_KEYPOINT_KINDS)} only, "
+                         "--keypoints: every joint, --no-keypoints: none")
     ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT")
     _add_bsip_options(ap)
     ap.add_argument("--quiet", action="store_true", help="no progress output")

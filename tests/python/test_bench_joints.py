@@ -8,9 +8,10 @@ import pytest
 from bsv.bench.common import Run
 from bsv.bench.joints import INFO_KEY, joint_errors, joints_markdown, summarise
 from bsv.bodies.joints import rig_joints
-from bsv.errors import SegmentationError
+from bsv.errors import InputError
 from bsv.frontend.landmarks import (
     JOINT_OFFSETS_M,
+    OFFSET_PREDICTOR_RANGE,
     OFFSET_PREDICTORS,
     TRUNK_REF_M,
     apply_offsets,
@@ -40,7 +41,7 @@ def test_offsets_move_each_side_outward_alike() -> None:
     e = joint_errors(moved, truth)
     assert np.allclose(e["knee_l"], [10, -20, 5], atol=0.05) and np.allclose(e["knee_r"], [10, -20, 5], atol=0.05)
     assert np.allclose(e["ankle_l"], 0.0)
-    # the trunk-length term: b (T - T_ref)
+    # the trunk-length term: c_trunk (T - T_ref)
     t = trunk_length(truth)
     assert 0.3 < t < 0.7
     moved = apply_offsets(truth, {"hip": {"trunk": (0.0, 0.1, 0.0)}})
@@ -65,17 +66,34 @@ def test_offset_predictors_are_the_build_minus_its_reference() -> None:
     wide = {k: v.copy() for k, v in truth.items()}
     frame = body_frame(truth)
     assert frame is not None
-    wide["hip_l"] = truth["hip_l"] + frame[0] * 0.01
-    wide["hip_r"] = truth["hip_r"] - frame[0] * 0.01
+    wide["hip_l"] = truth["hip_l"] + frame[0] * 0.005
+    wide["hip_r"] = truth["hip_r"] - frame[0] * 0.005
+    assert m["hip_width"] + 0.01 < OFFSET_PREDICTOR_RANGE["hip_width"][1]  # inside the clip range
     table = {"hip": {"hip_width": (0.0, -0.5, 0.0)}}
     e = joint_errors(apply_offsets(wide, table), wide)
-    assert np.allclose(e["hip_l"], [0, -0.5 * (m["hip_width"] + 0.02) * 1000, 0], atol=0.5)
+    assert np.allclose(e["hip_l"], [0, -0.5 * (m["hip_width"] + 0.01) * 1000, 0], atol=0.5)
     assert np.allclose(e["hip_r"], e["hip_l"], atol=1e-6)
 
 
 def test_an_unknown_offset_predictor_is_refused_by_name() -> None:
-    with pytest.raises(SegmentationError, match="knee_height"):
+    with pytest.raises(InputError, match="knee_height") as e:
         apply_offsets(rig_joints(), {"hip": {"knee_height": (0.0, 0.01, 0.0)}})
+    assert e.value.argument == "offsets"
+    # refused even when the joints give no body frame (no hips): the table is checked first
+    with pytest.raises(InputError, match="knee_height"):
+        apply_offsets({"knee_l": np.zeros(3)}, {"hip": {"knee_height": (0.0, 0.01, 0.0)}})
+
+
+def test_a_build_far_outside_the_cohorts_is_clipped() -> None:
+    truth = rig_joints()
+    wide = {k: v.copy() for k, v in truth.items()}
+    frame = body_frame(truth)
+    assert frame is not None
+    wide["hip_l"] = truth["hip_l"] + frame[0] * 0.2  # a hip width 40 cm over the true one
+    wide["hip_r"] = truth["hip_r"] - frame[0] * 0.2
+    assert offset_predictors(wide)["hip_width"] == OFFSET_PREDICTOR_RANGE["hip_width"][1]
+    assert offset_predictors(truth)["hip_width"] == pytest.approx(
+        float(np.linalg.norm(truth["hip_l"] - truth["hip_r"])) - OFFSET_PREDICTORS["hip_width"])
 
 
 def test_tables_pool_sides_and_name_the_worst_subject() -> None:

@@ -31,7 +31,8 @@ pub struct Args {
     #[arg(long, default_value = bsv_register::DEFAULT_SCHEDULE)]
     schedule: String,
     /// End the schedule's last stage once an iteration moves the vertices by less than this RMS
-    /// distance, mm (0 = run every iteration of the schedule).
+    /// distance, mm (0 = run every iteration of the schedule); only a last stage of more than 3
+    /// iterations ends early (the default schedule's 2-iteration p2m tail always runs).
     #[arg(long, value_name = "MM")]
     stop_motion_mm: Option<f64>,
     /// Regularization strength: how much a cell may leave its nearest rotation (0 = free affine cells).

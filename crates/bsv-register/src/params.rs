@@ -363,7 +363,8 @@ pub struct RegisterParams {
     /// iterations, at the first iteration that moves the vertices by less than this RMS distance
     /// (mm; 0 = always run every iteration). Default 0.2: by then an iteration changes no segment's
     /// volume by more than the correspondences' own jitter (measured: benchmarks/BENCH.md, "Round 2,
-    /// session 6").
+    /// session 6"). It acts on a last stage longer than [`MIN_FINAL_ITERATIONS`] (a user's schedule,
+    /// e.g. the paper's `m2p:5,p2m:5,m2p:10`); the default schedule's 2-iteration p2m tail always runs.
     pub stop_motion_mm: f64,
     /// In a p2m iteration that follows a p2m iteration, each cloud point finds its nearest vertex
     /// by walking over the mesh's edges from its previous one (`walk.rs`) instead of a k-d tree

@@ -90,8 +90,8 @@ fn straight_capsule_to_bent_capsule() {
     let max = reg.mesh.vertices.iter().map(|&p| bent_capsule_distance(p, r, length, radius)).fold(0.0, f64::max);
     let err = rel_pct(volume(&reg.mesh), volume(&ideal));
     println!("bent capsule: max vertex error {:.3} mm, volume error {:.3} %", max * 1e3, err);
-    // Under 2 mm with the paper's schedule (the previous bound); the default's p2m tail leaves the
-    // worst vertex at 2.3 mm, the volume within 0.07 %.
+    // The bound was 2 mm with the paper's schedule; the default's p2m tail leaves the worst vertex at
+    // 2.3 mm, the volume within 0.07 %.
     assert!(max < 2.5e-3, "max vertex error {:.3} mm", max * 1e3);
     assert!(err.abs() < 0.5);
 }

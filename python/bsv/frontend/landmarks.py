@@ -22,8 +22,9 @@ segments meeting at the joint, within :data:`DEPTH_RADIUS_PX`); seen from both v
 midpoint of the front and back surface points (the joint lies midway between the two opposite surfaces
 of the limb's cross-section); seen usably by one view only, the surface point pushed along the ray by the
 limb's half-thickness. An offset per joint kind in the body's own frame, linear in the body's measurements
-(trunk length; for the hip also the hip and shoulder widths and the leg length: :data:`JOINT_OFFSETS_M`,
-learned on synthetic subjects, see there), then moves MediaPipe's landmark to the anatomical joint centre.
+(trunk length; for the hip and the shoulder also the hip and shoulder widths and the leg length:
+:data:`JOINT_OFFSETS_M`, learned on synthetic subjects, see there), then moves MediaPipe's landmark to the
+anatomical joint centre.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import LimbMissingError, SegmentationError
+from ..errors import InputError, LimbMissingError, SegmentationError
 from ..keypoints import JOINT_NAMES
 from .intrinsics import Intrinsics
 from .segment import (
@@ -88,6 +89,15 @@ TRUNK_REF_M = 0.48
 #: shoulder width and the leg length (hip to ankle, mean of the sides). ``"1"`` is the constant term.
 OFFSET_PREDICTORS: dict[str, float] = {"1": 0.0, "trunk": TRUNK_REF_M, "hip_width": 0.17, "shoulder_width": 0.33,
                                        "leg_length": 0.80}
+#: The range (metres, minus the reference) each measurement of :data:`OFFSET_PREDICTORS` is clipped to: the
+#: training cohort's range widened by a quarter of its span on each side (printed by
+#: ``benchmarks/learn_joint_offsets.py``). The build terms rise and fall together, so their fitted
+#: coefficients are large and of opposite signs; clipped, a build far outside the cohort's (or a hip width
+#: centimetres off) cannot move a joint by centimetres. No held-out subject of seeds 0, 2, 4, 6 is clipped.
+OFFSET_PREDICTOR_RANGE: dict[str, tuple[float, float]] = {
+    "trunk": (-0.090, 0.081), "hip_width": (-0.040, 0.049), "shoulder_width": (-0.082, 0.073),
+    "leg_length": (-0.167, 0.162),
+}
 #: Offset (metres) from the landmark-based estimate to the anatomical joint centre, per joint kind, in the
 #: body frame (x: lateral, toward the joint's own side; y: up, hips to shoulders; z: forward, the
 #: subject's facing direction), linear in the body's measurements (an anthropometric regression, like the
@@ -117,8 +127,9 @@ JOINT_OFFSETS_M: dict[str, dict[str, tuple[float, float, float]]] = {
 
 def offset_predictors(joints: Mapping[str, np.ndarray]) -> dict[str, float]:
     """The measurements of :data:`OFFSET_PREDICTORS` of joint centres by name, each minus its reference
-    (``"1"``: 1). A measurement whose joints are missing is 0 (its reference value: the cohort's mean
-    build), so a joint without ankles is still moved by the other terms."""
+    and clipped to :data:`OFFSET_PREDICTOR_RANGE` (``"1"``: 1). A measurement whose joints are missing is 0
+    (its reference value: the cohort's mean build), so a joint without ankles is still moved by the other
+    terms; the leg length is the mean of the legs that have both joints."""
 
     def dist(a: str, b: str) -> float:
         if a not in joints or b not in joints:
@@ -129,7 +140,12 @@ def offset_predictors(joints: Mapping[str, np.ndarray]) -> dict[str, float]:
     legs = [x for x in legs if np.isfinite(x)]
     m = {"1": 1.0, "trunk": trunk_length(joints), "hip_width": dist("hip_l", "hip_r"),
          "shoulder_width": dist("shoulder_l", "shoulder_r"), "leg_length": float(np.mean(legs)) if legs else np.nan}
-    return {k: (m[k] - ref if np.isfinite(m[k]) else 0.0) if k != "1" else 1.0 for k, ref in OFFSET_PREDICTORS.items()}
+    out = {"1": 1.0}
+    for k, ref in OFFSET_PREDICTORS.items():
+        if k != "1":
+            lo, hi = OFFSET_PREDICTOR_RANGE[k]
+            out[k] = float(np.clip(m[k] - ref, lo, hi)) if np.isfinite(m[k]) else 0.0
+    return out
 
 
 @dataclass(frozen=True)
@@ -449,6 +465,13 @@ def apply_offsets(joints: Mapping[str, np.ndarray],
     their body frame (x mirrored for the right side); unchanged without hips and shoulders to build the
     frame. Joints that are not of :data:`JOINTS` (e.g. the neck) are not moved."""
     table = JOINT_OFFSETS_M if offsets is None else offsets
+    for kind, row in table.items():
+        unknown = sorted(set(row) - set(OFFSET_PREDICTORS))
+        if unknown:
+            err = InputError(f"apply_offsets(offsets=...): kind {kind!r}: unknown predictor(s) {unknown}; known: "
+                             f"{', '.join(OFFSET_PREDICTORS)}")
+            err.argument = "offsets"
+            raise err
     frame = _body_frame(joints)
     if frame is None or not np.isfinite(trunk_length(joints)):
         return {j: np.asarray(p, dtype=np.float64) for j, p in joints.items()}
@@ -459,10 +482,6 @@ def apply_offsets(joints: Mapping[str, np.ndarray],
             out[j] = np.asarray(p, dtype=np.float64)
             continue
         kind, side = _kind(j)
-        unknown = set(table[kind]) - set(measured)
-        if unknown:
-            raise SegmentationError(f"joint offsets of {kind!r}: unknown predictor(s) {sorted(unknown)}; use "
-                                    f"{', '.join(OFFSET_PREDICTORS)}")
         off = sum((measured[name] * np.asarray(c, dtype=np.float64) for name, c in table[kind].items()),
                   np.zeros(3))
         off = off * np.array([1.0 if side == "left" else -1.0, 1.0, 1.0])
@@ -503,6 +522,7 @@ __all__ = [
     "JOINT_OFFSETS_M",
     "LIMBS",
     "OFFSET_PREDICTORS",
+    "OFFSET_PREDICTOR_RANGE",
     "TRUNK_REF_M",
     "Camera",
     "JointCentre",

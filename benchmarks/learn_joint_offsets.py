@@ -32,11 +32,10 @@ from bsv.bench.joints import KINDS, camera_segmentations, joint_errors
 from bsv.bodies.joints import rig_joints
 from bsv.frontend.landmarks import (
     JOINT_OFFSETS_M,
-    OFFSET_PREDICTORS,
     apply_offsets,
     body_frame,
+    build_measurements,
     offset_predictors,
-    trunk_length,
 )
 
 
@@ -119,20 +118,13 @@ def main() -> None:
 
 
 def predictor_range(pairs: list[tuple[dict, dict]]) -> dict[str, tuple[float, float]]:
-    """Per build measurement of OFFSET_PREDICTORS (minus its reference, unclipped): the training range widened
+    """Per build measurement (bsv.frontend.landmarks.build_measurements, unclipped): the training range widened
     by a quarter of its span on each side (bsv.frontend.landmarks.OFFSET_PREDICTOR_RANGE)."""
-    def dist(est: dict, a: str, b: str) -> float:
-        return float(np.linalg.norm(est[a] - est[b])) if a in est and b in est else float("nan")
-
-    values: dict[str, list[float]] = {k: [] for k in OFFSET_PREDICTORS if k != "1"}
+    values: dict[str, list[float]] = {}
     for est, _ in pairs:
-        legs = [dist(est, f"hip_{s}", f"ankle_{s}") for s in "lr"]
-        legs = [x for x in legs if np.isfinite(x)]
-        m = {"trunk": trunk_length(est), "hip_width": dist(est, "hip_l", "hip_r"),
-             "shoulder_width": dist(est, "shoulder_l", "shoulder_r"), "leg_length": np.mean(legs) if legs else np.nan}
-        for k in values:
-            if np.isfinite(m[k]):
-                values[k].append(float(m[k]) - OFFSET_PREDICTORS[k])
+        for k, v in build_measurements(est).items():
+            if np.isfinite(v):
+                values.setdefault(k, []).append(float(v))
     out = {}
     for k, v in values.items():
         lo, hi = min(v), max(v)

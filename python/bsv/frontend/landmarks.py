@@ -125,11 +125,10 @@ JOINT_OFFSETS_M: dict[str, dict[str, tuple[float, float, float]]] = {
 }
 
 
-def offset_predictors(joints: Mapping[str, np.ndarray]) -> dict[str, float]:
-    """The measurements of :data:`OFFSET_PREDICTORS` of joint centres by name, each minus its reference
-    and clipped to :data:`OFFSET_PREDICTOR_RANGE` (``"1"``: 1). A measurement whose joints are missing is 0
-    (its reference value: the cohort's mean build), so a joint without ankles is still moved by the other
-    terms; the leg length is the mean of the legs that have both joints."""
+def build_measurements(joints: Mapping[str, np.ndarray]) -> dict[str, float]:
+    """The build measurements of :data:`OFFSET_PREDICTORS` (all but ``"1"``) of joint centres by name, each
+    minus its reference, unclipped; NaN when their joints are missing. The leg length is the mean of the
+    legs that have both joints."""
 
     def dist(a: str, b: str) -> float:
         if a not in joints or b not in joints:
@@ -138,13 +137,20 @@ def offset_predictors(joints: Mapping[str, np.ndarray]) -> dict[str, float]:
 
     legs = [dist(f"hip_{s}", f"ankle_{s}") for s in ("l", "r")]
     legs = [x for x in legs if np.isfinite(x)]
-    m = {"1": 1.0, "trunk": trunk_length(joints), "hip_width": dist("hip_l", "hip_r"),
+    m = {"trunk": trunk_length(joints), "hip_width": dist("hip_l", "hip_r"),
          "shoulder_width": dist("shoulder_l", "shoulder_r"), "leg_length": float(np.mean(legs)) if legs else np.nan}
+    return {k: m[k] - ref for k, ref in OFFSET_PREDICTORS.items() if k != "1"}
+
+
+def offset_predictors(joints: Mapping[str, np.ndarray]) -> dict[str, float]:
+    """The predictors of :data:`JOINT_OFFSETS_M` of joint centres by name: ``"1"`` (1) and the
+    :func:`build_measurements` clipped to :data:`OFFSET_PREDICTOR_RANGE`. A measurement whose joints are
+    missing is 0 (its reference value: the cohort's mean build), so a joint without ankles is still moved by
+    the other terms."""
     out = {"1": 1.0}
-    for k, ref in OFFSET_PREDICTORS.items():
-        if k != "1":
-            lo, hi = OFFSET_PREDICTOR_RANGE[k]
-            out[k] = float(np.clip(m[k] - ref, lo, hi)) if np.isfinite(m[k]) else 0.0
+    for k, v in build_measurements(joints).items():
+        lo, hi = OFFSET_PREDICTOR_RANGE[k]
+        out[k] = float(np.clip(v, lo, hi)) if np.isfinite(v) else 0.0
     return out
 
 
@@ -528,6 +534,7 @@ __all__ = [
     "JointCentre",
     "apply_offsets",
     "body_frame",
+    "build_measurements",
     "capture_joints",
     "joint_centres",
     "offset_predictors",

@@ -114,7 +114,9 @@ pub struct EnergyParams {
     pub keypoint_axial: bool,
     /// The keypoint term acts in the first `keypoint_iterations` iterations only: it places the
     /// template's joints, then the cloud alone finishes the fit (a joint held against the cloud's
-    /// pull stretches the limb and thins its unseen sides). Default 5 (the first stage).
+    /// pull stretches the limb and thins its unseen sides). Default 10: the first m2p stage and the
+    /// p2m stage after it (camera path, seeds 0, 2, 4, 6: the eight limbs' mean error 0.05 points
+    /// lower than with 5 in 8 of 8 runs; benchmarks/BENCH.md, "Round 2, session 13").
     pub keypoint_iterations: usize,
     /// Lift the normal part of every data target by the height of the surface under its points'
     /// spread (`curvature.rs`): the mean of the points whose nearest vertex is this one (p2m) lies
@@ -135,7 +137,7 @@ impl Default for EnergyParams {
             keypoint_weight: 40.0,
             keypoint_robust_m: 0.03,
             keypoint_axial: true,
-            keypoint_iterations: 5,
+            keypoint_iterations: 10,
             curvature_correction: true,
         }
     }

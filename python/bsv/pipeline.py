@@ -19,6 +19,7 @@ demo: a synthetic subject of :mod:`bsv.bodies` -> virtual two-camera capture ima
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import time
 from collections.abc import Callable, Sequence
@@ -408,6 +409,7 @@ def process(
     from . import default_template, write_mesh, write_point_cloud
     from . import register as bsv_register
     from .frontend.capture import read_capture
+    from .frontend.segment import warming_up
     from .report import render_report, require_pdf, write_rendered
 
     if segmentation not in SEGMENTATIONS:
@@ -426,135 +428,139 @@ def process(
     cap = Path(capture_dir)
     out = Path(out_dir)
     _check_outputs(out, overwrite, cameras, bsip=bsip)
-    require_pdf()  # report.pdf: WeasyPrint must be there before the work, not after it
     if bsip:
         from .biomech import densities
 
         if bsip_sex not in SEXES:
             raise BsipError(f"bsip_sex must be one of {SEXES}, got {bsip_sex!r}")
         densities(bsip_density, [n for n in SEGMENT_IDS if n != "unlabelled"])  # a bad density fails before the work
-    dirs = _camera_dirs(cap, cameras)
+    # Timed from here: the PDF renderer loads while MediaPipe prepares on another thread (camera path).
     steps = _Steps(progress)
+    warm = warming_up(**(segment_params or {})) if segmentation == "camera" else contextlib.nullcontext()
+    with warm:
+        steps.run("prepare", "loading the PDF renderer (report.pdf)" + (" while MediaPipe starts" if segmentation == "camera"
+                                                                       else ""), require_pdf)
+        dirs = _camera_dirs(cap, cameras)
 
-    def read_all() -> dict[str, dict[str, Any]]:
-        return {cam: read_capture(d) for cam, d in dirs.items()}
+        def read_all() -> dict[str, dict[str, Any]]:
+            return {cam: read_capture(d) for cam, d in dirs.items()}
 
-    data = steps.run("read", f"reading the capture {cap}", read_all)
-    extrinsics = steps.run("calibration", "reading the calibration",
-                           lambda: _calibration(calibration, cap, cameras, {c: d["intrinsics"] for c, d in data.items()}))
+        data = steps.run("read", f"reading the capture {cap}", read_all)
+        extrinsics = steps.run("calibration", "reading the calibration",
+                               lambda: _calibration(calibration, cap, cameras, {c: d["intrinsics"] for c, d in data.items()}))
 
-    seg_summary: dict[str, dict[str, Any]] = {}
-    seg_files: dict[str, Any] = {}
-    joints: dict[str, Any] = {}
-    camera_segs: dict[str, Any] = {}
-    if segmentation == "camera":
-        camera_segs, joints = steps.run("segment", "segmenting both cameras (MediaPipe) and their joint centres",
-                                        lambda: _segment_cameras(data, extrinsics, cameras, segment_params or {}))
-    refined: dict[str, dict[str, Any]] = {}
-    views = []
-    for cam in cameras:
-        d = data[cam]
+        seg_summary: dict[str, dict[str, Any]] = {}
+        seg_files: dict[str, Any] = {}
+        joints: dict[str, Any] = {}
+        camera_segs: dict[str, Any] = {}
+        if segmentation == "camera":
+            camera_segs, joints = steps.run("segment", "segmenting both cameras (MediaPipe) and their joint centres",
+                                            lambda: _segment_cameras(data, extrinsics, cameras, segment_params or {}))
+        refined: dict[str, dict[str, Any]] = {}
+        views = []
+        for cam in cameras:
+            d = data[cam]
 
-        def segment_camera(cam: str = cam, d: dict[str, Any] = d) -> tuple[np.ndarray, dict, Any]:
-            return _segment(cam, d, dirs[cam], segmentation, segment_params or {}, out / SEGMENTATION_DIR / cam,
-                            camera_segs.get(cam))
+            def segment_camera(cam: str = cam, d: dict[str, Any] = d) -> tuple[np.ndarray, dict, Any]:
+                return _segment(cam, d, dirs[cam], segmentation, segment_params or {}, out / SEGMENTATION_DIR / cam,
+                                camera_segs.get(cam))
 
-        labels, summary, seg_files[cam] = (segment_camera() if camera_segs else
-                                           steps.run(f"segment_{cam}", f"segmenting the {cam} camera ({segmentation})",
-                                                     segment_camera))
-        seg_summary[cam] = summary
-        if refine_floor:
-            from .frontend.floorplane import refine_extrinsics
+            labels, summary, seg_files[cam] = (segment_camera() if camera_segs else
+                                               steps.run(f"segment_{cam}", f"segmenting the {cam} camera ({segmentation})",
+                                                         segment_camera))
+            seg_summary[cam] = summary
+            if refine_floor:
+                from .frontend.floorplane import refine_extrinsics
 
-            def refine_camera(cam: str = cam, d: dict[str, Any] = d, person: np.ndarray = labels > 0
-                              ) -> tuple[dict[str, Any], dict[str, Any]]:
-                return refine_extrinsics(cam, extrinsics[cam], d["depth_m"], d["intrinsics"], person)
+                def refine_camera(cam: str = cam, d: dict[str, Any] = d, person: np.ndarray = labels > 0
+                                  ) -> tuple[dict[str, Any], dict[str, Any]]:
+                    return refine_extrinsics(cam, extrinsics[cam], d["depth_m"], d["intrinsics"], person)
 
-            extrinsics[cam], refined[cam] = steps.run(
-                f"refine_{cam}", f"refining the {cam} camera's pitch, roll and height with the floor", refine_camera)
-        views.append({"name": cam, "intrinsics": d["intrinsics"].to_json(), "camera_to_world": {k: extrinsics[cam][k] for k in ("rotation", "translation")},
-                      "depth": np.ascontiguousarray(d["depth_m"], dtype=np.float32), "labels": labels,
-                      "colors": np.ascontiguousarray(d["colour"], dtype=np.uint8)})
-    landmark_warnings = [w for seg in camera_segs.values() for w in seg.warnings]
-    if progress:
-        for w in landmark_warnings:
-            print(f"[bsv]   warning: {w}", flush=True)
+                extrinsics[cam], refined[cam] = steps.run(
+                    f"refine_{cam}", f"refining the {cam} camera's pitch, roll and height with the floor", refine_camera)
+            views.append({"name": cam, "intrinsics": d["intrinsics"].to_json(), "camera_to_world": {k: extrinsics[cam][k] for k in ("rotation", "translation")},
+                          "depth": np.ascontiguousarray(d["depth_m"], dtype=np.float32), "labels": labels,
+                          "colors": np.ascontiguousarray(d["colour"], dtype=np.uint8)})
+        landmark_warnings = [w for seg in camera_segs.values() for w in seg.warnings]
+        if progress:
+            for w in landmark_warnings:
+                print(f"[bsv]   warning: {w}", flush=True)
 
-    cloud, cloud_report = steps.run(
-        "cloud", "building the cloud (deprojection, only the person, merge)",
-        lambda: build_cloud(views, keep_extremities=keep_extremities, sor=sor, sor_k=sor_k, sor_std_ratio=sor_std_ratio,
-                            remove_floor=remove_floor, isolate_person=isolate_person, **(cloud_params or {})))
-    if progress:
-        _print_cloud(len(cloud), cloud_report)
+        cloud, cloud_report = steps.run(
+            "cloud", "building the cloud (deprojection, only the person, merge)",
+            lambda: build_cloud(views, keep_extremities=keep_extremities, sor=sor, sor_k=sor_k, sor_std_ratio=sor_std_ratio,
+                                remove_floor=remove_floor, isolate_person=isolate_person, **(cloud_params or {})))
+        if progress:
+            _print_cloud(len(cloud), cloud_report)
 
-    # Camera labels: an upper-arm patch far from the measured arm is the torso a hanging arm covers in one view.
-    cloud, arm_relabelled = confine_cloud_upper_arms(cloud, joints if segmentation == "camera" else None)
-    label_source = register_params.pop("labels", CAMERA_LABEL_SOURCE if segmentation == "camera" else None)
-    if template is None and sex is not None and label_source == "template":
-        # the template's own segments carried onto this sex's body; with the cloud's labels the average
-        # template fits the limbs better (benchmarks/BENCH.md, round 2 session 11)
-        template = default_template(sex=sex)
-    measured = camera_joints(joints, keypoints)
-    reg: Registration = steps.run(
-        "register", "registering the template (ARAP)",
-        lambda: bsv_register(cloud, template=template, progress=False, density=density, label_source=label_source,
-                             keypoints=measured, **register_params))
+        # Camera labels: an upper-arm patch far from the measured arm is the torso a hanging arm covers in one view.
+        cloud, arm_relabelled = confine_cloud_upper_arms(cloud, joints if segmentation == "camera" else None)
+        label_source = register_params.pop("labels", CAMERA_LABEL_SOURCE if segmentation == "camera" else None)
+        if template is None and sex is not None and label_source == "template":
+            # the template's own segments carried onto this sex's body; with the cloud's labels the average
+            # template fits the limbs better (benchmarks/BENCH.md, round 2 session 11)
+            template = default_template(sex=sex)
+        measured = camera_joints(joints, keypoints)
+        reg: Registration = steps.run(
+            "register", "registering the template (ARAP)",
+            lambda: bsv_register(cloud, template=template, progress=False, density=density, label_source=label_source,
+                                 keypoints=measured, **register_params))
 
-    inertial = None
-    if bsip:
-        from .biomech import compute as compute_bsip
+        inertial = None
+        if bsip:
+            from .biomech import compute as compute_bsip
 
-        inertial = steps.run("bsip", "segment masses, centres of mass, inertia (bsip)",
-                             lambda: compute_bsip(reg, bsip_density, sex=bsip_sex))
-    vols = dict(reg.volumes)
+            inertial = steps.run("bsip", "segment masses, centres of mass, inertia (bsip)",
+                                 lambda: compute_bsip(reg, bsip_density, sex=bsip_sex))
+        vols = dict(reg.volumes)
 
-    vols["intervals"] = steps.run(
-        "intervals", "95 % intervals (calibration Monte Carlo + error model)",
-        lambda: _intervals(reg, [_camera_spread(c, extrinsics[c]) for c in cameras], segmentation, density)).to_json()
-    if refined:
-        vols["calibration_refinement"] = {"method": "floor plane (pitch, roll, height)", "cameras": refined}
-    vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report,
-                     "upper_arm_points_relabelled_torso": arm_relabelled}
-    vols["joints_m"] = {name: j.to_json() for name, j in joints.items()}
-    vols["warnings"] = landmark_warnings
-    vols["template"] = {"kind": "default" if template is None else template_kind(template) or "custom", "sex": sex}
-    out.mkdir(parents=True, exist_ok=True)
-    files = {"cloud": out / "cloud.ply", "fitted": out / "fitted.ply", "volumes": out / "volumes.json",
-             "report": out / "report.html"}
+        vols["intervals"] = steps.run(
+            "intervals", "95 % intervals (calibration Monte Carlo + error model)",
+            lambda: _intervals(reg, [_camera_spread(c, extrinsics[c]) for c in cameras], segmentation, density)).to_json()
+        if refined:
+            vols["calibration_refinement"] = {"method": "floor plane (pitch, roll, height)", "cameras": refined}
+        vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report,
+                         "upper_arm_points_relabelled_torso": arm_relabelled}
+        vols["joints_m"] = {name: j.to_json() for name, j in joints.items()}
+        vols["warnings"] = landmark_warnings
+        vols["template"] = {"kind": "default" if template is None else template_kind(template) or "custom", "sex": sex}
+        out.mkdir(parents=True, exist_ok=True)
+        files = {"cloud": out / "cloud.ply", "fitted": out / "fitted.ply", "volumes": out / "volumes.json",
+                 "report": out / "report.html"}
 
-    def write_all() -> None:
-        # Written only now: a run that fails earlier leaves nothing in OUT, and can be rerun as it was.
-        for cam, seg in seg_files.items():
-            if seg is not None:
-                from .frontend.segment import write_segmentation
+        def write_all() -> None:
+            # Written only now: a run that fails earlier leaves nothing in OUT, and can be rerun as it was.
+            for cam, seg in seg_files.items():
+                if seg is not None:
+                    from .frontend.segment import write_segmentation
 
-                write_segmentation(seg, out / SEGMENTATION_DIR / cam, overwrite=overwrite)
-        write_point_cloud(files["cloud"], cloud, overwrite=overwrite)
-        write_mesh(files["fitted"], reg.mesh, overwrite=overwrite)
-        files["volumes"].write_text(json.dumps(vols, indent=2) + "\n")
-        if inertial is not None:
-            from .biomech import write_all as write_bsip
+                    write_segmentation(seg, out / SEGMENTATION_DIR / cam, overwrite=overwrite)
+            write_point_cloud(files["cloud"], cloud, overwrite=overwrite)
+            write_mesh(files["fitted"], reg.mesh, overwrite=overwrite)
+            files["volumes"].write_text(json.dumps(vols, indent=2) + "\n")
+            if inertial is not None:
+                from .biomech import write_all as write_bsip
 
-            files.update({Path(n).stem + "_" + Path(n).suffix[1:]: p
-                          for n, p in write_bsip(inertial, out, overwrite=overwrite).items()})
+                files.update({Path(n).stem + "_" + Path(n).suffix[1:]: p
+                              for n, p in write_bsip(inertial, out, overwrite=overwrite).items()})
 
-    result = ProcessResult(out, cloud, reg, vols, cloud_report, seg_summary, steps.timings, files, truth=truth,
-                           bsip=inertial, joints=joints, warnings=landmark_warnings)
-    if truth is not None:
-        result.comparison = compare(vols, truth)
-    # The report (HTML, PDF, CSV) is rendered before anything is written: a failed rendering leaves OUT empty.
-    rendered = steps.run("report", "drawing the report (report.html, report.pdf, volumes.csv)", lambda: render_report(
-        result, out, title=title, segmentations={c: s.labels for c, s in seg_files.items() if s is not None}))
+        result = ProcessResult(out, cloud, reg, vols, cloud_report, seg_summary, steps.timings, files, truth=truth,
+                               bsip=inertial, joints=joints, warnings=landmark_warnings)
+        if truth is not None:
+            result.comparison = compare(vols, truth)
+        # The report (HTML, PDF, CSV) is rendered before anything is written: a failed rendering leaves OUT empty.
+        rendered = steps.run("report", "drawing the report (report.html, report.pdf, volumes.csv)", lambda: render_report(
+            result, out, title=title, segmentations={c: s.labels for c, s in seg_files.items() if s is not None}))
 
-    def write_everything() -> None:
-        write_all()
-        files.update(write_rendered(rendered, overwrite))
+        def write_everything() -> None:
+            write_all()
+            files.update(write_rendered(rendered, overwrite))
 
-    steps.run("write", "writing the segmentation, cloud.ply, fitted.ply, volumes.json and the report", write_everything)
-    result.timings["total"] = steps.total()
-    if progress:
-        print(f"[bsv] done in {result.timings['total']:.1f} s: {out}", flush=True)
-    return result
+        steps.run("write", "writing the segmentation, cloud.ply, fitted.ply, volumes.json and the report", write_everything)
+        result.timings["total"] = steps.total()
+        if progress:
+            print(f"[bsv] done in {result.timings['total']:.1f} s: {out}", flush=True)
+        return result
 
 
 # ----------------------------------------------------------------------------------------------------

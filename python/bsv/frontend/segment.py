@@ -274,6 +274,38 @@ def _holistic_model(complexity: int, min_detection_confidence: float) -> Any:
     return model
 
 
+def _warm_up(prm: SegmentParams) -> None:
+    """Builds this process's graph for ``prm`` and runs it once on a small blank image (the first
+    ``process`` call loads the models: about 0.5 s, the graph 0.6 s more). Errors are left to the real
+    call, which reports them with its own message."""
+    try:
+        with _MODELS_LOCK, _native_stderr_silenced():
+            _holistic_model(prm.model_complexity, prm.min_detection_confidence).process(
+                np.zeros((64, 64, 3), dtype=np.uint8))
+    except Exception:
+        pass
+
+
+@contextlib.contextmanager
+def warming_up(**overrides: Any) -> Iterator[None]:
+    """Prepares MediaPipe (:func:`_warm_up`, with :class:`SegmentParams` ``overrides``) on a background
+    thread while the body of the ``with`` runs: a fresh ``bsv process`` loads WeasyPrint and reads the
+    capture meanwhile (GIL-bound Python, where MediaPipe's start is mostly native code). The segmentation
+    waits for it through the graph lock. Leaving the block waits for the thread, so its silenced
+    stderr (:func:`_native_stderr_silenced`) is restored before an error of the body is printed."""
+    try:
+        prm = dataclasses.replace(DEFAULT_PARAMS["front"], **overrides)
+    except (TypeError, SegmentationError):  # an unknown or bad parameter: the segmentation names it
+        yield
+        return
+    thread = threading.Thread(target=_warm_up, args=(prm,), name="bsv-mediapipe-warm-up", daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        thread.join()
+
+
 @contextlib.contextmanager
 def _native_stderr_silenced() -> Iterator[None]:
     """Sends file descriptor 2 to /dev/null while MediaPipe's C++ code runs: absl/TFLite print
@@ -834,5 +866,6 @@ __all__ = [
     "segment_capture",
     "segment_image",
     "unconfident_landmarks",
+    "warming_up",
     "write_segmentation",
 ]

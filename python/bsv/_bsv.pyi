@@ -68,6 +68,38 @@ class VolumeReport:
     @property
     def notes(self) -> list[str]: ...
 
+class PreparedVolumes:
+    # A labelled closed mesh prepared once for re-measuring at many vertex positions
+    # (``bsv_volume::PreparedSegments``): the arguments of ``volumes``; validation, labels, island
+    # merging (on these vertices) and the caps between segments are fixed, only positions change.
+    # Raises ``VolumeError`` / ``InputError`` as ``volumes`` does on the same mesh.
+    # ``n_vertices``: the vertex count every call must pass; ``density_kg_m3``: the reports' density.
+    # ``volume_report(vertices)``: the report ``volumes`` gives on the mesh with its (N, 3) vertices at
+    # ``vertices``.
+    # ``quantities(vertices)``: for each name of the reports' ``volumes_l`` then ``ratios`` (first-seen
+    # order), an (S,) array over the S vertex arrays of ``vertices`` ((S, N, 3), N = ``n_vertices``): the
+    # values ``bsv.uncertainty.quantities(volumes(moved mesh))`` gives, NaN where a draw has none;
+    # evaluated in parallel with the GIL released. A wrong N is a ``VolumeError``, a wrong shape an
+    # ``InputError``.
+
+    def __init__(
+        self,
+        vertices: ArrayLike,
+        faces: ArrayLike,
+        vertex_labels: ArrayLike | None = None,
+        face_labels: ArrayLike | None = None,
+        labels: ArrayLike | None = None,
+        density: float = 1000.0,
+        close_holes: bool = False,
+        islands: bool = False,
+    ) -> None: ...
+    @property
+    def n_vertices(self) -> int: ...
+    @property
+    def density_kg_m3(self) -> float: ...
+    def volume_report(self, vertices: ArrayLike) -> VolumeReport: ...
+    def quantities(self, vertices: ArrayLike) -> dict[str, F64]: ...
+
 class RegistrationResult:
     # What ``register`` returns: fitted vertices and labels (faces: the template's), the volume
     # report of the fitted mesh, the summary, the per-iteration log and the parameters used.

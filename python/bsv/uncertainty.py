@@ -10,7 +10,8 @@ Two independent sources are combined:
    (the Cali model of DESIGN.md; its "x vertical, y transversal" axes of the portrait sensor are our Y and
    X). Each draw moves every camera's part of the fitted surface rigidly by ``E_alt o E^-1`` with the
    blending weights of the calibration floor (:func:`bsv.bench.floor.camera_weights`) and re-measures it
-   with :func:`bsv.volumes`: no new registration. A fixed seed makes it reproducible.
+   as :func:`bsv.volumes` would (the mesh prepared once, every draw re-measured in one parallel call): no
+   new registration. A fixed seed makes it reproducible.
 2. **Depth noise and registration** (an error model): per quantity, the bias and the prediction standard
    deviation of the registration error measured on a synthetic cohort (``bsv/data/noise_model.json``,
    derived by :mod:`bsv.bench.noisemodel`; its ``derivation`` says from which runs). The table has one
@@ -30,10 +31,8 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import time
 from collections.abc import Mapping, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
@@ -211,8 +210,10 @@ def calibration_spread(mesh: Mesh, cameras: Sequence[CameraSpread], *, samples: 
                        seed: int = DEFAULT_SEED, density: float = 1000.0) -> dict[str, float]:
     """Per quantity, the standard deviation (in the comparison space) of the re-measured fitted mesh over
     ``samples`` calibration draws: each camera's extrinsics perturbed within its covariance, its part of
-    the surface moved rigidly (floor weights), :func:`bsv.volumes` with the fitted mesh's settings."""
-    from . import volumes
+    the surface moved rigidly (floor weights), the volumes of :func:`bsv.volumes` with the fitted mesh's
+    settings. The mesh is prepared once (:class:`bsv._bsv.PreparedVolumes`: validation, labels, island
+    merging and caps) and re-measured at every draw's vertices in one parallel call: the same numbers as
+    :func:`bsv.volumes` on each moved mesh."""
     from .bench.floor import CameraPose, camera_weights, vertex_normals
 
     if samples < 2:
@@ -220,31 +221,51 @@ def calibration_spread(mesh: Mesh, cameras: Sequence[CameraSpread], *, samples: 
     if not cameras:
         return {}
     covs = [check_covariance(c.covariance, f"camera {c.name!r}") for c in cameras]
-    nominal = quantities(volumes(mesh, islands=True, density=density))
+    prepared = _bsv.PreparedVolumes(mesh.vertices, mesh.faces, mesh.vertex_labels, mesh.face_labels, None,
+                                    float(density), False, True)
     w = camera_weights(vertex_normals(mesh.vertices, mesh.faces),
                        [CameraPose(c.name, c.rotation, c.translation, c.rotation, c.translation) for c in cameras])
+    # The draws first, in order (the same draws as ever for a seed), then every moved mesh at once.
     rng = np.random.default_rng(seed)
-    names = sorted(nominal)
-    # The draws first, in order (the same draws whatever the threads), then the volumes of the moved
-    # meshes on a thread pool: bsv.volumes releases the GIL, and it is most of the time.
     draws = [[rng.multivariate_normal(np.zeros(6), cov, method="eigh") for cov in covs] for _ in range(samples)]
+    vertices = np.asarray(mesh.vertices, dtype=np.float64)
+    stack = np.empty((samples + 1, len(vertices), 3))
+    stack[0] = vertices  # row 0: the nominal mesh
+    moved_vertices(vertices, w, cameras, draws, out=stack[1:])
+    measured = prepared.quantities(stack)
+    nominal = {n: float(v[0]) for n, v in measured.items() if math.isfinite(float(v[0]))}
+    names = sorted(nominal)
+    out: dict[str, float] = {}
+    for n in names:
+        col = measured[n][1:]
+        if is_additive(n):
+            dev = col - nominal[n]
+        else:
+            dev = np.log(np.where(col > 0, col, np.nan)) - math.log(nominal[n]) if nominal[n] > 0 else col * np.nan
+        if np.isfinite(dev).sum() > 1:
+            out[n] = float(np.nanstd(dev, ddof=1))
+    return out
 
-    def measure(deltas: list[np.ndarray]) -> dict[str, float]:
-        moved = np.zeros_like(mesh.vertices)
+
+def moved_vertices(vertices: np.ndarray, weights: np.ndarray, cameras: Sequence[CameraSpread],
+                   draws: Sequence[Sequence[np.ndarray]], out: np.ndarray | None = None) -> np.ndarray:
+    """The (S, N, 3) vertices of S calibration draws: in draw ``s`` camera ``k``'s extrinsics are perturbed by
+    ``draws[s][k]`` (:func:`perturb`) and its rigid error ``E_alt o E^-1``
+    (:meth:`bsv.bench.floor.CameraPose.error_transform`) moves the vertices, blended with the (N, C)
+    ``weights``: ``sum_k weights[:, k] * (R_sk v + t_sk)``, one matrix product per draw."""
+    from .bench.floor import CameraPose
+
+    v = np.asarray(vertices, dtype=np.float64)
+    w = np.asarray(weights, dtype=np.float64)
+    rhs = np.empty((len(draws), 4 * len(cameras), 3))
+    for s, deltas in enumerate(draws):
         for k, (c, delta) in enumerate(zip(cameras, deltas, strict=True)):
             r_alt, t_alt = perturb(c.rotation, c.translation, delta)
-            moved += w[:, [k]] * CameraPose(c.name, c.rotation, c.translation, r_alt, t_alt).apply_error(mesh.vertices)
-        return quantities(volumes(Mesh(moved, mesh.faces, mesh.vertex_labels, mesh.face_labels), islands=True,
-                                  density=density))
-
-    with ThreadPoolExecutor(max_workers=max(1, min(4, os.cpu_count() or 1))) as pool:
-        measured = list(pool.map(measure, draws))
-    dev = np.full((samples, len(names)), np.nan)
-    for s, q in enumerate(measured):
-        for j, n in enumerate(names):
-            if n in q:
-                dev[s, j] = transform(n, q[n]) - transform(n, nominal[n])
-    return {n: float(np.nanstd(dev[:, j], ddof=1)) for j, n in enumerate(names) if np.isfinite(dev[:, j]).sum() > 1}
+            r_err, t_err = CameraPose(c.name, c.rotation, c.translation, r_alt, t_alt).error_transform()
+            rhs[s, 3 * k:3 * k + 3] = np.asarray(r_err).T
+            rhs[s, 3 * len(cameras) + k] = t_err
+    lhs = np.concatenate([w[:, [k]] * v for k in range(len(cameras))] + [w], axis=1)  # (N, 4C)
+    return np.matmul(lhs, rhs, out=out)
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -418,6 +439,7 @@ __all__ = [
     "intervals",
     "is_additive",
     "model_for",
+    "moved_vertices",
     "paper_covariance",
     "perturb",
     "pose_delta",

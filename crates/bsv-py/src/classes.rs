@@ -3,7 +3,9 @@
 //! (`pythonize`), so names, defaults and validation stay in `bsv-register`; Rust results become
 //! Python dicts through their `Serialize`. No JSON text crosses the boundary.
 
+use crate::convert::{labelled_mesh_from, points_from, stacked_points_from};
 use crate::errors::{parameter_error, py_err};
+use crate::functions::volume_options;
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -153,6 +155,96 @@ impl PyVolumeReport {
         parts.push(format!("{segments} segments"));
         parts.push(format!("mass_kg={:.2}", self.inner.mass_kg));
         format!("VolumeReport({})", parts.join(", "))
+    }
+}
+
+/// A labelled closed mesh prepared for re-measuring at many vertex positions
+/// (`bsv_volume::PreparedSegments`): the arguments of `volumes`; `quantities` and `volume_report` take
+/// the vertices moved (same count and order) and give what `volumes` gives on the moved mesh, without
+/// redoing the validation, labels, island merging and caps.
+#[pyclass(name = "PreparedVolumes", module = "bsv._bsv", frozen)]
+pub struct PyPreparedVolumes {
+    /// The prepared mesh.
+    inner: bsv_volume::PreparedSegments,
+    /// Density of the reports, kg/m^3.
+    density: f64,
+}
+
+#[pymethods]
+impl PyPreparedVolumes {
+    #[new]
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (vertices, faces, vertex_labels=None, face_labels=None, labels=None, density=1000.0, close_holes=false, islands=false))]
+    fn new(
+        py: Python<'_>,
+        vertices: &Bound<'_, PyAny>,
+        faces: &Bound<'_, PyAny>,
+        vertex_labels: Option<&Bound<'_, PyAny>>,
+        face_labels: Option<&Bound<'_, PyAny>>,
+        labels: Option<&Bound<'_, PyAny>>,
+        density: f64,
+        close_holes: bool,
+        islands: bool,
+    ) -> PyResult<Self> {
+        let mesh = labelled_mesh_from(vertices, faces, vertex_labels, face_labels, labels)?;
+        bsv_volume::check_density(density).map_err(py_err)?;
+        let opts = volume_options(close_holes, islands);
+        let inner = py.detach(|| bsv_volume::PreparedSegments::new(&mesh, &opts)).map_err(py_err)?;
+        Ok(PyPreparedVolumes { inner, density })
+    }
+
+    /// The vertex count every call must pass.
+    #[getter]
+    fn n_vertices(&self) -> usize {
+        self.inner.vertex_count()
+    }
+
+    /// Density of the reports, kg/m^3.
+    #[getter]
+    fn density_kg_m3(&self) -> f64 {
+        self.density
+    }
+
+    /// The volumes report with the vertices at `vertices` ((N, 3)).
+    fn volume_report(&self, py: Python<'_>, vertices: &Bound<'_, PyAny>) -> PyResult<PyVolumeReport> {
+        let v = points_from(vertices, "vertices")?;
+        let inner = py.detach(|| self.inner.report(&v, self.density)).map_err(py_err)?;
+        Ok(PyVolumeReport { inner })
+    }
+
+    /// Per name of the reports' `volumes_l` and `ratios` (first-seen order), an (S,) array over the S
+    /// vertex arrays of `vertices` ((S, N, 3)); NaN where a draw has no finite value. Evaluated in
+    /// parallel without the GIL.
+    fn quantities<'py>(&self, py: Python<'py>, vertices: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyDict>> {
+        use numpy::PyUntypedArrayMethods as _;
+        let stack = stacked_points_from(vertices, "vertices")?;
+        let (s, n) = (stack.shape()[0], stack.shape()[1]);
+        let flat = stack.as_slice()?;
+        let draws: Vec<&[f64]> = if n == 0 { vec![&[][..]; s] } else { flat.chunks_exact(3 * n).collect() };
+        let reports = py.detach(|| self.inner.reports_many_coords(&draws, self.density)).map_err(py_err)?;
+        let mut names: Vec<&str> = Vec::new();
+        let mut columns: Vec<Vec<f64>> = Vec::new();
+        for (i, r) in reports.iter().enumerate() {
+            for (k, v) in r.volumes_l.0.iter().chain(&r.ratios.0) {
+                let j = names.iter().position(|x| x == k).unwrap_or_else(|| {
+                    names.push(k);
+                    columns.push(vec![f64::NAN; s]);
+                    names.len() - 1
+                });
+                if v.is_finite() {
+                    columns[j][i] = *v;
+                }
+            }
+        }
+        let out = PyDict::new(py);
+        for (k, c) in names.into_iter().zip(columns) {
+            out.set_item(k, PyArray1::from_vec(py, c))?;
+        }
+        Ok(out)
+    }
+
+    fn __repr__(&self) -> String {
+        format!("PreparedVolumes({} vertices, density_kg_m3={})", self.inner.vertex_count(), self.density)
     }
 }
 

@@ -9,7 +9,8 @@ use crate::errors::input_error;
 use bsv_core::{PointCloud, TriMesh};
 use numpy::ndarray::Array2;
 use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyArrayDescrMethods, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods,
+    IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayDescrMethods, PyArrayMethods, PyReadonlyArray3, PyUntypedArray,
+    PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -65,6 +66,60 @@ fn rows3(obj: &Bound<'_, PyAny>, what: &str, hint: &str) -> PyResult<Vec<[f64; 3
 /// Copies an (N, 3) array of points (metres).
 pub fn points_from(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[f64; 3]>> {
     rows3(obj, what, "x, y, z in metres")
+}
+
+/// A stack of S point arrays as a C-contiguous float64 (S, N, 3) array (no copy when it already is
+/// one), or an `InputError`. Its `as_slice()` holds the S arrays one after another.
+pub fn stacked_points_from<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<PyReadonlyArray3<'py, f64>> {
+    let a = asarray(obj, None, what)?;
+    if a.ndim() != 3 || a.shape()[2] != 3 {
+        return Err(input_error(
+            what,
+            None,
+            format!(
+                "{what} must have shape (S, N, 3) (S arrays of N points x, y, z in metres; one array: add a \
+                 leading axis, vertices[None]), got {}",
+                shape_text(a.shape())
+            ),
+        ));
+    }
+    if !matches!(kind(&a), b'f' | b'i' | b'u' | b'b') {
+        return Err(input_error(what, None, format!("{what} must hold real numbers, got dtype {}", a.dtype())));
+    }
+    let py = obj.py();
+    let c = py
+        .import("numpy")?
+        .call_method1("ascontiguousarray", (a, "float64"))
+        .map_err(|e| input_error(what, None, format!("{what} is not a numeric array: {e}")))?;
+    Ok(c.cast_into::<PyArray3<f64>>()?.readonly())
+}
+
+/// A mesh from array-likes with `labels` (per vertex or per face, told apart by length) replacing the
+/// mesh's own when given: the arguments of `volumes` and `PreparedVolumes`.
+pub fn labelled_mesh_from(
+    vertices: &Bound<'_, PyAny>,
+    faces: &Bound<'_, PyAny>,
+    vertex_labels: Option<&Bound<'_, PyAny>>,
+    face_labels: Option<&Bound<'_, PyAny>>,
+    labels: Option<&Bound<'_, PyAny>>,
+) -> PyResult<TriMesh> {
+    let mut mesh = mesh_from(vertices, faces, vertex_labels, face_labels)?;
+    if let Some(l) = labels.filter(|l| !l.is_none()) {
+        let l = label_values(l, "labels")?;
+        let (nv, nf) = (mesh.vertices.len(), mesh.triangles.len());
+        if l.len() == nv {
+            mesh.vertex_labels = Some(l);
+        } else if l.len() == nf {
+            mesh.face_labels = Some(l);
+        } else {
+            return Err(input_error(
+                "labels",
+                None,
+                format!("labels has {} entries; expected one per vertex ({nv}) or per face ({nf})", l.len()),
+            ));
+        }
+    }
+    Ok(mesh)
 }
 
 /// An integer-valued array as i64 (whole-valued floats accepted), or an `InputError`.

@@ -1,7 +1,9 @@
 //! The functions of `bsv._bsv` (see `python/bsv/_bsv.pyi`): conversion, one library call, conversion.
 
 use crate::classes::{from_kwargs, to_py, PyVolumeReport};
-use crate::convert::{cloud_from, cloud_to, label_values, mesh_from, mesh_to, points_from, triangles_from};
+use crate::convert::{
+    cloud_from, cloud_to, label_values, labelled_mesh_from, mesh_from, mesh_to, points_from, triangles_from,
+};
 use crate::errors::{input_error, py_err};
 use bsv_capture::scanner::{self, Condition, Rig, Room};
 use bsv_core::io::{self, PlyEncoding};
@@ -94,26 +96,17 @@ fn volumes(
     close_holes: bool,
     islands: bool,
 ) -> PyResult<PyVolumeReport> {
-    let mut mesh = mesh_from(vertices, faces, vertex_labels, face_labels)?;
-    if let Some(l) = labels.filter(|l| !l.is_none()) {
-        let l = label_values(l, "labels")?;
-        let (nv, nf) = (mesh.vertices.len(), mesh.triangles.len());
-        if l.len() == nv {
-            mesh.vertex_labels = Some(l);
-        } else if l.len() == nf {
-            mesh.face_labels = Some(l);
-        } else {
-            return Err(input_error(
-                "labels",
-                None,
-                format!("labels has {} entries; expected one per vertex ({nv}) or per face ({nf})", l.len()),
-            ));
-        }
-    }
-    let base = if islands { bsv_volume::SegmentOptions::fitted() } else { bsv_volume::SegmentOptions::default() };
-    let opts = bsv_volume::SegmentOptions { close_holes, ..base };
+    let mesh = labelled_mesh_from(vertices, faces, vertex_labels, face_labels, labels)?;
+    let opts = volume_options(close_holes, islands);
     let inner = py.detach(|| bsv_volume::report_with(&mesh, density, &opts)).map_err(py_err)?;
     Ok(PyVolumeReport { inner })
+}
+
+/// The segment options of the `close_holes` and `islands` arguments (`islands`:
+/// `SegmentOptions::fitted()`, the policy for registered meshes).
+pub fn volume_options(close_holes: bool, islands: bool) -> bsv_volume::SegmentOptions {
+    let base = if islands { bsv_volume::SegmentOptions::fitted() } else { bsv_volume::SegmentOptions::default() };
+    bsv_volume::SegmentOptions { close_holes, ..base }
 }
 
 /// The embedded template (9 segments, or 14 with `full`), or the one named `kind` (`TemplateKind::NAMES`).

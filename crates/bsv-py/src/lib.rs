@@ -20,6 +20,7 @@ fn _bsv(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<classes::PyRegisterParams>()?;
     m.add_class::<classes::PyRegistration>()?;
     m.add_class::<classes::PyVolumeReport>()?;
+    m.add_class::<classes::PyPreparedVolumes>()?;
     m.add_function(wrap_pyfunction!(register::register, m)?)?;
     functions::register(m)?;
     fuse::register(m)?;

@@ -61,14 +61,24 @@ pub fn close_holes(mesh: &TriMesh) -> Result<(TriMesh, Vec<Hole>), VolumeError> 
     Ok((closed.into_owned(), holes))
 }
 
+/// A boundary loop: its half-edges `(from, to, face)` in walking order.
+pub(crate) type BoundaryLoop = Vec<(u32, u32, u32)>;
+
 /// Validates, checks manifoldness, closes holes when allowed; returns the closed mesh and its edges.
 pub(crate) fn prepare(mesh: &TriMesh, close: bool) -> Result<(Cow<'_, TriMesh>, Vec<Hole>, EdgeTable), VolumeError> {
+    let (closed, holes, _, table) = prepare_loops(mesh, close)?;
+    Ok((closed, holes, table))
+}
+
+/// `prepare`, also returning the boundary loops that were closed: the fan apex of loop `k` is the
+/// closed mesh's vertex `mesh.vertices.len() + k` (see [`hole_of`] to redo the holes at new positions).
+pub(crate) fn prepare_loops(mesh: &TriMesh, close: bool) -> Closing<'_> {
     validate(mesh)?;
     check_labels(mesh)?;
     let table = EdgeTable::build(&mesh.triangles);
     table.check_manifold(&mesh.vertices)?;
     if table.boundary.is_empty() {
-        return Ok((Cow::Borrowed(mesh), Vec::new(), table));
+        return Ok((Cow::Borrowed(mesh), Vec::new(), Vec::new(), table));
     }
     if !close {
         return Err(open_error(&mesh.vertices, &table));
@@ -77,15 +87,13 @@ pub(crate) fn prepare(mesh: &TriMesh, close: bool) -> Result<(Cow<'_, TriMesh>, 
     let mut out = mesh.clone();
     let mut holes = Vec::with_capacity(loops.len());
     for l in &loops {
-        let c = loop_centroid(&mesh.vertices, l);
+        let hole = hole_of(&mesh.vertices, l);
         let apex = out.vertices.len() as u32;
-        out.vertices.push(c);
+        out.vertices.push(hole.centroid);
         let n = l.len();
-        let mut perimeter = 0.0;
         let mut face_votes = Vec::with_capacity(n);
         let mut vertex_votes = Vec::with_capacity(n);
         for &(a, b, f) in l {
-            perimeter += dist2(mesh.vertices[a as usize], mesh.vertices[b as usize]).sqrt();
             out.triangles.push([apex, b, a]);
             if let Some(fl) = &mesh.face_labels {
                 face_votes.push(fl[f as usize]);
@@ -101,11 +109,21 @@ pub(crate) fn prepare(mesh: &TriMesh, close: bool) -> Result<(Cow<'_, TriMesh>, 
         if let Some(vl) = &mut out.vertex_labels {
             vl.push(most_common(&vertex_votes));
         }
-        holes.push(Hole { centroid: c, edges: n, perimeter_m: perimeter });
+        holes.push(hole);
     }
     let table = EdgeTable::build(&out.triangles);
     table.check_manifold(&out.vertices)?;
-    Ok((Cow::Owned(out), holes, table))
+    Ok((Cow::Owned(out), holes, loops, table))
+}
+
+/// What [`prepare_loops`] returns: the closed mesh, its holes, their loops and its edge table, or why not.
+pub(crate) type Closing<'a> = Result<(Cow<'a, TriMesh>, Vec<Hole>, Vec<BoundaryLoop>, EdgeTable), VolumeError>;
+
+/// The hole a boundary loop leaves at `vertices`: the loop centroid (the fan apex), its edge count
+/// and perimeter. The one rule of hole closing and of re-measuring a prepared mesh at new positions.
+pub(crate) fn hole_of(vertices: &[[f64; 3]], l: &[(u32, u32, u32)]) -> Hole {
+    let perimeter_m = l.iter().fold(0.0, |p, &(a, b, _)| p + dist2(vertices[a as usize], vertices[b as usize]).sqrt());
+    Hole { centroid: loop_centroid(vertices, l), edges: l.len(), perimeter_m }
 }
 
 /// The `OpenMesh` error of a mesh with boundary edges: loop count and the centroids of the largest loops.

@@ -112,7 +112,12 @@ pub(crate) fn validate(mesh: &TriMesh) -> Result<(), VolumeError> {
             return Err(VolumeError::DegenerateFace { face, vertex: t[1] });
         }
     }
-    if let Some((vertex, p)) = mesh.vertices.iter().enumerate().find(|(_, p)| !p.iter().all(|v| v.is_finite())) {
+    check_finite(&mesh.vertices)
+}
+
+/// A `NonFiniteVertex` error for the first vertex with a NaN or infinite coordinate.
+pub(crate) fn check_finite(vertices: &[[f64; 3]]) -> Result<(), VolumeError> {
+    if let Some((vertex, p)) = vertices.iter().enumerate().find(|(_, p)| !p.iter().all(|v| v.is_finite())) {
         return Err(VolumeError::NonFiniteVertex { vertex, position: *p });
     }
     Ok(())

@@ -97,6 +97,17 @@ pub enum VolumeError {
         /// The bad label.
         label: u8,
     },
+    /// A vertex array passed to a prepared mesh (`PreparedSegments`) has another vertex count.
+    #[error(
+        "the vertex array has {got} vertices but the prepared mesh has {expected}; pass the prepared mesh's \
+         vertices moved (same count and order), or prepare the other mesh"
+    )]
+    VertexCountMismatch {
+        /// Vertex count of the prepared mesh.
+        expected: usize,
+        /// Vertex count given.
+        got: usize,
+    },
     /// The density is not a positive finite number.
     #[error("density {0} kg/m^3 is not a positive finite number; use e.g. 1000 (water) or 1010 (body)")]
     InvalidDensity(f64),

@@ -1,6 +1,7 @@
 //! BSV volumes: divergence-theorem volumes of closed meshes, segment labels on meshes, segment
 //! volumes closed by shared caps (they add up to the whole exactly), aggregates, ratios, asymmetry,
-//! mass and the volumes report (JSON of DESIGN.md "Formats" and a readable table).
+//! mass, re-measurement of a prepared mesh at many vertex positions, and the volumes report (JSON of
+//! DESIGN.md "Formats" and a readable table).
 //!
 //! Geometry is in metres and volumes in m^3 internally; reports are in litres.
 
@@ -10,6 +11,7 @@ pub mod error;
 pub mod indices;
 pub mod labels;
 pub mod mass;
+pub mod prepared;
 pub mod report;
 pub mod segments;
 
@@ -21,7 +23,8 @@ pub use labels::{
     IslandReport,
 };
 pub use mass::{mass_properties, segment_mass_with, MassProperties, SegmentMass};
-pub use report::{report, report_with, NamedValues, Units, VolumeReport};
+pub use prepared::PreparedSegments;
+pub use report::{check_density, report, report_with, NamedValues, Units, VolumeReport};
 pub use segments::{
     segment_volumes, segment_volumes_with, volumes_by_label, CapStats, Interface, LabelSource, LabelVolumes,
     SegmentOptions, SegmentVolumes,

@@ -108,9 +108,7 @@ pub struct VolumeReport {
 impl VolumeReport {
     /// Builds the report of measured segment volumes at a density (kg/m^3).
     pub fn from_volumes(v: &SegmentVolumes, density_kg_m3: f64) -> Result<VolumeReport, VolumeError> {
-        if !(density_kg_m3.is_finite() && density_kg_m3 > 0.0) {
-            return Err(VolumeError::InvalidDensity(density_kg_m3));
-        }
+        check_density(density_kg_m3)?;
         let mut volumes = NamedValues::default();
         for (s, m3) in &v.segments {
             volumes.push(s.name(), m3 * L_PER_M3);
@@ -163,10 +161,18 @@ pub fn report(mesh: &TriMesh, density_kg_m3: f64) -> Result<VolumeReport, Volume
 
 /// `report` with options (hole closing, island merging).
 pub fn report_with(mesh: &TriMesh, density_kg_m3: f64, opts: &SegmentOptions) -> Result<VolumeReport, VolumeError> {
-    if !(density_kg_m3.is_finite() && density_kg_m3 > 0.0) {
-        return Err(VolumeError::InvalidDensity(density_kg_m3));
-    }
+    check_density(density_kg_m3)?;
     VolumeReport::from_volumes(&segment_volumes_with(mesh, opts)?, density_kg_m3)
+}
+
+/// `InvalidDensity` unless the density (kg/m^3) is a positive finite number: the one check of every
+/// report (and of callers that take a density before they measure, e.g. the Python `PreparedVolumes`).
+pub fn check_density(density_kg_m3: f64) -> Result<(), VolumeError> {
+    if density_kg_m3.is_finite() && density_kg_m3 > 0.0 {
+        Ok(())
+    } else {
+        Err(VolumeError::InvalidDensity(density_kg_m3))
+    }
 }
 
 impl fmt::Display for VolumeReport {

@@ -21,11 +21,15 @@
 //!    on the line where the cut surfaces meet when the junctions do (two triple points of a limb joint,
 //!    the poles of a sphere cut in three sectors), so planar cuts stay planar and the parts are exact.
 //!
+//! Steps 1 and the topology of 2-3 depend on the labels only (`Caps::build`, once per labelling); the
+//! positions enter in `Caps::integrals` alone, which [`crate::PreparedSegments`] reuses to re-measure a
+//! mesh at many vertex positions.
+//!
 //! Because every segment surface is closed, its volume does not depend on the reference point of the
 //! tetrahedra (the mesh centroid is used for round-off). Faces labelled 0 (unlabelled) are treated as a
 //! segment of their own: they count in `whole` but produce no segment entry.
 
-use crate::closed::{open_error, prepare, Hole};
+use crate::closed::{open_error, prepare_loops, BoundaryLoop, Hole};
 use crate::edges::{det6, used_centroid, validate, EdgeTable};
 use crate::labels::{face_labels_from_vertices, merge_small_islands, IslandOptions, IslandReport};
 use crate::mass::Moments;
@@ -134,6 +138,8 @@ pub(crate) struct Labelled<'a> {
     pub closed: std::borrow::Cow<'a, TriMesh>,
     /// Holes closed.
     pub holes: Vec<Hole>,
+    /// Their boundary loops (the apex of loop `k` is vertex `n + k` of `closed`, n the input's count).
+    pub loops: Vec<BoundaryLoop>,
     /// Edge table of `closed`.
     pub table: EdgeTable,
     /// One label per face of `closed` (islands merged when asked).
@@ -147,7 +153,7 @@ pub(crate) struct Labelled<'a> {
 /// Validates, closes holes when asked, and picks the face labels (faces, else vertices, else none)
 /// with small islands merged when asked: the one labelling rule of volumes and mass properties.
 pub(crate) fn labelled<'a>(mesh: &'a TriMesh, opts: &SegmentOptions) -> Result<Labelled<'a>, VolumeError> {
-    let (closed, holes, table) = prepare(mesh, opts.close_holes)?;
+    let (closed, holes, loops, table) = prepare_loops(mesh, opts.close_holes)?;
     let (mut labels, source) = match (&closed.face_labels, &closed.vertex_labels) {
         (Some(f), _) => (f.clone(), LabelSource::Faces),
         (None, Some(v)) => (face_labels_from_vertices(&closed.triangles, v), LabelSource::Vertices),
@@ -157,14 +163,30 @@ pub(crate) fn labelled<'a>(mesh: &'a TriMesh, opts: &SegmentOptions) -> Result<L
         (Some(o), LabelSource::Faces | LabelSource::Vertices) => Some(merge_small_islands(&closed, &mut labels, &o)),
         _ => None,
     };
-    Ok(Labelled { closed, holes, table, labels, source, islands })
+    Ok(Labelled { closed, holes, loops, table, labels, source, islands })
 }
 
 /// Segment volumes with options (hole closing, island merging).
 pub fn segment_volumes_with(mesh: &TriMesh, opts: &SegmentOptions) -> Result<SegmentVolumes, VolumeError> {
-    let Labelled { closed, holes, table, labels, source, islands } = labelled(mesh, opts)?;
+    let Labelled { closed, holes, table, labels, source, islands, .. } = labelled(mesh, opts)?;
+    let caps = Caps::build(closed.vertices.len(), &table, &labels);
+    Ok(segment_volumes_at(&closed.vertices, &closed.triangles, &labels, &caps, source, holes, islands))
+}
+
+/// The part of `segment_volumes_with` that reads the positions: the volumes of the labelled closed
+/// mesh (`triangles` labelled `labels`, caps `caps` built on them) at `vertices`, and the notes. Shared
+/// with [`crate::PreparedSegments`], which fixes everything but `vertices` (and `holes`, redone at them).
+pub(crate) fn segment_volumes_at(
+    vertices: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    labels: &[u8],
+    caps: &Caps,
+    source: LabelSource,
+    holes: Vec<Hole>,
+    islands: Option<IslandReport>,
+) -> SegmentVolumes {
     let mut notes = Vec::new();
-    let lv = label_volumes(&closed.vertices, &closed.triangles, &table, &labels);
+    let lv = caps.volumes(used_centroid(vertices, triangles), vertices, triangles, labels);
     let inverted = lv.whole_m3 < 0.0;
     let sign = if inverted { -1.0 } else { 1.0 };
     let mut segments = BTreeMap::new();
@@ -208,7 +230,7 @@ pub fn segment_volumes_with(mesh: &TriMesh, opts: &SegmentOptions) -> Result<Seg
             notes.push(format!("segment {s} has a non-positive volume ({:.4} L): its labels are probably scattered; merge small islands", v * 1e3));
         }
     }
-    Ok(SegmentVolumes {
+    SegmentVolumes {
         whole_m3: sign * lv.whole_m3,
         segments,
         unlabelled_m3: unlabelled,
@@ -218,7 +240,7 @@ pub fn segment_volumes_with(mesh: &TriMesh, opts: &SegmentOptions) -> Result<Seg
         islands,
         caps: lv.caps,
         notes,
-    })
+    }
 }
 
 /// A six-fold tetrahedron integral summed per label: the volume (`f64`, `det6`) or the volume
@@ -300,9 +322,7 @@ fn label_volumes_at(
     table: &EdgeTable,
     face_labels: &[u8],
 ) -> LabelVolumes {
-    let li = label_integrals_at::<f64>(r, vertices, triangles, table, face_labels);
-    let by_label = li.by_label.iter().map(|&(l, v, n)| (l, v / 6.0, n)).collect();
-    LabelVolumes { whole_m3: li.whole / 6.0, by_label, caps: li.caps }
+    Caps::build(vertices.len(), table, face_labels).volumes(r, vertices, triangles, face_labels)
 }
 
 /// The integrals of every label with the caps of the module docs, tetrahedra from `r`.
@@ -313,21 +333,138 @@ fn label_integrals_at<I: Integrand>(
     table: &EdgeTable,
     face_labels: &[u8],
 ) -> LabelIntegrals<I> {
-    let (mut acc, count, whole) = face_integrals::<I>(r, vertices, triangles, face_labels);
-    // 1. Interface edges, chained into pieces.
-    let iface = interface_edges(table, face_labels);
-    let mut caps = CapStats { interface_edges: iface.len(), ..CapStats::default() };
-    if iface.is_empty() {
-        return finish(r, acc, count, whole, caps, Vec::new());
+    Caps::build(vertices.len(), table, face_labels).integrals(r, vertices, triangles, face_labels)
+}
+
+/// The caps between the segments of a labelling, without positions (step 1 of the module docs and the
+/// topology of steps 2-3): the interface edges chained into pieces, the distinct vertices of each piece
+/// (its apex is their centroid), the unmatched spokes and the junction clusters (each hub the centroid
+/// of its junction vertices). Built once per labelling; [`Caps::integrals`] adds the positions, so a
+/// mesh whose vertices move (same triangles and labels) is re-measured without redoing this.
+pub(crate) struct Caps {
+    /// The interface edges.
+    iface: Vec<IEdge>,
+    /// Their pieces.
+    pieces: Pieces,
+    /// Hub (junction cluster) of each spoke of `pieces.spokes`.
+    spoke_hub: Vec<u32>,
+    /// Junction vertices of each hub (CSR: hub `h`'s are `hub_vertices[hub_start[h]..hub_start[h + 1]]`).
+    hub_start: Vec<usize>,
+    /// See `hub_start`.
+    hub_vertices: Vec<u32>,
+    /// Cap statistics (topology only).
+    stats: CapStats,
+}
+
+impl Caps {
+    /// The caps of `face_labels` on a closed mesh of `n_vertices` vertices with edge table `table`.
+    pub(crate) fn build(n_vertices: usize, table: &EdgeTable, face_labels: &[u8]) -> Caps {
+        let iface = interface_edges(table, face_labels);
+        let (piece, n_pieces) = chain_pieces(n_vertices, &iface);
+        let pieces = Pieces::build(&iface, piece, n_pieces);
+        // Junction clusters: pieces and junction vertices linked by spokes, one hub per cluster.
+        let np = pieces.count;
+        let mut open = vec![false; np];
+        let mut junction_id = vec![u32::MAX; n_vertices];
+        let mut junctions: Vec<u32> = Vec::new();
+        for &(p, v, _) in &pieces.spokes {
+            open[p as usize] = true;
+            if junction_id[v as usize] == u32::MAX {
+                junction_id[v as usize] = junctions.len() as u32;
+                junctions.push(v);
+            }
+        }
+        let mut cuf = UnionFind::new(np + junctions.len());
+        for &(p, v, _) in &pieces.spokes {
+            cuf.union(p as usize, np + junction_id[v as usize] as usize);
+        }
+        // Hubs numbered by their first junction; each lists its junctions in order.
+        let mut hub_of_root = vec![u32::MAX; np + junctions.len()];
+        let mut members: Vec<Vec<u32>> = Vec::new();
+        let mut hub_of = |root: usize, members: &mut Vec<Vec<u32>>| {
+            if hub_of_root[root] == u32::MAX {
+                hub_of_root[root] = members.len() as u32;
+                members.push(Vec::new());
+            }
+            hub_of_root[root] as usize
+        };
+        for (j, &v) in junctions.iter().enumerate() {
+            let h = hub_of(cuf.find(np + j), &mut members);
+            members[h].push(v);
+        }
+        let spoke_hub =
+            pieces.spokes.iter().map(|&(p, _, _)| hub_of(cuf.find(p as usize), &mut members) as u32).collect();
+        let mut hub_start = vec![0usize];
+        let mut hub_vertices = Vec::with_capacity(junctions.len());
+        for m in members {
+            hub_vertices.extend(m);
+            hub_start.push(hub_vertices.len());
+        }
+        let open_pieces = open.iter().filter(|&&o| o).count();
+        let stats = CapStats {
+            interface_edges: iface.len(),
+            closed_loops: np - open_pieces,
+            open_pieces,
+            junctions: junctions.len(),
+            clusters: (0..np + junctions.len()).filter(|&x| (x >= np || open[x]) && cuf.find(x) == x).count(),
+        };
+        Caps { iface, pieces, spoke_hub, hub_start, hub_vertices, stats }
     }
-    let (piece, n_pieces) = chain_pieces(vertices.len(), &iface);
-    // 2. One apex per piece, and the piece fans.
-    let pieces = Pieces::build(vertices, &iface, piece, n_pieces);
-    pieces.add_fans(r, vertices, &iface, &mut acc);
-    // 3. Junction clusters close the spokes of the open pieces.
-    pieces.close_spokes(r, vertices, &mut acc, &mut caps);
-    let interfaces = pieces.interfaces();
-    finish(r, acc, count, whole, caps, interfaces)
+
+    /// The hub of each junction cluster at `vertices`: the centroid of its junction vertices.
+    fn hubs(&self, vertices: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        self.hub_start
+            .windows(2)
+            .map(|w| {
+                let js = &self.hub_vertices[w[0]..w[1]];
+                let sum = js.iter().fold([0.0f64; 3], |s, &v| add(s, vertices[v as usize]));
+                scale(sum, 1.0 / js.len().max(1) as f64)
+            })
+            .collect()
+    }
+
+    /// Volumes (m^3, signed) of every label at `vertices`, tetrahedra from `r`.
+    pub(crate) fn volumes(
+        &self,
+        r: [f64; 3],
+        vertices: &[[f64; 3]],
+        triangles: &[[u32; 3]],
+        face_labels: &[u8],
+    ) -> LabelVolumes {
+        let li = self.integrals::<f64>(r, vertices, triangles, face_labels);
+        let by_label = li.by_label.iter().map(|&(l, v, n)| (l, v / 6.0, n)).collect();
+        LabelVolumes { whole_m3: li.whole / 6.0, by_label, caps: li.caps }
+    }
+
+    /// The six-fold integrals of every label at `vertices` (the caps' triangles and labels fixed),
+    /// tetrahedra from `r`: faces, then the piece fans to their apexes, then the spokes closed at the
+    /// hubs; apexes and hubs are the centroids of their vertices at `vertices`.
+    pub(crate) fn integrals<I: Integrand>(
+        &self,
+        r: [f64; 3],
+        vertices: &[[f64; 3]],
+        triangles: &[[u32; 3]],
+        face_labels: &[u8],
+    ) -> LabelIntegrals<I> {
+        let (mut acc, count, whole) = face_integrals::<I>(r, vertices, triangles, face_labels);
+        if self.iface.is_empty() {
+            return finish(r, acc, count, whole, self.stats, Vec::new());
+        }
+        // 2. One apex per piece, and the piece fans.
+        let apex = self.pieces.apexes(vertices);
+        self.pieces.add_fans(r, vertices, &self.iface, &apex, &mut acc);
+        // 3. Each spoke closed by (apex, junction, hub) on both sides.
+        let hubs = self.hubs(vertices);
+        let pos = |v: u32| vertices[v as usize];
+        for (&(p, v, d), &h) in self.pieces.spokes.iter().zip(&self.spoke_hub) {
+            let w = I::tetra(r, apex[p as usize], pos(v), hubs[h as usize]) * f64::from(d);
+            let (lo, hi) = self.pieces.pair[p as usize];
+            acc[usize::from(lo)] += w;
+            acc[usize::from(hi)] -= w;
+        }
+        let interfaces = self.pieces.interfaces(&apex);
+        finish(r, acc, count, whole, self.stats, interfaces)
+    }
 }
 
 /// Sums the six-fold tetrahedron integrals of the faces from `r`: per label, the face count per
@@ -424,33 +561,32 @@ fn chain_pieces(n: usize, iface: &[IEdge]) -> (Vec<u32>, usize) {
     (piece, n_pieces as usize)
 }
 
-/// The interface pieces with their apexes, label pairs and unmatched spokes.
+/// The interface pieces: label pairs, distinct vertices and unmatched spokes (no positions).
 struct Pieces {
     /// Piece of each interface edge.
     of_edge: Vec<u32>,
     /// Number of pieces.
     count: usize,
-    /// Apex of each piece: the centroid of its distinct vertices.
-    apex: Vec<[f64; 3]>,
     /// `(smaller, larger)` label of each piece.
     pair: Vec<(u8, u8)>,
     /// `(piece, vertex, out - in)` on the smaller label's side, where non-zero: the ends of open pieces.
     spokes: Vec<(u32, u32, i32)>,
-    /// Number of distinct vertices of each piece.
-    size: Vec<usize>,
+    /// Distinct vertices of each piece, ascending (CSR: piece `p`'s are `members[start[p]..start[p + 1]]`).
+    start: Vec<usize>,
+    /// See `start`.
+    members: Vec<u32>,
 }
 
 impl Pieces {
-    fn build(vertices: &[[f64; 3]], iface: &[IEdge], of_edge: Vec<u32>, np: usize) -> Pieces {
-        let pos = |v: u32| vertices[v as usize];
+    fn build(iface: &[IEdge], of_edge: Vec<u32>, np: usize) -> Pieces {
         let mut incid: Vec<(u32, u32, i32)> = Vec::with_capacity(iface.len() * 2);
         for (k, e) in iface.iter().enumerate() {
             incid.push((of_edge[k], e.a, 1));
             incid.push((of_edge[k], e.b, -1));
         }
         incid.sort_unstable_by_key(|x| (x.0, x.1));
-        let mut apex_sum = vec![[0.0f64; 3]; np];
-        let mut apex_n = vec![0usize; np];
+        let mut start = vec![0usize; np + 1];
+        let mut members = Vec::new();
         let mut spokes: Vec<(u32, u32, i32)> = Vec::new();
         let mut i = 0;
         while i < incid.len() {
@@ -460,23 +596,36 @@ impl Pieces {
                 d += incid[i].2;
                 i += 1;
             }
-            apex_sum[p as usize] = add(apex_sum[p as usize], pos(v));
-            apex_n[p as usize] += 1;
+            members.push(v);
+            start[p as usize + 1] += 1;
             if d != 0 {
                 spokes.push((p, v, d));
             }
         }
-        let apex: Vec<[f64; 3]> =
-            apex_sum.iter().zip(&apex_n).map(|(s, &c)| scale(*s, 1.0 / c.max(1) as f64)).collect();
+        for p in 0..np {
+            start[p + 1] += start[p];
+        }
         let mut pair = vec![(0u8, 0u8); np];
         for (k, e) in iface.iter().enumerate() {
             pair[of_edge[k] as usize] = (e.lo, e.hi);
         }
-        Pieces { of_edge, count: np, apex, pair, spokes, size: apex_n }
+        Pieces { of_edge, count: np, pair, spokes, start, members }
+    }
+
+    /// The apex of each piece at `vertices`: the centroid of its distinct vertices.
+    fn apexes(&self, vertices: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        self.start
+            .windows(2)
+            .map(|w| {
+                let vs = &self.members[w[0]..w[1]];
+                let sum = vs.iter().fold([0.0f64; 3], |s, &v| add(s, vertices[v as usize]));
+                scale(sum, 1.0 / vs.len().max(1) as f64)
+            })
+            .collect()
     }
 
     /// The pieces as interfaces (label pair, apex, size, closed loop or not).
-    fn interfaces(&self) -> Vec<Interface> {
+    fn interfaces(&self, apex: &[[f64; 3]]) -> Vec<Interface> {
         let mut open = vec![false; self.count];
         for &(p, _, _) in &self.spokes {
             open[p as usize] = true;
@@ -485,61 +634,28 @@ impl Pieces {
             .map(|p| Interface {
                 lo: self.pair[p].0,
                 hi: self.pair[p].1,
-                centroid: self.apex[p],
-                vertices: self.size[p],
+                centroid: apex[p],
+                vertices: self.start[p + 1] - self.start[p],
                 closed: !open[p],
             })
             .collect()
     }
 
     /// Piece fans: the smaller label gets (apex, b, a), the larger the same triangle reversed.
-    fn add_fans<I: Integrand>(&self, r: [f64; 3], vertices: &[[f64; 3]], iface: &[IEdge], acc: &mut [I]) {
+    fn add_fans<I: Integrand>(
+        &self,
+        r: [f64; 3],
+        vertices: &[[f64; 3]],
+        iface: &[IEdge],
+        apex: &[[f64; 3]],
+        acc: &mut [I],
+    ) {
         let pos = |v: u32| vertices[v as usize];
         for (k, e) in iface.iter().enumerate() {
-            let d = I::tetra(r, self.apex[self.of_edge[k] as usize], pos(e.b), pos(e.a));
+            let d = I::tetra(r, apex[self.of_edge[k] as usize], pos(e.b), pos(e.a));
             acc[usize::from(e.lo)] += d;
             acc[usize::from(e.hi)] -= d;
         }
-    }
-
-    /// Junction clusters: pieces and junction vertices linked by spokes, one hub per cluster; each
-    /// spoke is closed by (apex, junction, hub) on both sides. Fills the piece and junction counts.
-    fn close_spokes<I: Integrand>(&self, r: [f64; 3], vertices: &[[f64; 3]], acc: &mut [I], caps: &mut CapStats) {
-        let pos = |v: u32| vertices[v as usize];
-        let np = self.count;
-        let mut open = vec![false; np];
-        let mut junction_id = vec![u32::MAX; vertices.len()];
-        let mut junctions: Vec<u32> = Vec::new();
-        for &(p, v, _) in &self.spokes {
-            open[p as usize] = true;
-            if junction_id[v as usize] == u32::MAX {
-                junction_id[v as usize] = junctions.len() as u32;
-                junctions.push(v);
-            }
-        }
-        let mut cuf = UnionFind::new(np + junctions.len());
-        for &(p, v, _) in &self.spokes {
-            cuf.union(p as usize, np + junction_id[v as usize] as usize);
-        }
-        let mut hub_sum = vec![[0.0f64; 3]; np + junctions.len()];
-        let mut hub_n = vec![0usize; np + junctions.len()];
-        for (j, &v) in junctions.iter().enumerate() {
-            let root = cuf.find(np + j);
-            hub_sum[root] = add(hub_sum[root], pos(v));
-            hub_n[root] += 1;
-        }
-        for &(p, v, d) in &self.spokes {
-            let root = cuf.find(p as usize);
-            let hub = scale(hub_sum[root], 1.0 / hub_n[root].max(1) as f64);
-            let w = I::tetra(r, self.apex[p as usize], pos(v), hub) * f64::from(d);
-            let (lo, hi) = self.pair[p as usize];
-            acc[usize::from(lo)] += w;
-            acc[usize::from(hi)] -= w;
-        }
-        caps.open_pieces = open.iter().filter(|&&o| o).count();
-        caps.closed_loops = np - caps.open_pieces;
-        caps.junctions = junctions.len();
-        caps.clusters = (0..np + junctions.len()).filter(|&x| (x >= np || open[x]) && cuf.find(x) == x).count();
     }
 }
 

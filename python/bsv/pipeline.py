@@ -151,8 +151,11 @@ def _calibration(calibration: PathLike | None, capture_dir: Path, cameras: Seque
     from .frontend import calibrate as cal
 
     if calibration is None:
+        here = capture_dir / "calibration.json"
+        hint = (f"; the capture folder has one: pass --calibration {here} to use it" if here.is_file() else "")
         raise CalibrationFileError(
             f"no calibration given for {capture_dir}: pass --calibration calibration.json (written by `bsv calibrate`)"
+            + hint
         )
     p = Path(calibration)
     if p.is_dir() and not (p / "calibration.json").is_file():

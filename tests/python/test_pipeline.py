@@ -211,6 +211,8 @@ def test_missing_calibration_is_a_clear_error(capture, tmp_path):
     cap, _ = capture
     with pytest.raises(CalibrationFileError, match="calibration"):
         pipeline.process(cap, None, tmp_path / "out", segmentation="oracle", progress=False)
+    with pytest.raises(CalibrationFileError, match="the capture folder has one"):  # the scanner wrote one
+        pipeline.process(cap, None, tmp_path / "out", segmentation="oracle", progress=False)
     with pytest.raises(CalibrationFileError, match="does not exist"):
         pipeline.process(cap, tmp_path / "nope.json", tmp_path / "out", segmentation="oracle", progress=False)
     assert pipeline.main_process([str(cap), "-o", str(tmp_path / "out2"), "--segmentation", "oracle", "--quiet"]) == 1

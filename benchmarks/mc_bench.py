@@ -59,6 +59,7 @@ def per_draw_spread(mesh: bsv.Mesh, cameras: Sequence[unc.CameraSpread], *, samp
     draws = [[rng.multivariate_normal(np.zeros(6), cov, method="eigh") for cov in covs] for _ in range(samples)]
 
     def measure(deltas: list[np.ndarray]) -> dict[str, float]:
+        """The quantities of the mesh moved by one draw's per-camera ``deltas`` (floor-weighted blend)."""
         moved = np.zeros_like(mesh.vertices)
         for k, (c, delta) in enumerate(zip(cameras, deltas, strict=True)):
             r_alt, t_alt = unc.perturb(c.rotation, c.translation, delta)
@@ -85,12 +86,16 @@ def timed(fn: Callable[[], object], repeat: int = 1) -> float:
 
 
 def row(name: str, peer: list[float], new: list[float], unit: float, unit_name: str) -> str:
+    """One Markdown table row for step ``name``: the median (min-max) of the ``peer`` and ``new`` timings
+    (seconds, shown times ``unit`` in ``unit_name``) and the ratio of the medians (peer / new)."""
     mp, mn = statistics.median(peer), statistics.median(new)
     return (f"| {name} | {mp * unit:.2f} ({min(peer) * unit:.2f}-{max(peer) * unit:.2f}) {unit_name} "
             f"| {mn * unit:.3f} ({min(new) * unit:.3f}-{max(new) * unit:.3f}) {unit_name} | {mp / mn:.0f}x |")
 
 
 def main() -> None:
+    """Parses the options, checks that both paths give the same spreads, times them in interleaved rounds
+    and prints the table (also written to ``--out`` when given)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=7, help="interleaved rounds (default 7)")
     ap.add_argument("--samples", type=int, default=unc.DEFAULT_SAMPLES, help="Monte Carlo draws (default 200)")

@@ -76,11 +76,11 @@ class PreparedVolumes:
     # ``n_vertices``: the vertex count every call must pass; ``density_kg_m3``: the reports' density.
     # ``volume_report(vertices)``: the report ``volumes`` gives on the mesh with its (N, 3) vertices at
     # ``vertices``.
-    # ``quantities(vertices)``: for each name of the reports' ``volumes_l`` then ``ratios`` (first-seen
-    # order), an (S,) array over the S vertex arrays of ``vertices`` ((S, N, 3), N = ``n_vertices``): the
-    # values ``bsv.uncertainty.quantities(volumes(moved mesh))`` gives, NaN where a draw has none;
-    # evaluated in parallel with the GIL released. A wrong N is a ``VolumeError``, a wrong shape an
-    # ``InputError``.
+    # ``quantities(vertices)``: for each quantity of the reports (``VolumeReport::quantities``: the finite
+    # entries of ``volumes_l`` then ``ratios``; first-seen order), an (S,) array over the S vertex arrays
+    # of ``vertices`` ((S, N, 3), N = ``n_vertices``): the values ``bsv.uncertainty.quantities(volumes(moved
+    # mesh))`` gives, NaN where a draw has none; copied, then evaluated in parallel with the GIL released.
+    # A wrong N is a ``VolumeError`` (also for S = 0), a wrong shape an ``InputError``.
 
     def __init__(
         self,

@@ -181,7 +181,12 @@ def is_additive(name: str) -> bool:
 
 
 def quantities(volumes: Mapping[str, Any]) -> dict[str, float]:
-    """The flat {name: value} of a volumes report's ``volumes_l`` and ``ratios`` (finite values only)."""
+    """The flat {name: value} of a volumes report's ``volumes_l`` then ``ratios`` (finite values only), for a
+    report as a dict (e.g. read from a JSON file).
+
+    It mirrors ``VolumeReport::quantities`` of bsv-volume, the one definition of the quantities the intervals
+    model, which :meth:`bsv._bsv.PreparedVolumes.quantities` (and so :func:`calibration_spread`) uses;
+    ``tests/python/test_uncertainty_prepared.py`` checks that the two give the same names and values."""
     out: dict[str, float] = {}
     for key in ("volumes_l", "ratios"):
         for k, v in (volumes.get(key) or {}).items():

@@ -11,7 +11,7 @@ import pytest
 import bsv
 from bsv import _bsv
 from bsv import uncertainty as unc
-from bsv.errors import InputError, VolumeError
+from bsv.errors import BsvError, InputError, VolumeError
 
 
 @pytest.fixture(scope="module")
@@ -134,3 +134,31 @@ def test_prepared_volumes_labels_holes_and_errors():
         _bsv.PreparedVolumes(v, f, None, None, labels, -1.0)
     with pytest.raises(VolumeError, match="open"):
         _bsv.PreparedVolumes(v, f[1:], None, None, labels)
+
+
+def test_wrong_vertex_counts_are_typed_errors_naming_vertices_even_for_no_draws():
+    v = np.array([[x, y, z] for x in (-0.2, 0.2) for y in (0.1, 1.7) for z in (-0.15, 0.15)], dtype=np.float64)
+    f = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                  [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]], dtype=np.int64)
+    p = _bsv.PreparedVolumes(v, f, None, None, np.array([1, 1, 1, 1, 2, 2, 2, 2], dtype=np.uint8))
+    for stack in (np.empty((0, 7, 3)), np.empty((0, 0, 3)), np.zeros((3, 9, 3))):
+        with pytest.raises(VolumeError) as info:
+            p.quantities(stack)
+        assert isinstance(info.value, BsvError)
+        text = str(info.value)
+        assert "vertices" in text and f"{stack.shape[1]} vertices but the prepared mesh has 8" in text, text
+    with pytest.raises(VolumeError, match=r"vertices.*prepared mesh has 8"):
+        p.volume_report(v[:5])
+    assert p.quantities(np.empty((0, 8, 3))) == {}
+
+
+def test_prepared_quantities_equal_the_python_rule_on_the_template(template):
+    # bsv.uncertainty.quantities (on report dicts) mirrors VolumeReport::quantities (used by
+    # PreparedVolumes.quantities): the same names, in the same order, with the same values.
+    m = template
+    want = unc.quantities(bsv.volumes(m, islands=True))
+    prepared = _bsv.PreparedVolumes(m.vertices, m.faces, m.vertex_labels, m.face_labels, None, 1000.0, False, True)
+    got = prepared.quantities(np.asarray(m.vertices, dtype=np.float64)[None])
+    assert list(got) == list(want)
+    assert {n: float(a[0]) for n, a in got.items()} == want
+    assert all(a.shape == (1,) for a in got.values())

@@ -212,32 +212,15 @@ impl PyPreparedVolumes {
         Ok(PyVolumeReport { inner })
     }
 
-    /// Per name of the reports' `volumes_l` and `ratios` (first-seen order), an (S,) array over the S
-    /// vertex arrays of `vertices` ((S, N, 3)); NaN where a draw has no finite value. Evaluated in
-    /// parallel without the GIL.
+    /// Per quantity of the reports (`bsv_volume::VolumeReport::quantities`, first-seen order), an (S,)
+    /// array over the S vertex arrays of `vertices` ((S, N, 3)); NaN where a draw has no finite value.
+    /// The arrays are copied first, then evaluated in parallel without the GIL.
     fn quantities<'py>(&self, py: Python<'py>, vertices: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyDict>> {
-        use numpy::PyUntypedArrayMethods as _;
-        let stack = stacked_points_from(vertices, "vertices")?;
-        let (s, n) = (stack.shape()[0], stack.shape()[1]);
-        let flat = stack.as_slice()?;
-        let draws: Vec<&[f64]> = if n == 0 { vec![&[][..]; s] } else { flat.chunks_exact(3 * n).collect() };
-        let reports = py.detach(|| self.inner.reports_many_coords(&draws, self.density)).map_err(py_err)?;
-        let mut names: Vec<&str> = Vec::new();
-        let mut columns: Vec<Vec<f64>> = Vec::new();
-        for (i, r) in reports.iter().enumerate() {
-            for (k, v) in r.volumes_l.0.iter().chain(&r.ratios.0) {
-                let j = names.iter().position(|x| x == k).unwrap_or_else(|| {
-                    names.push(k);
-                    columns.push(vec![f64::NAN; s]);
-                    names.len() - 1
-                });
-                if v.is_finite() {
-                    columns[j][i] = *v;
-                }
-            }
-        }
+        // An owned copy (the converter's): with the GIL released another thread could write to the array.
+        let (flat, [s, n]) = stacked_points_from(vertices, "vertices")?;
+        let table = py.detach(|| self.inner.quantities_stacked(&flat, s, n, self.density)).map_err(py_err)?;
         let out = PyDict::new(py);
-        for (k, c) in names.into_iter().zip(columns) {
+        for (k, c) in table.names.into_iter().zip(table.columns) {
             out.set_item(k, PyArray1::from_vec(py, c))?;
         }
         Ok(out)

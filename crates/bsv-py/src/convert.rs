@@ -9,7 +9,7 @@ use crate::errors::input_error;
 use bsv_core::{PointCloud, TriMesh};
 use numpy::ndarray::Array2;
 use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayDescrMethods, PyArrayMethods, PyReadonlyArray3, PyUntypedArray,
+    IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayDescrMethods, PyArrayMethods, PyUntypedArray,
     PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
@@ -68,9 +68,10 @@ pub fn points_from(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[f64; 3]>
     rows3(obj, what, "x, y, z in metres")
 }
 
-/// A stack of S point arrays as a C-contiguous float64 (S, N, 3) array (no copy when it already is
-/// one), or an `InputError`. Its `as_slice()` holds the S arrays one after another.
-pub fn stacked_points_from<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<PyReadonlyArray3<'py, f64>> {
+/// A stack of S point arrays ((S, N, 3)) copied into an owned buffer, the S arrays one after another
+/// (x y z per point, C order), with its (S, N); or an `InputError`. Owned, like the other converters'
+/// results, so that it can be read with the GIL released (no other thread can write to it).
+pub fn stacked_points_from(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(Vec<f64>, [usize; 2])> {
     let a = asarray(obj, None, what)?;
     if a.ndim() != 3 || a.shape()[2] != 3 {
         return Err(input_error(
@@ -91,7 +92,9 @@ pub fn stacked_points_from<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult
         .import("numpy")?
         .call_method1("ascontiguousarray", (a, "float64"))
         .map_err(|e| input_error(what, None, format!("{what} is not a numeric array: {e}")))?;
-    Ok(c.cast_into::<PyArray3<f64>>()?.readonly())
+    let a = c.cast_into::<PyArray3<f64>>()?.readonly();
+    let shape = [a.shape()[0], a.shape()[1]];
+    Ok((a.as_slice()?.to_vec(), shape))
 }
 
 /// A mesh from array-likes with `labels` (per vertex or per face, told apart by length) replacing the

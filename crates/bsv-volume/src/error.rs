@@ -99,14 +99,39 @@ pub enum VolumeError {
     },
     /// A vertex array passed to a prepared mesh (`PreparedSegments`) has another vertex count.
     #[error(
-        "the vertex array has {got} vertices but the prepared mesh has {expected}; pass the prepared mesh's \
-         vertices moved (same count and order), or prepare the other mesh"
+        "vertices: the vertex array has {got} vertices but the prepared mesh has {expected}; pass `vertices` \
+         as the prepared mesh's vertices moved (same count and order: {expected} rows of x, y, z), or prepare \
+         the mesh that has {got} vertices"
     )]
     VertexCountMismatch {
         /// Vertex count of the prepared mesh.
         expected: usize,
         /// Vertex count given.
         got: usize,
+    },
+    /// Flat coordinates passed to a prepared mesh (`PreparedSegments::evaluate_coords`) whose length is
+    /// not a multiple of 3, so they are not whole vertices.
+    #[error(
+        "vertices: the flat coordinate array has {len} numbers, which is not a multiple of 3 (x, y, z per \
+         vertex); pass the vertices as an (N, 3) array flattened row by row (x0 y0 z0 x1 y1 z1 ...)"
+    )]
+    CoordinatesNotTriples {
+        /// Length of the coordinate array.
+        len: usize,
+    },
+    /// A stack of flat coordinate arrays (`PreparedSegments::quantities_stacked`) whose length is not
+    /// draws x vertices x 3.
+    #[error(
+        "vertices: the stacked coordinate array has {len} numbers but {draws} draws of {vertices} vertices \
+         need {draws} x {vertices} x 3; pass a C-ordered (S, N, 3) array with its S and N"
+    )]
+    StackLengthMismatch {
+        /// Length of the coordinate array.
+        len: usize,
+        /// Number of draws (S) given.
+        draws: usize,
+        /// Vertex count per draw (N) given.
+        vertices: usize,
     },
     /// The density is not a positive finite number.
     #[error("density {0} kg/m^3 is not a positive finite number; use e.g. 1000 (water) or 1010 (body)")]

@@ -23,7 +23,7 @@ pub use labels::{
     IslandReport,
 };
 pub use mass::{mass_properties, segment_mass_with, MassProperties, SegmentMass};
-pub use prepared::PreparedSegments;
+pub use prepared::{PreparedSegments, QuantityTable};
 pub use report::{check_density, report, report_with, NamedValues, Units, VolumeReport};
 pub use segments::{
     segment_volumes, segment_volumes_with, volumes_by_label, CapStats, Interface, LabelSource, LabelVolumes,

@@ -70,13 +70,20 @@ impl PreparedSegments {
         self.n_vertices
     }
 
+    /// `Ok` when `n` is the prepared mesh's vertex count, else `VertexCountMismatch`.
+    pub fn check_vertex_count(&self, n: usize) -> Result<(), VolumeError> {
+        if n == self.n_vertices {
+            Ok(())
+        } else {
+            Err(VolumeError::VertexCountMismatch { expected: self.n_vertices, got: n })
+        }
+    }
+
     /// The segment volumes with the vertices at `vertices` (the prepared mesh's vertices moved, same
     /// count and order). Errors: `VertexCountMismatch` for another count, `NonFiniteVertex` for a NaN
     /// or infinite coordinate.
     pub fn evaluate(&self, vertices: &[[f64; 3]]) -> Result<SegmentVolumes, VolumeError> {
-        if vertices.len() != self.n_vertices {
-            return Err(VolumeError::VertexCountMismatch { expected: self.n_vertices, got: vertices.len() });
-        }
+        self.check_vertex_count(vertices.len())?;
         check_finite(vertices)?;
         let holes: Vec<_> = self.loops.iter().map(|l| hole_of(vertices, l)).collect();
         let closed: Cow<'_, [[f64; 3]]> = if holes.is_empty() {
@@ -88,11 +95,13 @@ impl PreparedSegments {
     }
 
     /// [`PreparedSegments::evaluate`] on flat coordinates `x0 y0 z0 x1 y1 z1 ...` (one row of a C-ordered
-    /// (N, 3) array); a length that is not 3 x the vertex count is a `VertexCountMismatch`.
+    /// (N, 3) array). Errors: `CoordinatesNotTriples` for a length that is not a multiple of 3,
+    /// `VertexCountMismatch` for another vertex count, and those of [`PreparedSegments::evaluate`].
     pub fn evaluate_coords(&self, coords: &[f64]) -> Result<SegmentVolumes, VolumeError> {
-        if coords.len() != 3 * self.n_vertices {
-            return Err(VolumeError::VertexCountMismatch { expected: self.n_vertices, got: coords.len() / 3 });
+        if coords.len() % 3 != 0 {
+            return Err(VolumeError::CoordinatesNotTriples { len: coords.len() });
         }
+        self.check_vertex_count(coords.len() / 3)?;
         let vertices: Vec<[f64; 3]> = coords.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
         self.evaluate(&vertices)
     }
@@ -134,6 +143,71 @@ impl PreparedSegments {
                 .map(|c| VolumeReport::from_volumes(&self.evaluate_coords(c.as_ref())?, density_kg_m3))
                 .collect(),
         )
+    }
+
+    /// [`PreparedSegments::reports_many_coords`] on a stack of `draws` vertex arrays of `vertices`
+    /// vertices each, one after another in `coords` (a C-ordered (S, N, 3) array with S = `draws`,
+    /// N = `vertices`). The vertex count is checked first, also for an empty stack
+    /// (`VertexCountMismatch`), then the density, then the length (`StackLengthMismatch`).
+    pub fn reports_stacked(
+        &self,
+        coords: &[f64],
+        draws: usize,
+        vertices: usize,
+        density_kg_m3: f64,
+    ) -> Result<Vec<VolumeReport>, VolumeError> {
+        self.check_vertex_count(vertices)?;
+        check_density(density_kg_m3)?;
+        let per_draw = 3 * vertices;
+        if draws.checked_mul(per_draw) != Some(coords.len()) {
+            return Err(VolumeError::StackLengthMismatch { len: coords.len(), draws, vertices });
+        }
+        let rows: Vec<&[f64]> =
+            if per_draw == 0 { vec![&[][..]; draws] } else { coords.chunks_exact(per_draw).collect() };
+        self.reports_many_coords(&rows, density_kg_m3)
+    }
+
+    /// The [`QuantityTable`] of [`PreparedSegments::reports_stacked`]: per quantity
+    /// ([`VolumeReport::quantities`]), its value in every draw.
+    pub fn quantities_stacked(
+        &self,
+        coords: &[f64],
+        draws: usize,
+        vertices: usize,
+        density_kg_m3: f64,
+    ) -> Result<QuantityTable, VolumeError> {
+        Ok(QuantityTable::of_reports(&self.reports_stacked(coords, draws, vertices, density_kg_m3)?))
+    }
+}
+
+/// The quantities ([`VolumeReport::quantities`]) of many reports as columns: `names[j]`'s value in
+/// report `i` is `columns[j][i]`, NaN where that report has no (finite) value for it.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct QuantityTable {
+    /// The quantity names, in first-seen order (report by report, each in its own order).
+    pub names: Vec<String>,
+    /// One column per name, one entry per report.
+    pub columns: Vec<Vec<f64>>,
+}
+
+impl QuantityTable {
+    /// The table of `reports` (no columns for none).
+    pub fn of_reports(reports: &[VolumeReport]) -> QuantityTable {
+        let mut table = QuantityTable::default();
+        for (i, r) in reports.iter().enumerate() {
+            for (k, v) in r.quantities() {
+                let j = match table.names.iter().position(|n| n == k) {
+                    Some(j) => j,
+                    None => {
+                        table.names.push(k.to_string());
+                        table.columns.push(vec![f64::NAN; reports.len()]);
+                        table.names.len() - 1
+                    }
+                };
+                table.columns[j][i] = v;
+            }
+        }
+        table
     }
 }
 

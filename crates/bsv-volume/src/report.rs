@@ -151,6 +151,25 @@ impl VolumeReport {
     pub fn whole_l(&self) -> Option<f64> {
         self.volumes_l.get(Aggregate::Whole.name())
     }
+
+    /// The quantities of this report, as `(name, value)` in order: the one definition of "the
+    /// quantities of a volume report that the intervals model" (`bsv.uncertainty` mirrors it on JSON
+    /// reports, and a test keeps the two equal). They are the entries of `volumes_l` then those of
+    /// `ratios` (volumes in litres, ratios, asymmetries in percent), finite values only; a name given
+    /// twice keeps its first place and its last finite value.
+    pub fn quantities(&self) -> Vec<(&str, f64)> {
+        let mut out: Vec<(&str, f64)> = Vec::new();
+        for (k, v) in self.volumes_l.0.iter().chain(&self.ratios.0) {
+            if !v.is_finite() {
+                continue;
+            }
+            match out.iter_mut().find(|(name, _)| *name == k.as_str()) {
+                Some(slot) => slot.1 = *v,
+                None => out.push((k.as_str(), *v)),
+            }
+        }
+        out
+    }
 }
 
 /// Segment volumes and the report of a mesh at a density (kg/m^3), default options

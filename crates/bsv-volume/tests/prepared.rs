@@ -8,7 +8,8 @@ use bsv_core::geometry::{add, scale};
 use bsv_core::shapes::{capsule, icosphere, subdivided_cuboid};
 use bsv_core::{Segment, TriMesh};
 use bsv_volume::{
-    report_with, segment_volumes_with, IslandOptions, PreparedSegments, SegmentOptions, SegmentVolumes, VolumeError,
+    report_with, segment_volumes_with, IslandOptions, PreparedSegments, QuantityTable, SegmentOptions, SegmentVolumes,
+    VolumeError,
 };
 use std::f64::consts::PI;
 
@@ -154,7 +155,7 @@ fn assert_same(got: &SegmentVolumes, want: &SegmentVolumes, what: &str) {
     assert_eq!(got.inverted, want.inverted, "{what}");
     assert_eq!(got.islands, want.islands, "{what}");
     assert_eq!(got.caps, want.caps, "{what}");
-    assert_eq!(got.notes.len(), want.notes.len(), "{what}: {:?} vs {:?}", got.notes, want.notes);
+    assert_eq!(got.notes, want.notes, "{what}");
 }
 
 fn cases() -> Vec<(&'static str, TriMesh, SegmentOptions)> {
@@ -268,12 +269,18 @@ fn wrong_vertex_counts_and_bad_values_are_typed_errors() {
     assert_eq!(err, VolumeError::VertexCountMismatch { expected: n, got: n - 1 });
     let text = err.to_string();
     assert!(text.contains(&n.to_string()) && text.contains(&(n - 1).to_string()) && text.contains("prepare"), "{text}");
+    assert!(text.starts_with("vertices:") && text.contains("pass `vertices`"), "{text}");
     let flat: Vec<f64> = mesh.vertices.iter().flatten().copied().collect();
     assert_eq!(
         prepared.evaluate_coords(&flat[..flat.len() - 3]).unwrap_err(),
         VolumeError::VertexCountMismatch { expected: n, got: n - 1 }
     );
-    assert!(matches!(prepared.evaluate_coords(&flat[..flat.len() - 1]), Err(VolumeError::VertexCountMismatch { .. })));
+    // A length that is not whole vertices: its own error, not a truncated vertex count.
+    let err = prepared.evaluate_coords(&flat[..flat.len() - 1]).unwrap_err();
+    assert_eq!(err, VolumeError::CoordinatesNotTriples { len: flat.len() - 1 });
+    let text = err.to_string();
+    assert!(text.contains(&(flat.len() - 1).to_string()) && text.contains("not a multiple of 3"), "{text}");
+    assert!(text.contains("vertices"), "{text}");
     // In a batch: the first failing draw's error, whatever the threads did.
     let mut bad = mesh.vertices.clone();
     bad[7][1] = f64::NAN;
@@ -289,4 +296,96 @@ fn wrong_vertex_counts_and_bad_values_are_typed_errors() {
         PreparedSegments::new(&open, &SegmentOptions::default()).err(),
         segment_volumes_with(&open, &SegmentOptions::default()).err()
     );
+}
+
+#[test]
+fn stacks_check_the_vertex_count_first_even_when_empty() {
+    let mesh = limb();
+    let n = mesh.vertices.len();
+    let prepared = PreparedSegments::new(&mesh, &SegmentOptions::default()).unwrap();
+    // No draws but the wrong N: still the vertex count error (not an empty table).
+    for (draws, vertices) in [(0, n - 1), (0, 0), (2, n + 1)] {
+        let coords = vec![0.0; draws * vertices * 3];
+        assert_eq!(
+            prepared.quantities_stacked(&coords, draws, vertices, 1000.0).unwrap_err(),
+            VolumeError::VertexCountMismatch { expected: n, got: vertices },
+            "{draws} x {vertices}"
+        );
+    }
+    // No draws and the right N: the empty table.
+    assert_eq!(prepared.quantities_stacked(&[], 0, n, 1000.0).unwrap(), QuantityTable::default());
+    // A length that does not match the shape.
+    let flat: Vec<f64> = mesh.vertices.iter().flatten().copied().collect();
+    assert_eq!(
+        prepared.quantities_stacked(&flat, 2, n, 1000.0).unwrap_err(),
+        VolumeError::StackLengthMismatch { len: 3 * n, draws: 2, vertices: n }
+    );
+    assert!(matches!(prepared.quantities_stacked(&flat, 1, n, -1.0), Err(VolumeError::InvalidDensity(_))));
+}
+
+#[test]
+fn the_quantity_table_holds_each_reports_quantities() {
+    let mesh = box_parts();
+    let opts = SegmentOptions::fitted();
+    let prepared = PreparedSegments::new(&mesh, &opts).unwrap();
+    let draws: Vec<Vec<[f64; 3]>> = moves(&mesh.vertices, 3);
+    let flat: Vec<f64> = draws.iter().flatten().flatten().copied().collect();
+    let n = mesh.vertices.len();
+    let table = prepared.quantities_stacked(&flat, draws.len(), n, 1010.0).unwrap();
+    let reports = prepared.reports_stacked(&flat, draws.len(), n, 1010.0).unwrap();
+    assert_eq!(table, QuantityTable::of_reports(&reports));
+    assert_eq!(table.names.len(), table.columns.len());
+    for (i, (r, v)) in reports.iter().zip(&draws).enumerate() {
+        let q = r.quantities();
+        let one = report_with(&with_vertices(&mesh, v), 1010.0, &opts).unwrap();
+        assert_eq!(
+            q.iter().map(|(k, _)| *k).collect::<Vec<_>>(),
+            one.quantities().iter().map(|(k, _)| *k).collect::<Vec<_>>()
+        );
+        // volumes_l then ratios, finite only, in the report's order.
+        let want: Vec<(&str, f64)> = r
+            .volumes_l
+            .0
+            .iter()
+            .chain(&r.ratios.0)
+            .filter(|(_, x)| x.is_finite())
+            .map(|(k, x)| (k.as_str(), *x))
+            .collect();
+        assert_eq!(q, want, "draw {i}");
+        for (j, name) in table.names.iter().enumerate() {
+            match q.iter().find(|(k, _)| k == name) {
+                Some((_, x)) => assert_eq!(table.columns[j][i].to_bits(), x.to_bits(), "{name}"),
+                None => assert!(table.columns[j][i].is_nan(), "{name}"),
+            }
+        }
+    }
+    assert!(table.names.iter().any(|k| k == "whole") && table.names.iter().any(|k| k.starts_with("asymmetry_")));
+}
+
+#[test]
+fn report_quantities_are_the_finite_volumes_then_ratios() {
+    let mut r = prepared_report();
+    let n_volumes = r.volumes_l.0.len();
+    r.ratios.0.push(("asymmetry_test_pct".into(), f64::NAN));
+    r.ratios.0.push(("test_ratio".into(), 0.5));
+    r.volumes_l.0[0].1 = f64::INFINITY;
+    let first = r.volumes_l.0[0].0.clone();
+    let q = r.quantities();
+    assert!(q.iter().all(|(k, x)| x.is_finite() && *k != first && *k != "asymmetry_test_pct"));
+    assert_eq!(q[..n_volumes - 1], r.volumes_l.0[1..].iter().map(|(k, x)| (k.as_str(), *x)).collect::<Vec<_>>()[..]);
+    assert_eq!(q.last(), Some(&("test_ratio", 0.5)));
+    // The table: NaN where a report lacks a quantity, names in first-seen order.
+    let table = QuantityTable::of_reports(&[r.clone(), prepared_report()]);
+    let j = table.names.iter().position(|k| *k == first).unwrap();
+    assert!(table.columns[j][0].is_nan() && table.columns[j][1].is_finite());
+    assert_eq!(table.names.last().map(String::as_str), Some(first.as_str()));
+    let t = table.names.iter().position(|k| k == "test_ratio").unwrap();
+    assert_eq!(table.columns[t][0], 0.5);
+    assert!(table.columns[t][1].is_nan());
+}
+
+fn prepared_report() -> bsv_volume::VolumeReport {
+    let mesh = box_parts();
+    let prepared = PreparedSegments::new(&mesh, &SegmentOptions::fitted()).unwrap();
+    prepared.report(&mesh.vertices, 1000.0).unwrap()
 }

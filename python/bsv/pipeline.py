@@ -144,12 +144,9 @@ def _camera_dirs(capture_dir: Path, cameras: Sequence[str]) -> dict[str, Path]:
     return dirs
 
 
-def _calibration(calibration: PathLike | None, capture_dir: Path, cameras: Sequence[str],
-                 intrinsics: dict[str, Any]) -> dict[str, dict[str, Any]]:
-    """Camera-to-world extrinsics per camera from calibration.json, or by calibrating from a folder of
-    marker images (``<folder>/<camera>/*.png``)."""
-    from .frontend import calibrate as cal
-
+def _calibration_source(calibration: PathLike | None, capture_dir: Path) -> Path:
+    """The calibration.json to read, or the folder of marker images to calibrate from; a
+    CalibrationFileError when there is none (checked before any work)."""
     if calibration is None:
         here = capture_dir / "calibration.json"
         hint = (f"; the capture folder has one: pass --calibration {here} to use it" if here.is_file() else "")
@@ -159,15 +156,27 @@ def _calibration(calibration: PathLike | None, capture_dir: Path, cameras: Seque
         )
     p = Path(calibration)
     if p.is_dir() and not (p / "calibration.json").is_file():
+        return p
+    if p.is_dir():
+        p = p / "calibration.json"
+    if not p.is_file():
+        raise CalibrationFileError(
+            f"calibration file {p} does not exist: run `bsv calibrate` first, or pass the folder of marker images"
+        )
+    return p
+
+
+def _calibration(calibration: PathLike | None, capture_dir: Path, cameras: Sequence[str],
+                 intrinsics: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """Camera-to-world extrinsics per camera from calibration.json, or by calibrating from a folder of
+    marker images (``<folder>/<camera>/*.png``)."""
+    from .frontend import calibrate as cal
+
+    p = _calibration_source(calibration, capture_dir)
+    if p.is_dir():
         images = {cam: [str(f) for f in cal.image_files(p / cam)] for cam in cameras}
         c = cal.calibrate(images, {cam: intrinsics[cam] for cam in cameras})
     else:
-        if p.is_dir():
-            p = p / "calibration.json"
-        if not p.is_file():
-            raise CalibrationFileError(
-                f"calibration file {p} does not exist: run `bsv calibrate` first, or pass the folder of marker images"
-            )
         c = cal.read_calibration(p)
     out = {}
     for cam in cameras:
@@ -437,13 +446,14 @@ def process(
         if bsip_sex not in SEXES:
             raise BsipError(f"bsip_sex must be one of {SEXES}, got {bsip_sex!r}")
         densities(bsip_density, [n for n in SEGMENT_IDS if n != "unlabelled"])  # a bad density fails before the work
+    dirs = _camera_dirs(cap, cameras)  # the cheap input checks before the warm-up, which an error waits for
+    _calibration_source(calibration, cap)
     # Timed from here: the PDF renderer loads while MediaPipe prepares on another thread (camera path).
     steps = _Steps(progress)
     warm = warming_up(**(segment_params or {})) if segmentation == "camera" else contextlib.nullcontext()
     with warm:
         steps.run("prepare", "loading the PDF renderer (report.pdf)" + (" while MediaPipe starts" if segmentation == "camera"
                                                                        else ""), require_pdf)
-        dirs = _camera_dirs(cap, cameras)
 
         def read_all() -> dict[str, dict[str, Any]]:
             return {cam: read_capture(d) for cam, d in dirs.items()}

@@ -1,6 +1,7 @@
 """MediaPipe prepared on a background thread while `bsv process` loads the PDF renderer
-(`bsv.frontend.segment.warming_up`): the graph is ready afterwards, the body's errors come through, and the
-stderr the warm-up silences is the process's own again when the block ends."""
+(`bsv.frontend.segment.warming_up`): the graph is ready afterwards, the body's errors come through, the
+stderr the warm-up captures is the process's own again when the block ends, and what the rest of the
+process printed meanwhile is replayed without MediaPipe's start-up log."""
 
 from __future__ import annotations
 
@@ -43,3 +44,14 @@ def test_an_unknown_or_bad_parameter_is_left_to_the_segmentation() -> None:
         pass
     with pytest.raises(seg.SegmentationError, match="no_such_parameter"):
         seg.detect(np.zeros((32, 32, 3), np.uint8), "front", no_such_parameter=1)
+
+
+def test_captured_stderr_is_replayed_without_mediapipes_log(capfd) -> None:
+    captured: list[str] = []
+    with seg._native_stderr_captured(captured):
+        os.write(2, b"INFO: Created TensorFlow Lite XNNPACK delegate for CPU.\n")
+        os.write(2, b"W0000 00:00:1796314194.740015   13600 inference_feedback_manager.cc:114] Feedback manager\n")
+        os.write(2, b"a warning of the main thread\n")  # what sys.stderr does in a process (fd 2)
+    assert capfd.readouterr().err == ""  # nothing reached the real stderr meanwhile
+    seg._replay(captured)
+    assert capfd.readouterr().err == "a warning of the main thread\n"

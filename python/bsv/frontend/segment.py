@@ -37,7 +37,9 @@ import dataclasses
 import json
 import math
 import os
+import re
 import sys
+import tempfile
 import threading
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
@@ -274,16 +276,35 @@ def _holistic_model(complexity: int, min_detection_confidence: float) -> Any:
     return model
 
 
-def _warm_up(prm: SegmentParams) -> None:
+#: A line MediaPipe's native code prints on stderr while it starts: TFLite's "INFO: ..." lines, absl's notice
+#: about its log, glog-style lines ("W0000 00:00:1796314194.740015   13600 file.cc:114] ..."). The warm-up
+#: drops these from what it captured and replays every other line.
+_NATIVE_LOG_LINE = re.compile(
+    r"^(?:INFO: |WARNING: All log messages before absl::InitializeLog\(\)|[IWEF]\d{4} \d\d:\d\d:\d+\.\d+ +\d+ \S+:\d+\] )"
+)
+
+
+def _warm_up(prm: SegmentParams, captured: list[str]) -> None:
     """Builds this process's graph for ``prm`` and runs it once on a small blank image (the first
-    ``process`` call loads the models: about 0.5 s, the graph 0.6 s more). Errors are left to the real
-    call, which reports them with its own message."""
+    ``process`` call loads the models: about 0.5 s, the graph 0.6 s more); what reaches stderr meanwhile
+    is appended to ``captured``. Errors are left to the real call, which reports them with its own
+    message."""
     try:
-        with _MODELS_LOCK, _native_stderr_silenced():
+        with _MODELS_LOCK, _native_stderr_captured(captured):
             _holistic_model(prm.model_complexity, prm.min_detection_confidence).process(
                 np.zeros((64, 64, 3), dtype=np.uint8))
-    except Exception:
+    except Exception:  # the segmentation step that follows raises it with its own message
         pass
+
+
+def _replay(captured: Sequence[str]) -> None:
+    """Writes to stderr the captured lines that are not MediaPipe's start-up log (:data:`_NATIVE_LOG_LINE`):
+    whatever else the process printed while the warm-up held file descriptor 2 (a warning of the main
+    thread, say)."""
+    lines = [ln for text in captured for ln in text.splitlines(keepends=True) if not _NATIVE_LOG_LINE.match(ln)]
+    if lines:
+        sys.stderr.write("".join(lines))
+        sys.stderr.flush()
 
 
 @contextlib.contextmanager
@@ -291,19 +312,60 @@ def warming_up(**overrides: Any) -> Iterator[None]:
     """Prepares MediaPipe (:func:`_warm_up`, with :class:`SegmentParams` ``overrides``) on a background
     thread while the body of the ``with`` runs: a fresh ``bsv process`` loads WeasyPrint and reads the
     capture meanwhile (GIL-bound Python, where MediaPipe's start is mostly native code). The segmentation
-    waits for it through the graph lock. Leaving the block waits for the thread, so its silenced
-    stderr (:func:`_native_stderr_silenced`) is restored before an error of the body is printed."""
+    waits for it through the graph lock.
+
+    MediaPipe's Python modules are imported first, in the caller's thread (two threads importing packages
+    they share, PIL among them, can trip the import locks). While the thread runs, file descriptor 2 goes
+    to a temporary file (MediaPipe's C++ code logs there); leaving the block waits for the thread (also
+    through Ctrl-C, raised again afterwards), restores stderr and replays what the rest of the process
+    printed meanwhile, so an error of the body is printed to the real stderr. Without MediaPipe, or with
+    a bad parameter, nothing is prepared: the segmentation reports it."""
     try:
         prm = dataclasses.replace(DEFAULT_PARAMS["front"], **overrides)
-    except (TypeError, SegmentationError):  # an unknown or bad parameter: the segmentation names it
+        _mediapipe_holistic()
+    except Exception:  # an unknown or bad parameter, or no MediaPipe: the segmentation names it
         yield
         return
-    thread = threading.Thread(target=_warm_up, args=(prm,), name="bsv-mediapipe-warm-up", daemon=True)
-    thread.start()
+    captured: list[str] = []
+    thread = threading.Thread(target=_warm_up, args=(prm, captured), name="bsv-mediapipe-warm-up", daemon=True)
+    try:
+        thread.start()
+    except RuntimeError:  # no thread to be had: the segmentation builds the graph itself
+        yield
+        return
     try:
         yield
     finally:
-        thread.join()
+        interrupted = False
+        while thread.is_alive():
+            try:
+                thread.join()
+            except KeyboardInterrupt:
+                interrupted = True
+        _replay(captured)
+        if interrupted:
+            raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def _native_stderr_captured(into: list[str]) -> Iterator[None]:
+    """Sends file descriptor 2 to a temporary file while MediaPipe's C++ code starts, and appends the
+    file's text to ``into`` when the block ends (see :func:`warming_up`, which replays what is not
+    MediaPipe's)."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with tempfile.TemporaryFile() as tmp:
+            os.dup2(tmp.fileno(), 2)
+            try:
+                yield
+            finally:
+                sys.stderr.flush()
+                os.dup2(saved, 2)
+                tmp.seek(0)
+                into.append(tmp.read().decode("utf-8", "replace"))
+    finally:
+        os.close(saved)
 
 
 @contextlib.contextmanager

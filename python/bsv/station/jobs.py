@@ -39,8 +39,9 @@ RIG_KINDS = ("capture", "preview")
 CAPTURE_BUSY = ("queued", "capturing")
 #: States of a job not finished yet.
 ACTIVE = ("queued", "capturing", "processing")
-#: Steps of :func:`bsv.pipeline.process` (keys of its timings), for the progress fraction.
-PROCESS_STEPS = 8
+#: Steps of :func:`bsv.pipeline.process` with camera segmentation (keys of its timings: prepare, read,
+#: calibration, segment, cloud, register, intervals, report, write), for the progress fraction.
+PROCESS_STEPS = 9
 #: Sub-folders of the data folder.
 CAPTURES, RESULTS, TMP, PREVIEWS = "captures", "results", "tmp", "previews"
 

@@ -450,10 +450,19 @@ def process(
     _calibration_source(calibration, cap)
     # Timed from here: the PDF renderer loads while MediaPipe prepares on another thread (camera path).
     steps = _Steps(progress)
-    warm = warming_up(**(segment_params or {})) if segmentation == "camera" else contextlib.nullcontext()
-    with warm:
+    warm = (warming_up(**(segment_params or {})) if segmentation == "camera"
+            else contextlib.nullcontext(lambda: None))
+    with warm as wait_for_warm_up:
+
+        def load_pdf_renderer() -> None:
+            try:
+                require_pdf()
+            except RuntimeError:  # importlib's deadlock error, WeasyPrint imported alongside MediaPipe: once more, alone
+                wait_for_warm_up()
+                require_pdf()
+
         steps.run("prepare", "loading the PDF renderer (report.pdf)" + (" while MediaPipe starts" if segmentation == "camera"
-                                                                       else ""), require_pdf)
+                                                                       else ""), load_pdf_renderer)
 
         def read_all() -> dict[str, dict[str, Any]]:
             return {cam: read_capture(d) for cam, d in dirs.items()}

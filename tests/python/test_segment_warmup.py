@@ -22,12 +22,12 @@ def _fd2() -> tuple[int, int]:
 
 def test_the_graph_is_built_and_stderr_is_restored() -> None:
     before = _fd2()
-    with seg.warming_up():
-        pass
-    assert _fd2() == before
     prm = seg.DEFAULT_PARAMS["front"]
-    made = seg._MODELS.get((prm.model_complexity, float(prm.min_detection_confidence)))
-    assert made is not None and made[0] == os.getpid()
+    with seg.warming_up() as wait:
+        wait()  # the with target waits for the thread: the graph is there inside the block already
+        made = seg._MODELS.get((prm.model_complexity, float(prm.min_detection_confidence)))
+        assert made is not None and made[0] == os.getpid()
+    assert _fd2() == before
 
 
 def test_an_error_in_the_body_propagates_after_the_warm_up() -> None:
@@ -38,10 +38,10 @@ def test_an_error_in_the_body_propagates_after_the_warm_up() -> None:
 
 
 def test_an_unknown_or_bad_parameter_is_left_to_the_segmentation() -> None:
-    with seg.warming_up(no_such_parameter=1):
-        pass
-    with seg.warming_up(model_complexity=7):
-        pass
+    with seg.warming_up(no_such_parameter=1) as wait:
+        wait()
+    with seg.warming_up(model_complexity=7) as wait:
+        wait()
     with pytest.raises(seg.SegmentationError, match="no_such_parameter"):
         seg.detect(np.zeros((32, 32, 3), np.uint8), "front", no_such_parameter=1)
 

@@ -41,7 +41,7 @@ import re
 import sys
 import tempfile
 import threading
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
@@ -308,33 +308,33 @@ def _replay(captured: Sequence[str]) -> None:
 
 
 @contextlib.contextmanager
-def warming_up(**overrides: Any) -> Iterator[None]:
+def warming_up(**overrides: Any) -> Iterator[Callable[[], None]]:
     """Prepares MediaPipe (:func:`_warm_up`, with :class:`SegmentParams` ``overrides``) on a background
     thread while the body of the ``with`` runs: a fresh ``bsv process`` loads WeasyPrint and reads the
     capture meanwhile (GIL-bound Python, where MediaPipe's start is mostly native code). The segmentation
     waits for it through the graph lock.
 
-    MediaPipe's Python modules are imported first, in the caller's thread (two threads importing packages
-    they share, PIL among them, can trip the import locks). While the thread runs, file descriptor 2 goes
-    to a temporary file (MediaPipe's C++ code logs there); leaving the block waits for the thread (also
-    through Ctrl-C, raised again afterwards), restores stderr and replays what the rest of the process
-    printed meanwhile, so an error of the body is printed to the real stderr. Without MediaPipe, or with
-    a bad parameter, nothing is prepared: the segmentation reports it."""
+    The ``with`` target is a function that waits for the thread: a caller whose own import fails with
+    importlib's deadlock error (the two threads imported a package they share, PIL or fontTools, at once:
+    never seen, possible in principle) waits, then imports again. While the thread runs, file
+    descriptor 2 goes to a temporary file (MediaPipe's C++ code logs there); leaving the block waits for
+    the thread (also through Ctrl-C, raised again afterwards), restores stderr and replays what the rest
+    of the process printed meanwhile, so an error of the body is printed to the real stderr. With a bad
+    parameter nothing is prepared: the segmentation reports it."""
     try:
         prm = dataclasses.replace(DEFAULT_PARAMS["front"], **overrides)
-        _mediapipe_holistic()
-    except Exception:  # an unknown or bad parameter, or no MediaPipe: the segmentation names it
-        yield
+    except (TypeError, SegmentationError):  # an unknown or bad parameter: the segmentation names it
+        yield lambda: None
         return
     captured: list[str] = []
     thread = threading.Thread(target=_warm_up, args=(prm, captured), name="bsv-mediapipe-warm-up", daemon=True)
     try:
         thread.start()
     except RuntimeError:  # no thread to be had: the segmentation builds the graph itself
-        yield
+        yield lambda: None
         return
     try:
-        yield
+        yield thread.join
     finally:
         interrupted = False
         while thread.is_alive():

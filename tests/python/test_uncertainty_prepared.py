@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from rigs import paper_rig
 
 import bsv
 from bsv import _bsv
@@ -17,17 +18,6 @@ from bsv.errors import BsvError, InputError, VolumeError
 @pytest.fixture(scope="module")
 def template() -> bsv.Mesh:
     return bsv.default_template()
-
-
-def _rig(cov_scale: float = 1.0) -> list[unc.CameraSpread]:
-    """Front and back cameras 2 m from the body, the paper's covariance (as in test_uncertainty.py)."""
-    out = []
-    for name, z in (("front", 2.0), ("back", -2.0)):
-        fwd = np.array([0.0, 0.0, -np.sign(z)])
-        down = np.array([0.0, -1.0, 0.0])
-        rot = np.column_stack([np.cross(down, fwd), down, fwd])
-        out.append(unc.CameraSpread(name, rot, np.array([0.0, 1.0, z]), unc.paper_covariance(name) * cov_scale))
-    return out
 
 
 def _reference_spread(mesh: bsv.Mesh, cameras: list[unc.CameraSpread], samples: int, seed: int,
@@ -59,8 +49,8 @@ def _reference_spread(mesh: bsv.Mesh, cameras: list[unc.CameraSpread], samples: 
 
 def test_calibration_spread_equals_the_per_draw_monte_carlo(template):
     for samples, seed, density in ((5, unc.DEFAULT_SEED, 1000.0), (7, 3, 1010.0)):
-        got = unc.calibration_spread(template, _rig(), samples=samples, seed=seed, density=density)
-        want = _reference_spread(template, _rig(), samples, seed, density)
+        got = unc.calibration_spread(template, paper_rig(), samples=samples, seed=seed, density=density)
+        want = _reference_spread(template, paper_rig(), samples, seed, density)
         assert list(got) == list(want)
         assert {"trunk_limbs", "whole", "torso", "asymmetry_forearm_pct", "shin_to_thigh_l"} <= set(got)
         for n, v in want.items():
@@ -72,7 +62,7 @@ def test_moved_vertices_are_the_blended_camera_errors(template):
     from bsv.bench.floor import CameraPose
 
     rng = np.random.default_rng(5)
-    cams = _rig()
+    cams = paper_rig()
     w = rng.uniform(0, 1, (len(template.vertices), 2))
     w /= w.sum(axis=1, keepdims=True)
     draws = np.stack([[rng.multivariate_normal(np.zeros(6), c.covariance) for c in cams] for _ in range(4)])

@@ -446,8 +446,9 @@ def process(
         if bsip_sex not in SEXES:
             raise BsipError(f"bsip_sex must be one of {SEXES}, got {bsip_sex!r}")
         densities(bsip_density, [n for n in SEGMENT_IDS if n != "unlabelled"])  # a bad density fails before the work
-    dirs = _camera_dirs(cap, cameras)  # the cheap input checks before the warm-up, which an error waits for
-    _calibration_source(calibration, cap)
+    # The capture folders before the warm-up, which an error waits for (the calibration is checked after the
+    # PDF renderer: a missing extra is named first).
+    dirs = _camera_dirs(cap, cameras)
     # Timed from here: the PDF renderer loads while MediaPipe prepares on another thread (camera path).
     steps = _Steps(progress)
     warm = (warming_up(**(segment_params or {})) if segmentation == "camera"

@@ -411,18 +411,6 @@ impl Caps {
         Caps { iface, pieces, spoke_hub, hub_start, hub_vertices, stats }
     }
 
-    /// The hub of each junction cluster at `vertices`: the centroid of its junction vertices.
-    fn hubs(&self, vertices: &[[f64; 3]]) -> Vec<[f64; 3]> {
-        self.hub_start
-            .windows(2)
-            .map(|w| {
-                let js = &self.hub_vertices[w[0]..w[1]];
-                let sum = js.iter().fold([0.0f64; 3], |s, &v| add(s, vertices[v as usize]));
-                scale(sum, 1.0 / js.len().max(1) as f64)
-            })
-            .collect()
-    }
-
     /// Volumes (m^3, signed) of every label at `vertices`, tetrahedra from `r`.
     pub(crate) fn volumes(
         &self,
@@ -451,10 +439,10 @@ impl Caps {
             return finish(r, acc, count, whole, self.stats, Vec::new());
         }
         // 2. One apex per piece, and the piece fans.
-        let apex = self.pieces.apexes(vertices);
+        let apex = group_centroids(&self.pieces.start, &self.pieces.members, vertices);
         self.pieces.add_fans(r, vertices, &self.iface, &apex, &mut acc);
         // 3. Each spoke closed by (apex, junction, hub) on both sides.
-        let hubs = self.hubs(vertices);
+        let hubs = group_centroids(&self.hub_start, &self.hub_vertices, vertices);
         let pos = |v: u32| vertices[v as usize];
         for (&(p, v, d), &h) in self.pieces.spokes.iter().zip(&self.spoke_hub) {
             let w = I::tetra(r, apex[p as usize], pos(v), hubs[h as usize]) * f64::from(d);
@@ -561,6 +549,19 @@ fn chain_pieces(n: usize, iface: &[IEdge]) -> (Vec<u32>, usize) {
     (piece, n_pieces as usize)
 }
 
+/// The centroid at `vertices` of each group of a CSR grouping (group `g` holds the vertex indices
+/// `members[start[g]..start[g + 1]]`): a piece's apex, a junction cluster's hub.
+fn group_centroids(start: &[usize], members: &[u32], vertices: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    start
+        .windows(2)
+        .map(|w| {
+            let vs = &members[w[0]..w[1]];
+            let sum = vs.iter().fold([0.0f64; 3], |s, &v| add(s, vertices[v as usize]));
+            scale(sum, 1.0 / vs.len().max(1) as f64)
+        })
+        .collect()
+}
+
 /// The interface pieces: label pairs, distinct vertices and unmatched spokes (no positions).
 struct Pieces {
     /// Piece of each interface edge.
@@ -610,18 +611,6 @@ impl Pieces {
             pair[of_edge[k] as usize] = (e.lo, e.hi);
         }
         Pieces { of_edge, count: np, pair, spokes, start, members }
-    }
-
-    /// The apex of each piece at `vertices`: the centroid of its distinct vertices.
-    fn apexes(&self, vertices: &[[f64; 3]]) -> Vec<[f64; 3]> {
-        self.start
-            .windows(2)
-            .map(|w| {
-                let vs = &self.members[w[0]..w[1]];
-                let sum = vs.iter().fold([0.0f64; 3], |s, &v| add(s, vertices[v as usize]));
-                scale(sum, 1.0 / vs.len().max(1) as f64)
-            })
-            .collect()
     }
 
     /// The pieces as interfaces (label pair, apex, size, closed loop or not).

@@ -348,42 +348,41 @@ def warming_up(**overrides: Any) -> Iterator[Callable[[], None]]:
 
 
 @contextlib.contextmanager
-def _native_stderr_captured(into: list[str]) -> Iterator[None]:
-    """Sends file descriptor 2 to a temporary file while MediaPipe's C++ code starts, and appends the
-    file's text to ``into`` when the block ends (see :func:`warming_up`, which replays what is not
-    MediaPipe's)."""
+def _stderr_fd_to(fileno: int) -> Iterator[None]:
+    """Points file descriptor 2 at ``fileno`` for the block (MediaPipe's C++ code, absl and TFLite, log
+    there before any logging setup can stop them), then back. Python exceptions still propagate."""
     sys.stderr.flush()
     saved = os.dup(2)
     try:
-        with tempfile.TemporaryFile() as tmp:
-            os.dup2(tmp.fileno(), 2)
-            try:
-                yield
-            finally:
-                sys.stderr.flush()
-                os.dup2(saved, 2)
-                tmp.seek(0)
-                into.append(tmp.read().decode("utf-8", "replace"))
+        os.dup2(fileno, 2)
+        try:
+            yield
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
     finally:
         os.close(saved)
 
 
 @contextlib.contextmanager
-def _native_stderr_silenced() -> Iterator[None]:
-    """Sends file descriptor 2 to /dev/null while MediaPipe's C++ code runs: absl/TFLite print
-    informational lines there before any logging setup can stop them. Python exceptions still
-    propagate with their messages."""
-    sys.stderr.flush()
-    saved = os.dup(2)
-    try:
-        with open(os.devnull, "wb") as null:
-            os.dup2(null.fileno(), 2)
-            try:
+def _native_stderr_captured(into: list[str]) -> Iterator[None]:
+    """Sends file descriptor 2 to a temporary file while MediaPipe's C++ code starts, and appends the
+    file's text to ``into`` when the block ends (see :func:`warming_up`, which replays what is not
+    MediaPipe's)."""
+    with tempfile.TemporaryFile() as tmp:
+        try:
+            with _stderr_fd_to(tmp.fileno()):
                 yield
-            finally:
-                os.dup2(saved, 2)
-    finally:
-        os.close(saved)
+        finally:
+            tmp.seek(0)
+            into.append(tmp.read().decode("utf-8", "replace"))
+
+
+@contextlib.contextmanager
+def _native_stderr_silenced() -> Iterator[None]:
+    """Sends file descriptor 2 to /dev/null while MediaPipe's C++ code runs (:func:`_stderr_fd_to`)."""
+    with open(os.devnull, "wb") as null, _stderr_fd_to(null.fileno()):
+        yield
 
 
 def run_holistic(rgb: np.ndarray, params: SegmentParams = SegmentParams()) -> dict[str, Any]:

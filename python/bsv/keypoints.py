@@ -43,7 +43,11 @@ def template_kind(mesh: Mesh) -> str | None:
 
 
 def joint_rings(mesh: Mesh) -> list[tuple[str, list[int], list[float]]] | None:
-    """The joint rings of an embedded template as ``(name, vertices, weights)``, or None for any other mesh."""
+    """The joint rings of an embedded template (or of one posed by :mod:`bsv.posed_template`, which carries
+    them) as ``(name, vertices, weights)``, or None for any other mesh."""
+    carried = getattr(mesh, "joint_rings", None)
+    if carried is not None:
+        return [(name, list(v), list(w)) for name, v, w in carried]
     kind = template_kind(mesh)
     if kind is None:
         return None

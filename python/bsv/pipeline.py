@@ -36,7 +36,8 @@ from .errors import BsipError, InputError, OutputExistsError, PersonIsolationErr
 from .extras import require
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
 from .interop import as_mesh
-from .keypoints import CAMERA_KEYPOINT_KINDS, camera_joints, confine_cloud_upper_arms, template_kind
+from .keypoints import CAMERA_KEYPOINT_KINDS, camera_joints, confine_cloud_upper_arms
+from .posed_template import camera_template, template_record
 from .types import SEGMENT_IDS, SEXES, TRUNK_LIMBS, Mesh, PointCloud, Registration
 
 PathLike = str | Path
@@ -379,6 +380,7 @@ def process(
     sex: str | None = None,
     refine_floor: bool = False,
     keypoints: bool | None = None,
+    pose_template: bool = True,
     **register_params: Any,
 ) -> ProcessResult:
     """Segmentation, cloud, registration and volumes of a capture folder (``CAPTURE_DIR/<camera>/`` with
@@ -417,7 +419,11 @@ def process(
     ``keypoints`` (camera segmentation): the joint centres lifted from both views pull the template's
     joints in the first iterations (``bsv.register``'s keypoint term): None (the default) the shoulders,
     wrists and hips only (:data:`bsv.keypoints.CAMERA_KEYPOINT_KINDS`, where the measurements on the synthetic cohort
-    say why), True (``--keypoints``) every joint, False (``--no-keypoints``) none."""
+    say why), True (``--keypoints``) every joint, False (``--no-keypoints``) none.
+    ``pose_template`` (camera segmentation, the template's segments; ``--no-pose-template`` turns it off):
+    the embedded template is first posed like the subject, its arm, elbow and hip angles read from the
+    measured joint centres (:func:`bsv.posed_template.camera_template`); volumes.json's ``template`` holds
+    the pose."""
     from . import default_template, write_mesh, write_point_cloud
     from . import register as bsv_register
     from .frontend.capture import read_capture
@@ -523,6 +529,14 @@ def process(
             # the template's own segments carried onto this sex's body; with the cloud's labels the average
             # template fits the limbs better (benchmarks/BENCH.md, round 2 session 11)
             template = default_template(sex=sex)
+        template_notes: list[str] = []
+        if segmentation == "camera" and label_source == "template" and pose_template:
+            template, template_notes = steps.run(
+                "pose", "posing the template like the subject (measured joint angles)",
+                lambda: camera_template(template, sex, joints))
+            if progress:
+                for w in template_notes:
+                    print(f"[bsv]   warning: {w}", flush=True)
         measured = camera_joints(joints, keypoints)
         reg: Registration = steps.run(
             "register", "registering the template (ARAP)",
@@ -545,8 +559,8 @@ def process(
         vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report,
                          "upper_arm_points_relabelled_torso": arm_relabelled}
         vols["joints_m"] = {name: j.to_json() for name, j in joints.items()}
-        vols["warnings"] = landmark_warnings
-        vols["template"] = {"kind": "default" if template is None else template_kind(template) or "custom", "sex": sex}
+        vols["warnings"] = landmark_warnings + template_notes
+        vols["template"] = template_record(template, sex)
         out.mkdir(parents=True, exist_ok=True)
         files = {"cloud": out / "cloud.ply", "fitted": out / "fitted.ply", "volumes": out / "volumes.json",
                  "report": out / "report.html"}
@@ -568,7 +582,7 @@ def process(
                               for n, p in write_bsip(inertial, out, overwrite=overwrite).items()})
 
         result = ProcessResult(out, cloud, reg, vols, cloud_report, seg_summary, steps.timings, files, truth=truth,
-                               bsip=inertial, joints=joints, warnings=landmark_warnings)
+                               bsip=inertial, joints=joints, warnings=vols["warnings"])
         if truth is not None:
             result.comparison = compare(vols, truth)
         # The report (HTML, PDF, CSV) is rendered before anything is written: a failed rendering leaves OUT empty.
@@ -716,6 +730,10 @@ def main_process(argv: Sequence[str] | None = None) -> int:
                     help="camera segmentation: let the joint centres lifted from both views pull the template's "
                          f"joints; default: the {', '.join(k + 's' for k in CAMERA_KEYPOINT_KINDS)} only, "
                          "--keypoints: every joint, --no-keypoints: none")
+    ap.add_argument("--pose-template", action=argparse.BooleanOptionalAction, default=True,
+                    help="camera segmentation: pose the embedded template like the subject (arm, elbow and hip "
+                         "angles from the measured joints) before the registration (default; --no-pose-template: "
+                         "the template's own A-pose)")
     ap.add_argument("--overwrite", action="store_true", help="replace files already in OUT")
     _add_bsip_options(ap)
     ap.add_argument("--quiet", action="store_true", help="no progress output")
@@ -737,7 +755,7 @@ def main_process(argv: Sequence[str] | None = None) -> int:
                       overwrite=a.overwrite, keep_extremities=a.keep_extremities, sor=a.sor, sor_k=a.sor_k,
                       sor_std_ratio=a.sor_std, remove_floor=not a.keep_floor, isolate_person=not a.no_isolate,
                       cloud_params=_register_args(a.cloud_param, "--cloud-param"),
-                      refine_floor=a.refine_floor, keypoints=a.keypoints, sex=a.sex,
+                      refine_floor=a.refine_floor, keypoints=a.keypoints, pose_template=a.pose_template, sex=a.sex,
                       **_bsip_args(a), **_register_args(a.param))
         _print_process(res)
         return 0

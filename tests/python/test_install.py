@@ -80,7 +80,10 @@ def test_the_wheel_installs_and_runs_without_a_rust_toolchain(tmp_path: Path) ->
         "e = fit.volumes['volumes_l']['trunk_limbs'] / bsv.volumes(t)['volumes_l']['trunk_limbs'] - 1;"
         "assert abs(e) < 0.03, e; print('trunk_limbs error', round(100 * e, 3), '%');"
         # the MakeHuman asset ships in the wheel (bsv/data/makehuman, a link to assets/ in the repository)
-        "s = bsv.bodies.subject(0); assert s.volumes_l()['trunk_limbs'] > 30, s.volumes_l()"
+        "s = bsv.bodies.subject(0); assert s.volumes_l()['trunk_limbs'] > 30, s.volumes_l();"
+        # and so does the templates' rig (bsv/data/template_rig.npz): the camera path poses the template
+        "import bsv.posed_template as pt; assert pt.rig_path().is_relative_to(pathlib.Path(r'" + str(venv) + "'));"
+        "p = pt.posed_template('female', bsv.bodies.Pose(30, 30, 15, 15, 4, 4)); assert len(p.joint_rings) == 10"
     )
     run = _run([str(bindir / "python"), "-c", smoke], env=env, cwd=tmp_path)
     assert run.returncode == 0, run.stderr[-3000:]

@@ -293,7 +293,7 @@ def test_every_output_blocks_a_rerun(capture, tmp_path):
 
 
 @pytest.mark.skipif(not _has_mediapipe(), reason="camera segmentation needs mediapipe")
-def test_a_failed_camera_run_leaves_nothing_and_can_be_rerun(capture, tmp_path):
+def test_a_failed_camera_run_leaves_nothing_and_can_be_rerun(capture, subject, tmp_path):
     """The camera segmentation is saved with the other outputs, after the registration: a run that fails
     in between (here a registration parameter error) leaves OUT empty, and the same call then works."""
     from bsv.errors import RegistrationParameterError
@@ -307,8 +307,13 @@ def test_a_failed_camera_run_leaves_nothing_and_can_be_rerun(capture, tmp_path):
     pipeline.process(cap, cap / "calibration.json", out, segmentation="camera", progress=False, sex="female")
     assert (out / "segmentation" / "front" / "mask.png").exists() and (out / "volumes.json").exists()
     vols = json.loads((out / "volumes.json").read_text())
-    # the camera path keeps the template's segments: the sex picks the template of that sex
-    assert vols["template"] == {"kind": "female", "sex": "female"}
+    # the camera path keeps the template's segments: the sex picks the template of that sex, posed like the
+    # subject (bsv.posed_template): its angles are the synthetic subject's within a few degrees
+    assert {k: vols["template"][k] for k in ("kind", "sex")} == {"kind": "female", "sex": "female"}
+    pose = vols["template"]["pose"]
+    assert set(pose) == set(bsv.bodies.Pose.RANGES)
+    for name, measured in pose.items():
+        assert measured == pytest.approx(getattr(subject.pose, name), abs=6.0), name
     relabelled = vols["cloud"]["upper_arm_points_relabelled_torso"]
     assert isinstance(relabelled, int) and relabelled >= 0  # keypoints.confine_upper_arms ran on the camera labels
 

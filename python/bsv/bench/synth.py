@@ -187,6 +187,11 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
         from ..keypoints import confine_cloud_upper_arms
 
         cloud = confine_cloud_upper_arms(cloud, joints)[0]
+    posing = str(params.pop("pose_template", "true")).lower() not in ("false", "0", "no", "off")
+    if segmentation == "camera" and params.get("labels") == "template" and posing and joints:
+        from ..posed_template import camera_template  # as bsv process: the template posed like the subject
+
+        template = camera_template(template, None, joints)[0] or template
     far2, far10 = cloud_far_pct(cloud, truth_surface)
     for method in methods:
         run = Run(name, condition, method, False, truth_l=dict(truth), floor_l=dict(floor), n_points=len(cloud),

@@ -84,6 +84,25 @@ def load_asset(path: str | None = None) -> Asset:
     except (KeyError, ValueError, OSError) as e:
         raise AssetError(f"{p}: not a valid MakeHuman asset ({e}); regenerate it with "
                          "scripts/make_assets.py") from e
+    return _with_lookups(a)
+
+
+def _with_lookups(a: Asset) -> Asset:
+    """``a`` with its name lookups (targets, bones) attached."""
     object.__setattr__(a, "_ids", {n: i for i, n in enumerate(a.target_names)})
     object.__setattr__(a, "_bones", {n: i for i, n in enumerate(a.bone_names)})
     return a
+
+
+def rig_asset(vertices: np.ndarray, faces: np.ndarray, bone_names: tuple[str, ...], bone_parent: np.ndarray,
+              joints_rest: np.ndarray, skin_vertex: np.ndarray, skin_bone: np.ndarray, skin_weight: np.ndarray) -> Asset:
+    """An :class:`Asset` of one rest body and its rig, without shape targets: enough to pose that body
+    (:func:`bsv.bodies.pose.pose_vertices`), as :mod:`bsv.posed_template` does with the templates' rig."""
+    no_targets = np.zeros((0, 3), dtype=np.float64)
+    return _with_lookups(Asset(
+        vertices=np.asarray(vertices, dtype=np.float64), faces=np.asarray(faces, dtype=np.int64),
+        bone_names=tuple(bone_names), bone_parent=np.asarray(bone_parent, dtype=np.int64),
+        joints_rest=np.asarray(joints_rest, dtype=np.float64), skin_vertex=np.asarray(skin_vertex, dtype=np.int64),
+        skin_bone=np.asarray(skin_bone, dtype=np.int64), skin_weight=np.asarray(skin_weight, dtype=np.float64),
+        target_names=(), target_offsets=np.zeros(1, dtype=np.int64), target_indices=np.zeros(0, dtype=np.int64),
+        target_deltas=no_targets, target_joint_deltas=np.zeros((0, len(bone_names), 2, 3))))

@@ -12,6 +12,7 @@ from .. import _bsv
 from ..errors import SolveError
 from ..types import Mesh
 from .asset import Asset, load_asset
+from .joints import posed_rig_joints
 from .labels import body_labels, volume
 from .model import Phenotype, shape
 from .pose import Pose, pose_vertices
@@ -65,11 +66,7 @@ def make_body(phenotype: Phenotype | None = None, pose: Pose | None = None, asse
     ph = phenotype or Phenotype()
     po = pose or Pose()
     v, j = shape(ph, a)
-    pv = pose_vertices(v, j, po, a)
-    hips = [a.bone("upperleg01.L"), a.bone("upperleg01.R")]
-    # the posed hip joints: the thighs' heads follow their parents (pelvis), which are not rotated
-    centre = j[hips, 0, :].mean(axis=0)
-    pv = pv - np.array([centre[0], pv[:, 1].min(), centre[2]])
+    pv = posed_rig_joints(v, j, po, a)[0]
     vl, fl = _labels(id(a)) if asset is None else body_labels(a.faces, a)
     return Body(pv, a.faces.copy(), vl.copy(), fl.copy(), ph, po)
 

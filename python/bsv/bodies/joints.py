@@ -23,16 +23,23 @@ def rig_joints(phenotype: Phenotype | None = None, pose: Pose | None = None,
     """Joint centres (m, world frame of :func:`bsv.bodies.make_body`) of the rig of a body with this
     phenotype and pose: the posed heads of the bones of :data:`RIG_BONES`."""
     a = asset or load_asset()
-    ph = phenotype or Phenotype()
-    po = pose or Pose()
-    v, j = shape(ph, a)
-    R, T = bone_transforms(j, po, a)
-    pv = pose_vertices(v, j, po, a)
-    hips = [a.bone("upperleg01.L"), a.bone("upperleg01.R")]
-    centre = j[hips, 0, :].mean(axis=0)
-    offset = np.array([centre[0], pv[:, 1].min(), centre[2]])  # as make_body
+    v, j = shape(phenotype or Phenotype(), a)
+    return posed_rig_joints(v, j, pose or Pose(), a)[1]
+
+
+def posed_rig_joints(rest_vertices: np.ndarray, rest_joints: np.ndarray, pose: Pose,
+                     asset: Asset) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """A rest body posed as :func:`bsv.bodies.make_body` poses it (dual-quaternion skinning, then moved to
+    floor y = 0 with the hips centred on x = z = 0) and its rig's joint centres (the posed heads of the
+    bones of :data:`RIG_BONES`) in the same frame: ``(vertices, {joint: xyz})``."""
+    R, T = bone_transforms(rest_joints, pose, asset)
+    pv = pose_vertices(rest_vertices, rest_joints, pose, asset)
+    hips = [asset.bone("upperleg01.L"), asset.bone("upperleg01.R")]
+    # the posed hip joints: the thighs' heads follow their parents (pelvis), which are not rotated
+    centre = rest_joints[hips, 0, :].mean(axis=0)
+    offset = np.array([centre[0], pv[:, 1].min(), centre[2]])
     out = {}
     for name, bone in RIG_BONES.items():
-        b = a.bone(bone)
-        out[name] = R[b] @ j[b, 0, :] + T[b] - offset
-    return out
+        b = asset.bone(bone)
+        out[name] = R[b] @ rest_joints[b, 0, :] + T[b] - offset
+    return pv - offset, out

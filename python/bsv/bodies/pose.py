@@ -11,6 +11,7 @@ axis abducted ``hip_abduction_deg`` from the vertical in the frontal plane; feet
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -35,10 +36,14 @@ class Pose:
         """The same angles on both sides."""
         return Pose(arm_down, arm_down, elbow, elbow, hip_abduction, hip_abduction)
 
+    #: The plausible range (degrees) of each angle.
+    RANGES: ClassVar[dict[str, tuple[float, float]]] = {
+        "arm_down_l": (-10, 85), "arm_down_r": (-10, 85), "elbow_l": (0, 120), "elbow_r": (0, 120),
+        "hip_abduction_l": (-5, 30), "hip_abduction_r": (-5, 30)}
+
     def validate(self) -> None:
-        """Raise PoseError if an angle is implausible."""
-        for name, lo, hi in (("arm_down_l", -10, 85), ("arm_down_r", -10, 85), ("elbow_l", 0, 120),
-                             ("elbow_r", 0, 120), ("hip_abduction_l", -5, 30), ("hip_abduction_r", -5, 30)):
+        """Raise PoseError if an angle is implausible (outside :attr:`RANGES`)."""
+        for name, (lo, hi) in self.RANGES.items():
             v = getattr(self, name)
             if not np.isfinite(v) or not lo <= v <= hi:
                 raise PoseError(f"pose {name}={v} deg: must lie in [{lo}, {hi}]")

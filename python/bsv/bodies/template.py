@@ -11,16 +11,18 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ..errors import OutputExistsError, TemplateError
 from ..types import SEGMENT_IDS, Mesh
+from .asset import load_asset
 from .body import make_body
 from .joints import rig_joints
-from .labels import vertex_labels_from_faces
+from .labels import body_labels, vertex_labels_from_faces
 from .meshio import obj_text, ply_bytes
-from .model import Phenotype
+from .model import Phenotype, shape
 from .pose import Pose
 from .template_joints import template_joints
 
@@ -174,6 +176,28 @@ def templates() -> dict[str, Mesh]:
             "template_female": trunk[0.0], "template_male": trunk[1.0]}
 
 
+#: The rest bodies and rig of the 9-segment templates, to pose them (:mod:`bsv.posed_template`), written beside them.
+RIG_FILE = "template_rig.npz"
+#: The 9-segment templates that can be posed, by kind (``bsv.default_template(sex=...)``), and their file names.
+POSABLE: dict[str, str] = {"default": "template", "female": "template_female", "male": "template_male"}
+
+
+def rig_arrays() -> dict[str, np.ndarray]:
+    """The arrays of :data:`RIG_FILE`: the MakeHuman body's faces and 14-segment face labels, the rig (bone
+    names and parents) and its skinning weights, and per posable template kind its rest body
+    (``rest_vertices_KIND``, ``rest_joints_KIND``: the shaped body before the A-pose)."""
+    a = load_asset()
+    out: dict[str, np.ndarray] = {
+        "faces": a.faces.astype(np.int32), "face_labels": body_labels(a.faces, a)[1].astype(np.uint8),
+        "bone_names": np.array(a.bone_names), "bone_parent": a.bone_parent.astype(np.int32),
+        "skin_vertex": a.skin_vertex.astype(np.int32), "skin_bone": a.skin_bone.astype(np.int32),
+        "skin_weight": a.skin_weight}
+    for kind, name in POSABLE.items():
+        v, j = shape(Phenotype(gender=TEMPLATE_GENDER[name]), a)
+        out[f"rest_vertices_{kind}"], out[f"rest_joints_{kind}"] = v, j
+    return out
+
+
 #: Names of the default templates (each written as NAME.ply and NAME.obj).
 TEMPLATE_NAMES = ("template", "template_full", "template_fine", "template_female", "template_male")
 #: The joint rings of every template (:mod:`bsv.bodies.template_joints`), written beside them.
@@ -185,7 +209,7 @@ def write_templates(out_dir: str | Path, overwrite: bool = False) -> dict[str, t
     are refused before any work (:class:`bsv.errors.OutputExistsError`) unless ``overwrite``."""
     out = Path(out_dir)
     existing = [f"{n}.{ext}" for n in TEMPLATE_NAMES for ext in ("ply", "obj") if (out / f"{n}.{ext}").exists()]
-    existing += [JOINTS_FILE] if (out / JOINTS_FILE).exists() else []
+    existing += [f for f in (JOINTS_FILE, RIG_FILE) if (out / f).exists()]
     if existing and not overwrite:
         raise OutputExistsError(f"{out} already holds {', '.join(existing)}; pass overwrite=True "
                                 "(python -m bsv.bodies.template OUT_DIR --overwrite) to regenerate them")
@@ -204,6 +228,9 @@ def write_templates(out_dir: str | Path, overwrite: bool = False) -> dict[str, t
                     " the MakeHuman rig's bone heads). Regenerate: python -m bsv.bodies.template",
            "templates": {name: template_joints(m, centres[TEMPLATE_GENDER[name]]) for name, m in built.items()}}
     (out / JOINTS_FILE).write_text(json.dumps(doc, indent=1) + "\n")
+    arrays: dict[str, Any] = rig_arrays()
+    with (out / RIG_FILE).open("wb") as fh:
+        np.savez_compressed(fh, **arrays)
     return counts
 
 

@@ -40,8 +40,8 @@ CAPTURE_BUSY = ("queued", "capturing")
 #: States of a job not finished yet.
 ACTIVE = ("queued", "capturing", "processing")
 #: Steps of :func:`bsv.pipeline.process` with camera segmentation (keys of its timings: prepare, read,
-#: calibration, segment, cloud, register, intervals, report, write), for the progress fraction.
-PROCESS_STEPS = 9
+#: calibration, segment, cloud, pose, register, intervals, report, write), for the progress fraction.
+PROCESS_STEPS = 10
 #: Sub-folders of the data folder.
 CAPTURES, RESULTS, TMP, PREVIEWS = "captures", "results", "tmp", "previews"
 

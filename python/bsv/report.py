@@ -657,6 +657,12 @@ def definitions_html(vols: dict[str, Any], target: _Target = "html") -> str:
     kind = (vols.get("template") or {}).get("kind")
     lead = (f"Segment boundaries in this result: {html.escape(how)}. " if how else "")
     lead += (f"Template: {html.escape(anatomy.TEMPLATE_TEXT.get(kind, str(kind)))}. " if kind else "")
+    pose = (vols.get("template") or {}).get("pose")
+    if isinstance(pose, dict) and pose:
+        lead += ("Posed like the subject before the fit, from the measured joints: arms "
+                 f"{pose.get('arm_down_l', 0):.0f} / {pose.get('arm_down_r', 0):.0f} deg below horizontal (left / right), "
+                 f"elbows flexed {pose.get('elbow_l', 0):.0f} / {pose.get('elbow_r', 0):.0f} deg, legs "
+                 f"{pose.get('hip_abduction_l', 0):.0f} / {pose.get('hip_abduction_r', 0):.0f} deg out. ")
     if target == "pdf":
         loops = ", ".join(b.joint for b in anatomy.BOUNDARIES.values())
         return ("<h2>Segment definitions</h2>"

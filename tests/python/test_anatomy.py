@@ -68,6 +68,12 @@ def test_the_report_says_how_this_results_boundaries_were_placed() -> None:
     cloud = report.definitions_html({"registration": {"params": {"labels": "cloud"}}})
     assert "same anatomical loop on every subject" in tpl and "nearest measured point" in cloud
     assert "Template: the female MakeHuman body" in tpl and "Template:" not in cloud
+    assert "Posed like the subject" not in tpl
+    pose = {"arm_down_l": 31.4, "arm_down_r": 44.6, "elbow_l": 18.0, "elbow_r": 21.0, "hip_abduction_l": 3.0,
+            "hip_abduction_r": 5.0}
+    posed = report.definitions_html({"registration": {"params": {"labels": "template"}},
+                                     "template": {"kind": "default", "pose": pose}})
+    assert "Posed like the subject" in posed and "arms 31 / 45 deg below horizontal" in posed
     assert tpl.count("<tr>") == len(anatomy.BOUNDARIES) + 1
     assert "through the armpit" in tpl and "centroid +38 mm" in tpl
     assert "Segment boundaries in this result" not in report.definitions_html({})

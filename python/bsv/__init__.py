@@ -206,7 +206,7 @@ def register(
     position is xyz in metres, ``(xyz, confidence)``, a ``{"xyz", "confidence"}`` dict or a
     :class:`~bsv.frontend.landmarks.JointCentre`) that pull the template's own joint centres (the
     keypoint term; parameters ``keypoint_weight``, ``keypoint_robust_m``). Only the embedded templates
-    carry joints; the fitted-to-measured distances are in ``volumes["registration"]["keypoints"]``.
+    (and those :func:`bsv.posed_template.posed_template` poses) carry joints; the fitted-to-measured distances are in ``volumes["registration"]["keypoints"]``.
     """
     cloud = as_cloud(points, labels=labels)
     tmpl = default_template() if template is None else as_mesh(template)
@@ -218,7 +218,8 @@ def register(
         rings = joint_rings(tmpl)
         if rings is None and measured:
             err = InputError("keypoints need a template that carries joint centres: the embedded templates "
-                             "(template=None, bsv.default_template(), the 'fine', 'full' and sexed ones) do; this one "
+                             "(template=None, bsv.default_template(), the 'fine', 'full' and sexed ones, and a "
+                             "bsv.posed_template.posed_template) do; this one "
                              "does not, so fit it without keypoints")
             err.argument = "keypoints"
             raise err

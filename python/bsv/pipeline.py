@@ -74,7 +74,8 @@ class ProcessResult:
     bsip: Any = None
     #: Joint centres in 3-D (:class:`bsv.frontend.landmarks.JointCentre` by name), camera segmentation only.
     joints: dict[str, Any] = field(default_factory=dict)
-    #: Warnings of the run (each landmark taken from another source than its own confident detection).
+    #: Warnings of the run (each landmark taken from another source than its own confident detection; the
+    #: template's pose when an angle was clipped or a joint missing).
     warnings: list[str] = field(default_factory=list)
 
     @property
@@ -697,6 +698,23 @@ def _register_args(values: Sequence[str], flag: str = "--param") -> dict[str, An
     return out
 
 
+#: ``process`` keywords that have their own ``bsv process`` option, which a ``--param`` must not repeat.
+_PROCESS_OPTIONS: dict[str, str] = {"keypoints": "--keypoints / --no-keypoints",
+                                    "pose_template": "--pose-template / --no-pose-template"}
+
+
+def _process_params(values: Sequence[str]) -> dict[str, Any]:
+    """``bsv process --param KEY=VALUE`` options (registration parameters); a key that is one of the
+    command's own options is an InputError naming that option."""
+    out = _register_args(values)
+    for key, option in _PROCESS_OPTIONS.items():
+        if key in out:
+            err = InputError(f"--param {key}=...: {key} is not a registration parameter; use {option}")
+            err.argument = "param"
+            raise err
+    return out
+
+
 def main_process(argv: Sequence[str] | None = None) -> int:
     """``bsv process CAPTURE_DIR --calibration calibration.json -o OUT``."""
     ap = argparse.ArgumentParser(prog="bsv process", description="Volumes and report of a two-camera capture.")
@@ -756,7 +774,7 @@ def main_process(argv: Sequence[str] | None = None) -> int:
                       sor_std_ratio=a.sor_std, remove_floor=not a.keep_floor, isolate_person=not a.no_isolate,
                       cloud_params=_register_args(a.cloud_param, "--cloud-param"),
                       refine_floor=a.refine_floor, keypoints=a.keypoints, pose_template=a.pose_template, sex=a.sex,
-                      **_bsip_args(a), **_register_args(a.param))
+                      **_bsip_args(a), **_process_params(a.param))
         _print_process(res)
         return 0
 

@@ -1,11 +1,12 @@
 """The embedded templates posed like the subject before the registration (the camera path).
 
 The embedded templates are MakeHuman bodies in the default A-pose (arms 40 deg below horizontal, elbows
-flexed 10 deg, legs 4 deg apart). A subject holds an A-pose of its own: arms 25-50 deg down, elbows
+flexed 10 deg, each leg 4 deg out from vertical). A subject holds an A-pose of its own: arms 25-50 deg down, elbows
 10-25 deg. The registration can rotate a limb into place, but the region where the limb meets the trunk
 then bends the way the registration's smoothness dictates, not the way a body bends, and the template's
 shoulder boundary (the upper arm's top) lands off the subject's: measured on the camera path, upper arms
--2 to -4 % on the cohorts with lower or higher arms (BENCH.md, round 2 session 14).
+3-4 % mean RVE on the cohorts whose arms hang lower or higher than 40 deg, too large on lowered arms and too
+small on raised ones (BENCH.md, round 2 session 14).
 
 So the camera path poses the template first, exactly as the MakeHuman rig poses a body:
 
@@ -28,6 +29,8 @@ by ``python -m bsv.bodies.template``), not from the 17 MB MakeHuman asset.
 
 from __future__ import annotations
 
+import zipfile
+import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -36,6 +39,8 @@ from typing import Any
 
 import numpy as np
 
+from .bodies.pose import Pose
+from .bodies.template import POSABLE
 from .errors import TemplateError
 from .types import Mesh
 
@@ -43,7 +48,10 @@ from .types import Mesh
 POSE_JOINTS: tuple[str, ...] = tuple(f"{j}_{s}" for s in ("l", "r")
                                      for j in ("shoulder", "elbow", "wrist", "hip", "ankle"))
 #: Template kinds that can be posed (the 9-segment templates: average, female, male).
-POSABLE_KINDS: tuple[str, ...] = ("default", "female", "male")
+POSABLE_KINDS: tuple[str, ...] = tuple(POSABLE)
+#: An angle measured this far (deg) outside the pose's range is clipped without a warning (the measured
+#: elbow flexion scatters by 1.5 deg: a straight arm reads -1 deg).
+CLIP_SILENT_DEG = 3.0
 
 
 def rig_path() -> Path:
@@ -85,8 +93,8 @@ def load_template_rig() -> TemplateRig:
                                       d[f"rest_joints_{kind}"], common["skin_vertex"], common["skin_bone"],
                                       common["skin_weight"]) for kind in POSABLE_KINDS}
             return TemplateRig(assets, faces, d["face_labels"].astype(np.uint8))
-    except (KeyError, ValueError, OSError) as e:
-        raise TemplateError(f"{p}: not a valid template rig ({e}); {fix}") from e
+    except (KeyError, ValueError, OSError, EOFError, zipfile.BadZipFile, zlib.error) as e:
+        raise TemplateError(f"{p}: not a valid template rig ({type(e).__name__}: {e}); {fix}") from e
 
 
 @dataclass(eq=False, repr=False)
@@ -96,28 +104,24 @@ class PosedTemplate(Mesh):
     :func:`bsv.keypoints.joint_rings` gives for the embedded templates)."""
 
     kind: str = "default"
-    pose: Any = None
-    joint_rings: list[tuple[str, list[int], list[float]]] = field(default_factory=list)
+    pose: Pose = field(default_factory=Pose)
+    #: The joint rings; None (as for any other mesh) when they were not built.
+    joint_rings: list[tuple[str, list[int], list[float]]] | None = None
 
     def pose_json(self) -> dict[str, float]:
         """The pose's angles in degrees (``arm_down_l``, ``elbow_l``, ``hip_abduction_l``, ... rounded to 0.1)."""
-        return {k: round(float(v), 1) for k, v in vars(self.pose).items() if not isinstance(v, bool)}
+        return {k: round(float(getattr(self.pose, k)), 1) for k in Pose.RANGES}
+
+    def __repr__(self) -> str:
+        return f"PosedTemplate({self.kind}, {len(self.vertices)} vertices, pose {self.pose_json()})"
 
 
 def _xyz(value: Any) -> np.ndarray:
     return np.asarray(getattr(value, "xyz", value), dtype=np.float64).reshape(3)
 
 
-def pose_from_joints(joints: Mapping[str, Any]) -> tuple[Any, list[str]]:
-    """The :class:`bsv.bodies.pose.Pose` of measured joint centres (``{name: xyz or JointCentre}``, metres,
-    Y up, the subject facing +Z) and the notes on any angle clipped to the pose's range. Raises
-    :class:`KeyError` naming a joint of :data:`POSE_JOINTS` that is missing."""
-    from .bodies.pose import Pose
-
-    missing = [n for n in POSE_JOINTS if n not in joints]
-    if missing:
-        raise KeyError(", ".join(missing))
-    p = {n: _xyz(joints[n]) for n in POSE_JOINTS}
+def _angles(p: dict[str, np.ndarray]) -> dict[str, Any]:
+    """The pose angles (deg) of the joints in :data:`POSE_JOINTS` (see :func:`pose_from_joints`)."""
     x = p["hip_l"] - p["hip_r"]
     x[1] = 0.0
     x /= np.linalg.norm(x)
@@ -135,17 +139,34 @@ def pose_from_joints(joints: Mapping[str, Any]) -> tuple[Any, list[str]]:
         angles[f"elbow_{side}"] = float(np.degrees(np.arctan2(np.cross(u, f) @ n, u @ f)))
         leg = a - h
         angles[f"hip_abduction_{side}"] = float(np.degrees(np.arctan2(sx * leg[0], -leg[1])))
+    return angles
+
+
+def pose_from_joints(joints: Mapping[str, Any]) -> tuple[Pose, list[str]]:
+    """The :class:`bsv.bodies.pose.Pose` of measured joint centres (``{name: xyz or JointCentre}``, metres,
+    Y up, the subject facing +Z) and the notes on any angle clipped to the pose's range (more than
+    :data:`CLIP_SILENT_DEG` outside it). Raises :class:`KeyError` naming the joints of :data:`POSE_JOINTS`
+    that are missing, :class:`ValueError` when the joints give no angle (coincident or non-finite joints)."""
+    missing = [n for n in POSE_JOINTS if n not in joints]
+    if missing:
+        raise KeyError(", ".join(missing))
+    with np.errstate(invalid="ignore", divide="ignore"):  # coincident joints: NaN angles, refused below
+        angles = _angles({n: _xyz(joints[n]) for n in POSE_JOINTS})
+    bad = [name for name, v in angles.items() if not np.isfinite(v)]
+    if bad:
+        raise ValueError(f"no angle for {', '.join(bad)} (coincident joints)")
     notes = []
     for name, (lo, hi) in Pose.RANGES.items():
         v = angles[name]
-        if not lo <= v <= hi:
-            notes.append(f"{name} {v:.0f} deg measured, the template posed at {min(max(v, lo), hi):.0f} "
+        clipped = min(max(v, lo), hi)
+        if abs(v - clipped) > CLIP_SILENT_DEG:
+            notes.append(f"{name} {round(v):d} deg measured, the template posed at {round(clipped):d} "
                          f"(the pose's range is {lo} to {hi} deg)")
-            angles[name] = min(max(v, lo), hi)
+        angles[name] = clipped
     return Pose(**angles), notes
 
 
-def posed_template(kind: str, pose: Any) -> PosedTemplate:
+def posed_template(kind: str, pose: Pose) -> PosedTemplate:
     """The 9-segment embedded template of ``kind`` (:data:`POSABLE_KINDS`) in ``pose`` (a
     :class:`bsv.bodies.pose.Pose`), with its joint rings; see the module notes."""
     from .bodies.joints import posed_rig_joints
@@ -176,10 +197,16 @@ def camera_template(template: Mesh | None, sex: str | None, joints: Mapping[str,
     kind = (sex or "default") if template is None else template_kind(template)
     if kind not in POSABLE_KINDS:
         return template, []
+    if not joints:
+        return template, ["the template kept its own A-pose: no 3-D joint centres (both cameras are needed)"]
     try:
         pose, notes = pose_from_joints(joints)
     except KeyError as e:
-        return template, [f"the template kept its own A-pose: joint {e.args[0]} was not measured"]
+        names = str(e.args[0])
+        which = f"joints {names} were" if "," in names else f"joint {names} was"
+        return template, [f"the template kept its own A-pose: {which} not measured"]
+    except ValueError as e:
+        return template, [f"the template kept its own A-pose: {e}"]
     return posed_template(kind, pose), notes
 
 

@@ -411,3 +411,13 @@ def test_demo_camera_segmentation_trunk_limbs_within_3_percent(tmp_path, capsys)
         for f in ("segmentation.png", "mask.png", "landmarks.json"):
             assert (tmp_path / "demo" / "segmentation" / cam / f).is_file(), (cam, f)
             assert not (tmp_path / "demo" / "capture" / cam / f).exists(), (cam, f)
+
+
+@pytest.mark.parametrize(("key", "option"), [("pose_template", "--no-pose-template"), ("keypoints", "--no-keypoints")])
+def test_a_process_option_given_as_a_registration_param_is_named(key, option, tmp_path, capsys):
+    """``--param pose_template=false`` is not a registration parameter but an option of the command: a
+    usage error naming the option (exit 2, no traceback), before any work."""
+    out = tmp_path / "out"
+    assert pipeline.main_process([str(tmp_path / "capture"), "-o", str(out), "--param", f"{key}=false"]) == 2
+    err = capsys.readouterr().err
+    assert option in err and "Traceback" not in err and not out.exists()

@@ -79,6 +79,29 @@ def test_an_angle_out_of_range_is_clipped_and_said():
     assert len(notes) == 1 and notes[0].startswith("elbow_l") and "0 to 120" in notes[0]
 
 
+def test_straight_elbows_are_not_a_warning():
+    """A straight elbow reads a fraction of a degree below 0 (the forearm's twist, the measurement's
+    scatter): clipped to 0 without a note; only an angle well outside the range is said."""
+    est, notes = pt.pose_from_joints(rig_joints(Phenotype(), Pose(40.0, 40.0, 0.0, 0.0, 4.0, 4.0)))
+    assert notes == [] and est.elbow_l == pytest.approx(0.0, abs=0.5) and est.elbow_l >= 0.0
+
+
+def test_coincident_joints_keep_the_templates_own_pose():
+    """Joints that give no angle (an elbow on its shoulder, both hips at one point) pose nothing: the
+    template keeps its own A-pose and the note says why, instead of a NaN pose failing the run."""
+    joints = dict(rig_joints(Phenotype(), Pose()))
+    joints["elbow_r"] = joints["shoulder_r"].copy()
+    with pytest.raises(ValueError, match="elbow_r"):
+        pt.pose_from_joints(joints)
+    kept, notes = pt.camera_template(None, None, joints)
+    assert kept is None and len(notes) == 1 and "coincident" in notes[0]
+    hips = dict(rig_joints(Phenotype(), Pose()))
+    hips["hip_l"] = hips["hip_r"].copy()
+    assert pt.camera_template(None, None, hips)[0] is None
+    assert pt.camera_template(None, None, {})[1] == [
+        "the template kept its own A-pose: no 3-D joint centres (both cameras are needed)"]
+
+
 def test_the_camera_paths_template():
     """bsv process's choice: the sex's template posed; a missing joint keeps the template's own pose with a
     note naming it; a template that cannot be posed (a user's mesh) is used as it is."""
@@ -91,10 +114,19 @@ def test_the_camera_paths_template():
     partial = {k: v for k, v in joints.items() if k != "ankle_r"}
     kept, notes = pt.camera_template(None, "male", partial)
     assert kept is None and notes == ["the template kept its own A-pose: joint ankle_r was not measured"]
+    two = {k: v for k, v in partial.items() if k != "wrist_l"}
+    assert pt.camera_template(None, "male", two)[1] == [
+        "the template kept its own A-pose: joints wrist_l, ankle_r were not measured"]
     full = bsv.default_template(full=True)
     assert pt.camera_template(full, None, joints) == (full, [])
     assert pt.template_record(full, None) == {"kind": "full", "sex": None}
     assert pt.template_record(None, "male") == {"kind": "default", "sex": "male"}
+
+
+def _real_rig_path():
+    from pathlib import Path
+
+    return Path(pt.__file__).resolve().parent / "data" / "template_rig.npz"
 
 
 def test_a_missing_rig_file_is_named(monkeypatch, tmp_path):
@@ -105,6 +137,12 @@ def test_a_missing_rig_file_is_named(monkeypatch, tmp_path):
         with pytest.raises(TemplateError, match=r"template_rig\.npz.*regenerate"):
             pt.posed_template("default", Pose())
         (tmp_path / "template_rig.npz").write_bytes(b"not an npz")
+        with pytest.raises(TemplateError, match="not a valid template rig"):
+            pt.posed_template("default", Pose())
+        # a file cut short (an interrupted copy): still the typed error, not zipfile's
+        whole = _real_rig_path().read_bytes()
+        (tmp_path / "template_rig.npz").write_bytes(whole[: len(whole) // 2])
+        pt.load_template_rig.cache_clear()
         with pytest.raises(TemplateError, match="not a valid template rig"):
             pt.posed_template("default", Pose())
     finally:

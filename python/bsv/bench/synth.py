@@ -188,10 +188,17 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
 
         cloud = confine_cloud_upper_arms(cloud, joints)[0]
     posing = str(params.pop("pose_template", "true")).lower() not in ("false", "0", "no", "off")
-    if segmentation == "camera" and params.get("labels") == "template" and posing and joints:
-        from ..posed_template import camera_template  # as bsv process: the template posed like the subject
+    template_info: dict[str, Any] = {}
+    if segmentation == "camera" and params.get("labels") == "template" and posing:
+        from ..errors import BsvError
+        from ..posed_template import camera_template, template_record
 
-        template = camera_template(template, None, joints)[0] or template
+        try:  # as bsv process: the template posed like the subject
+            posed, notes = camera_template(template, None, joints or {})
+            template = posed or template
+            template_info = {"template": template_record(template, None), "template_notes": notes}
+        except BsvError as exc:  # the template's own pose, said in each run
+            template_info = {"template_notes": [f"the template kept its own A-pose: {type(exc).__name__}: {exc}"]}
     far2, far10 = cloud_far_pct(cloud, truth_surface)
     for method in methods:
         run = Run(name, condition, method, False, truth_l=dict(truth), floor_l=dict(floor), n_points=len(cloud),
@@ -199,7 +206,7 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
                   unfiltered_far_10cm_pct=unfiltered[1])
         try:
             fit = register_method(method, cloud, template, params, keypoints=joints)
-            run.estimated_l, run.seconds, run.info, run.ok = fit.volumes_l, fit.seconds, fit.info, True
+            run.estimated_l, run.seconds, run.info, run.ok = fit.volumes_l, fit.seconds, {**fit.info, **template_info}, True
             if method == "bsv":  # the intervals' ingredients (bench/coverage.py)
                 from .coverage import record
 

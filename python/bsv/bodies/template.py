@@ -229,8 +229,10 @@ def write_templates(out_dir: str | Path, overwrite: bool = False) -> dict[str, t
            "templates": {name: template_joints(m, centres[TEMPLATE_GENDER[name]]) for name, m in built.items()}}
     (out / JOINTS_FILE).write_text(json.dumps(doc, indent=1) + "\n")
     arrays: dict[str, Any] = rig_arrays()
-    with (out / RIG_FILE).open("wb") as fh:
+    part = out / (RIG_FILE + ".part")  # written whole, then renamed: an interrupted run leaves no torn file
+    with part.open("wb") as fh:
         np.savez_compressed(fh, **arrays)
+    part.replace(out / RIG_FILE)
     return counts
 
 

@@ -66,7 +66,8 @@ def _capture_item(item: Item, tmp: Path, spec: Spec) -> dict[str, Any]:
 
     res = process(item.path, item.calibration, tmp, segmentation=spec.segmentation, progress=False,
                   density=spec.density, title=f"BSV batch: {item.name}", bsip=spec.what == "bsip", **spec.params)
-    warnings = [*res.cloud_report.get("warnings", []), *(res.volumes.get("notes") or [])]
+    # the cloud's floor check, the volumes' notes, and the camera path's landmark and template-pose warnings
+    warnings = [*res.cloud_report.get("warnings", []), *(res.volumes.get("notes") or []), *res.warnings]
     return {"volumes": res.volumes, "cloud_points": len(res.cloud), "warnings": warnings}
 
 

@@ -7,7 +7,7 @@ import numpy as np
 
 from .asset import Asset, load_asset
 from .model import Phenotype, shape
-from .pose import Pose, bone_transforms, pose_vertices
+from .pose import Pose, bone_transforms, dq_skin
 
 #: Joint name (as :data:`bsv.biomech.tables.JOINTS`) -> the MakeHuman bone whose head is that joint.
 RIG_BONES: dict[str, str] = {
@@ -33,7 +33,7 @@ def posed_rig_joints(rest_vertices: np.ndarray, rest_joints: np.ndarray, pose: P
     floor y = 0 with the hips centred on x = z = 0) and its rig's joint centres (the posed heads of the
     bones of :data:`RIG_BONES`) in the same frame: ``(vertices, {joint: xyz})``."""
     R, T = bone_transforms(rest_joints, pose, asset)
-    pv = pose_vertices(rest_vertices, rest_joints, pose, asset)
+    pv = dq_skin(rest_vertices, R, T, asset)  # pose_vertices, with the transforms computed once
     hips = [asset.bone("upperleg01.L"), asset.bone("upperleg01.R")]
     # the posed hip joints: the thighs' heads follow their parents (pelvis), which are not rotated
     centre = rest_joints[hips, 0, :].mean(axis=0)

@@ -429,7 +429,9 @@ def process(
     from . import register as bsv_register
     from .frontend.capture import read_capture
     from .frontend.segment import warming_up
-    from .report import render_report, require_pdf, write_rendered
+    from .pdf import PdfRenderer
+    from .report import render_report, write_rendered
+    from .staging import staged_outputs
 
     if segmentation not in SEGMENTATIONS:
         raise SegmentationError(f"segmentation must be one of {SEGMENTATIONS}, got {segmentation!r}")
@@ -456,22 +458,14 @@ def process(
     # The capture folders before the warm-up, which an error waits for (the calibration is checked after the
     # PDF renderer: a missing extra is named first).
     dirs = _camera_dirs(cap, cameras)
-    # Timed from here: the PDF renderer loads while MediaPipe prepares on another thread (camera path).
+    # Timed from here. WeasyPrint loads in a worker process (bsv.pdf) while MediaPipe prepares on a thread of
+    # this one and the capture is read (the worker first: MediaPipe's thread redirects stderr while it runs).
     steps = _Steps(progress)
-    warm = (warming_up(**(segment_params or {})) if segmentation == "camera"
-            else contextlib.nullcontext(lambda: None))
-    with warm as wait_for_warm_up:
-
-        def load_pdf_renderer() -> None:
-            try:
-                require_pdf()
-            except RuntimeError:  # importlib's deadlock error, WeasyPrint imported alongside MediaPipe: once more, alone
-                wait_for_warm_up()
-                require_pdf()
-
-        steps.run("prepare", "loading the PDF renderer (report.pdf)" + (" while MediaPipe starts" if segmentation == "camera"
-                                                                       else ""), load_pdf_renderer)
-
+    pdf_renderer = PdfRenderer()
+    warm = warming_up(**(segment_params or {})) if segmentation == "camera" else contextlib.nullcontext()
+    steps.run("prepare", "starting the PDF renderer (report.pdf) in a worker process" if pdf_renderer.worker
+              else "loading the PDF renderer (report.pdf)", pdf_renderer.start)
+    with contextlib.closing(pdf_renderer), warm:
         def read_all() -> dict[str, dict[str, Any]]:
             return {cam: read_capture(d) for cam, d in dirs.items()}
 
@@ -511,6 +505,7 @@ def process(
             views.append({"name": cam, "intrinsics": d["intrinsics"].to_json(), "camera_to_world": {k: extrinsics[cam][k] for k in ("rotation", "translation")},
                           "depth": np.ascontiguousarray(d["depth_m"], dtype=np.float32), "labels": labels,
                           "colors": np.ascontiguousarray(d["colour"], dtype=np.uint8)})
+        pdf_renderer.check()  # a worker that could not load WeasyPrint (pango missing) says so before the fit
         landmark_warnings = [w for seg in camera_segs.values() for w in seg.warnings]
         if progress:
             for w in landmark_warnings:
@@ -562,39 +557,46 @@ def process(
         vols["joints_m"] = {name: j.to_json() for name, j in joints.items()}
         vols["warnings"] = landmark_warnings + template_notes
         vols["template"] = template_record(template, sex)
-        out.mkdir(parents=True, exist_ok=True)
         files = {"cloud": out / "cloud.ply", "fitted": out / "fitted.ply", "volumes": out / "volumes.json",
                  "report": out / "report.html"}
 
-        def write_all() -> None:
-            # Written only now: a run that fails earlier leaves nothing in OUT, and can be rerun as it was.
+        def write_all(stage: Path) -> None:
+            # Written only now, into a folder inside OUT moved into place at the end (bsv.staging): a run that
+            # fails leaves nothing in OUT, and can be rerun as it was.
             for cam, seg in seg_files.items():
                 if seg is not None:
                     from .frontend.segment import write_segmentation
 
-                    write_segmentation(seg, out / SEGMENTATION_DIR / cam, overwrite=overwrite)
-            write_point_cloud(files["cloud"], cloud, overwrite=overwrite)
-            write_mesh(files["fitted"], reg.mesh, overwrite=overwrite)
-            files["volumes"].write_text(json.dumps(vols, indent=2) + "\n")
+                    write_segmentation(seg, stage / SEGMENTATION_DIR / cam)
+            write_point_cloud(stage / files["cloud"].name, cloud)
+            write_mesh(stage / files["fitted"].name, reg.mesh)
+            (stage / files["volumes"].name).write_text(json.dumps(vols, indent=2) + "\n")
             if inertial is not None:
                 from .biomech import write_all as write_bsip
 
-                files.update({Path(n).stem + "_" + Path(n).suffix[1:]: p
-                              for n, p in write_bsip(inertial, out, overwrite=overwrite).items()})
+                files.update({Path(n).stem + "_" + Path(n).suffix[1:]: out / p.name
+                              for n, p in write_bsip(inertial, stage).items()})
 
         result = ProcessResult(out, cloud, reg, vols, cloud_report, seg_summary, steps.timings, files, truth=truth,
                                bsip=inertial, joints=joints, warnings=vols["warnings"])
         if truth is not None:
             result.comparison = compare(vols, truth)
-        # The report (HTML, PDF, CSV) is rendered before anything is written: a failed rendering leaves OUT empty.
-        rendered = steps.run("report", "drawing the report (report.html, report.pdf, volumes.csv)", lambda: render_report(
-            result, out, title=title, segmentations={c: s.labels for c, s in seg_files.items() if s is not None}))
+        # report.html and volumes.csv; report.pdf's document goes to the PDF renderer (a worker process lays
+        # it out while this one writes the other files).
+        rendered = steps.run("report", "drawing the report (report.html, volumes.csv, report.pdf's figures)",
+                             lambda: render_report(result, out, title=title, pdf_renderer=pdf_renderer,
+                                                   segmentations={c: s.labels for c, s in seg_files.items()
+                                                                  if s is not None}))
 
         def write_everything() -> None:
-            write_all()
-            files.update(write_rendered(rendered, overwrite))
+            with staged_outputs(out, overwrite) as stage:
+                write_all(stage)
+                write_rendered({k: (stage / p.name, data) for k, (p, data) in rendered.items()})
+                (stage / "report.pdf").write_bytes(pdf_renderer.result())
+            files.update({k: out / p.name for k, (p, _) in rendered.items()}, report_pdf=out / "report.pdf")
 
-        steps.run("write", "writing the segmentation, cloud.ply, fitted.ply, volumes.json and the report", write_everything)
+        steps.run("write", "writing the segmentation, cloud.ply, fitted.ply, volumes.json and the report "
+                  "(report.pdf laid out meanwhile)", write_everything)
         result.timings["total"] = steps.total()
         if progress:
             print(f"[bsv] done in {result.timings['total']:.1f} s: {out}", flush=True)

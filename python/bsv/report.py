@@ -8,7 +8,8 @@ volume on their own scales, with their 95 % intervals, and the colourised camera
 Tables, in plain language: volumes with their 95 % intervals and masses, the true volumes over the same
 segments when known (a synthetic subject), proportions, left/right asymmetry ("not distinguishable from
 symmetric" when the interval holds 0), landmark and calibration warnings; the technical details (cloud
-cleaning per camera, registration figures and parameters, timings) are folded away in ``<details>``.
+cleaning per camera, registration figures and parameters, timings) are folded away in ``<details>`` in
+report.html and left out of report.pdf, the copy to print (:data:`TECHNICAL_IN_PDF`).
 Every file is rendered before any is written, and each is written atomically. The figures are drawn once
 for both files; report.pdf embeds the shaded renders as JPEG, which WeasyPrint takes as they are.
 """
@@ -31,8 +32,9 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from . import _bsv, anatomy
-from .errors import OutputExistsError, ReportError
+from .errors import OutputExistsError
 from .palette import colourise, hex_colour, plain_name, rgb01, segment_id
+from .pdf import PdfRenderer, render_pdf, require_pdf
 from .types import SEGMENT_NAMES
 
 if TYPE_CHECKING:
@@ -638,7 +640,7 @@ Volumes in litres, masses in kilograms; 95 % intervals give the range the true v
 {seg_html}
 <h2>Fit to the measured points</h2>
 <div class="figs">{cloud}</div>
-{tech}
+{tech if target == "html" else TECHNICAL_IN_PDF}
 {f"<h2>Notes</h2><ul>{notes}</ul>" if notes else ""}
 </main></body></html>
 """
@@ -727,6 +729,13 @@ REGISTRATION_LABELS = {
 }
 
 
+#: What report.pdf, the copy to print and hand over, says in place of the technical details: they are in
+#: report.html (folded away) and volumes.json. Two pages of parameter tables would also cost WeasyPrint
+#: 0.2-0.3 s of its 0.6 s layout.
+TECHNICAL_IN_PDF = ('<p class="note">Technical details (points per camera, cloud cleaning, segmentation, '
+                    "registration figures and parameters, timings): report.html and volumes.json.</p>")
+
+
 def _technical_html(result: Any, vols: dict[str, Any]) -> str:
     """The technical details, folded away: cloud per camera, cloud cleaning, registration figures and
     parameters, segmentation sources, timings."""
@@ -762,31 +771,6 @@ def _technical_html(result: Any, vols: dict[str, Any]) -> str:
     return "<details><summary>Technical details</summary>" + "".join(parts) + "</details>"
 
 
-def require_pdf() -> None:
-    """Checks that report.pdf can be made (``bsv process`` calls it before any work): without WeasyPrint a
-    :class:`bsv.errors.MissingExtraError` naming the ``frontend`` extra; without Debian's pango (WeasyPrint
-    fails to load it) a :class:`bsv.errors.ReportError` naming the packages to install."""
-    from .extras import require
-
-    try:
-        require("weasyprint")
-    except OSError as exc:
-        raise ReportError(f"report.pdf needs Debian's pango for WeasyPrint ({exc}); install it with "
-                          "`apt-get install libpango-1.0-0 libpangoft2-1.0-0`") from exc
-
-
-def render_pdf(doc: str) -> bytes:
-    """The PDF of a report's HTML (WeasyPrint; the data: URIs need no base URL)."""
-    require_pdf()
-    import weasyprint
-
-    try:
-        pdf: bytes = weasyprint.HTML(string=doc).write_pdf()
-    except Exception as exc:  # WeasyPrint raises many kinds; name the file
-        raise ReportError(f"report.pdf could not be rendered by WeasyPrint: {exc}") from exc
-    return pdf
-
-
 def _write_atomic(path: Path, data: bytes) -> None:
     """Writes ``data`` into a temporary file beside ``path`` and renames it onto ``path``."""
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
@@ -803,7 +787,8 @@ def _write_atomic(path: Path, data: bytes) -> None:
 
 
 def render_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", pdf: bool = True,
-                  segmentations: Mapping[str, np.ndarray] | None = None) -> dict[str, tuple[Path, bytes]]:
+                  segmentations: Mapping[str, np.ndarray] | None = None,
+                  pdf_renderer: PdfRenderer | None = None) -> dict[str, tuple[Path, bytes]]:
     """The report's files rendered in memory, nothing written: {key: (path, bytes)} for ``report.html``
     (self-contained), ``report.pdf`` (unless ``pdf`` is False) and ``volumes.csv`` (keys: report,
     report_pdf, volumes_csv). Write them with :func:`write_rendered`. The figures are drawn once for both
@@ -812,7 +797,9 @@ def render_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", 
     docs = _documents(result, out, title, segmentations, ("html", "pdf") if pdf else ("html",))
     files = {"report": (out / "report.html", docs["html"].encode("utf-8")),
              "volumes_csv": (out / "volumes.csv", csv_text(result).encode("utf-8"))}
-    if pdf:
+    if pdf and pdf_renderer is not None:
+        pdf_renderer.submit(docs["pdf"])
+    elif pdf:
         files["report_pdf"] = (out / "report.pdf", render_pdf(docs["pdf"]))
     return files
 
@@ -854,6 +841,7 @@ __all__ = [
     "FILES",
     "PDF_JPEG_QUALITY",
     "PREVIEW_MAX_PX",
+    "TECHNICAL_IN_PDF",
     "VIEWS",
     "check_outputs",
     "cleaning_html",

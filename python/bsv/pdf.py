@@ -1,0 +1,217 @@
+"""report.pdf: the report's HTML laid out by WeasyPrint, in this process or in a worker process.
+
+WeasyPrint costs a fresh process about 0.8 s of one core to import (cffi loads pango and its companions,
+asking ``ldconfig`` about each library name it tries) and 0.5-0.7 s to lay the report out. A fresh
+``bsv process`` keeps one core busy (GIL-bound imports, MediaPipe, the registration) and leaves the other
+mostly idle, so :class:`PdfRenderer` starts ``python -m bsv.pdf`` (:func:`main`) first thing: it imports
+WeasyPrint while the capture is segmented and registered, then reads the report's HTML on its standard
+input and writes the PDF on its standard output.
+
+A process that has loaded WeasyPrint already (a station, a batch worker, a notebook after its first
+report) or a machine with one core renders in this process: :func:`render_pdf`, the function the worker
+runs. A worker that cannot start or dies is replaced by this process: the report is never lost to it.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+from types import TracebackType
+from typing import IO, Self
+
+from .errors import BsvError, ReportError
+from .extras import require
+
+#: The module that renders the PDF (its extra: ``frontend``).
+RENDERER_MODULE = "weasyprint"
+#: A small document the worker lays out while it waits (text, a table, the report's font stack): the first
+#: layout of a process pays for fontconfig, pango's font map and the user-agent style sheet.
+WARM_UP_DOC = ('<html><head><style>body{font-family:system-ui,sans-serif}</style></head><body><h1>BSV</h1>'
+               '<table><tr><th>segment</th><td>1.0</td></tr></table><p>warm-up</p></body></html>')
+#: The worker's exit code when it fails with a BSV error (its message on stderr).
+WORKER_ERROR_EXIT = 3
+
+
+def require_pdf() -> None:
+    """Checks that report.pdf can be made (``bsv process`` calls it before any work): without WeasyPrint a
+    :class:`bsv.errors.MissingExtraError` naming the ``frontend`` extra; without Debian's pango (WeasyPrint
+    fails to load it) a :class:`bsv.errors.ReportError` naming the packages to install."""
+    try:
+        require(RENDERER_MODULE)
+    except OSError as exc:
+        raise ReportError(f"report.pdf needs Debian's pango for WeasyPrint ({exc}); install it with "
+                          "`apt-get install libpango-1.0-0 libpangoft2-1.0-0`") from exc
+
+
+def render_pdf(doc: str) -> bytes:
+    """The PDF of a report's HTML (WeasyPrint; the data: URIs need no base URL)."""
+    require_pdf()
+    import weasyprint
+
+    try:
+        pdf: bytes = weasyprint.HTML(string=doc).write_pdf()
+    except Exception as exc:  # WeasyPrint raises many kinds; name the file
+        raise ReportError(f"report.pdf could not be rendered by WeasyPrint: {exc}") from exc
+    return pdf
+
+
+def _installed(module: str) -> bool:
+    """Whether ``module`` can be found without importing it (a worker is started only then)."""
+    try:
+        return importlib.util.find_spec(module) is not None
+    except (ImportError, ValueError):  # sys.modules holds None or a module without a spec
+        return False
+
+
+def _cores() -> int:
+    """Cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):  # not Linux
+        return os.cpu_count() or 1
+
+
+def worker_pays() -> bool:
+    """Whether a worker process makes report.pdf sooner here: WeasyPrint not loaded yet in this process
+    and a second core to load it on."""
+    return RENDERER_MODULE not in sys.modules and _cores() > 1
+
+
+class PdfRenderer:
+    """Renders report.pdf, loading WeasyPrint as early as possible (module doc).
+
+    ``worker``: True a worker process, False this process, None (the default) a worker when
+    :func:`worker_pays`. Use it as a context manager (or :meth:`start` and :meth:`close`): :meth:`start`
+    names a missing ``frontend`` extra at once and starts loading WeasyPrint; :meth:`check` raises the
+    worker's error (pango missing) once known, without waiting; :meth:`submit` hands it the report's HTML and
+    :meth:`result` returns the PDF (one document per renderer)."""
+
+    def __init__(self, worker: bool | None = None) -> None:
+        self.worker = worker_pays() if worker is None else worker
+        self._proc: subprocess.Popen[bytes] | None = None
+        self._doc: str | None = None
+        self._err: IO[bytes] | None = None
+
+    def start(self) -> Self:
+        """Names a missing WeasyPrint (:class:`bsv.errors.MissingExtraError`) and starts loading it: in the
+        worker, or here (then a missing pango raises :class:`bsv.errors.ReportError` now)."""
+        if self.worker and _installed(RENDERER_MODULE):
+            package_root = str(Path(__file__).resolve().parent.parent)
+            env = dict(os.environ)
+            env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
+            try:
+                # a file, not a pipe: the worker never waits on it (closed by _stderr)
+                self._err = tempfile.TemporaryFile()  # noqa: SIM115
+                self._proc = subprocess.Popen([sys.executable, "-m", __name__], stdin=subprocess.PIPE,
+                                              stdout=subprocess.PIPE, stderr=self._err, env=env)
+                return self
+            except OSError:  # no process to be had: load it here
+                self._stderr()
+        self.worker = False
+        require_pdf()  # a missing WeasyPrint: its MissingExtraError naming the extra
+        return self
+
+    def check(self) -> None:
+        """Raises the worker's error (:class:`bsv.errors.ReportError`: pango missing) if it has stopped
+        already; returns at once otherwise (a worker that stopped otherwise is replaced by this process)."""
+        proc = self._proc
+        if proc is not None and proc.poll() is not None:
+            self._proc = None
+            proc.communicate()
+            self._failed(proc.returncode, self._stderr())
+
+    def submit(self, doc: str) -> None:
+        """Starts laying out ``doc`` (a report's HTML): the worker reads it and works while this process goes
+        on; :meth:`result` returns the PDF. Without a worker, :meth:`result` lays it out here."""
+        if self._doc is not None:
+            raise RuntimeError("PdfRenderer.submit: one document per renderer, and one was submitted")
+        self._doc = doc
+        if self._proc is not None and self._proc.stdin is not None:
+            try:
+                self._proc.stdin.write(doc.encode("utf-8"))  # the worker is waiting: it reads it all at once
+                self._proc.stdin.close()
+            except OSError:  # the worker died: result() says why or renders here
+                pass
+
+    def result(self) -> bytes:
+        """The PDF of the submitted document (:func:`render_pdf`), from the worker if one was started."""
+        doc, proc, self._proc = self._doc, self._proc, None
+        if doc is None:
+            raise RuntimeError("PdfRenderer.result: submit a document first")
+        if proc is None:
+            return render_pdf(doc)
+        pdf = b""
+        if proc.stdout is not None:
+            with proc.stdout:
+                pdf = proc.stdout.read()
+        proc.wait()
+        if proc.returncode == 0 and pdf:
+            self._stderr()
+            return pdf
+        self._failed(proc.returncode, self._stderr())
+        return render_pdf(doc)
+
+    def render(self, doc: str) -> bytes:
+        """:meth:`submit` then :meth:`result`: the PDF of ``doc``."""
+        self.submit(doc)
+        return self.result()
+
+    def _stderr(self) -> bytes:
+        """What the worker printed on stderr (its file closed then)."""
+        err, self._err = self._err, None
+        if err is None:
+            return b""
+        with err:
+            err.seek(0)
+            return err.read()
+
+    @staticmethod
+    def _failed(code: int | None, err: bytes) -> None:
+        """The worker stopped: its BSV error raised here as a :class:`bsv.errors.ReportError`; other ends
+        (killed, out of memory) return, and this process renders instead."""
+        if code == WORKER_ERROR_EXIT:
+            raise ReportError(err.decode("utf-8", "replace").strip())
+
+    def close(self) -> None:
+        """Stops a worker that has not rendered (the run failed or was interrupted)."""
+        proc, self._proc = self._proc, None
+        if proc is not None:
+            if proc.poll() is None:
+                proc.kill()
+            proc.communicate()
+        self._stderr()
+
+    def __enter__(self) -> Self:
+        return self.start()
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        self.close()
+
+
+def main() -> int:
+    """The worker (``python -m bsv.pdf``): loads WeasyPrint, reads a report's HTML (UTF-8) on stdin until
+    its end, writes the PDF on stdout. A BSV error (pango missing, a failed layout) is printed on stderr
+    with exit code :data:`WORKER_ERROR_EXIT`."""
+    try:
+        require_pdf()
+        render_pdf(WARM_UP_DOC)  # fonts, pango's font map, the user-agent style sheet: ready before the report
+        doc = sys.stdin.buffer.read().decode("utf-8")
+        pdf = render_pdf(doc)
+    except BsvError as exc:
+        sys.stderr.write(f"{exc}\n")
+        return WORKER_ERROR_EXIT
+    sys.stdout.buffer.write(pdf)
+    sys.stdout.buffer.flush()
+    return 0
+
+
+__all__ = ["RENDERER_MODULE", "WORKER_ERROR_EXIT", "PdfRenderer", "main", "render_pdf", "require_pdf", "worker_pays"]
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -215,3 +215,25 @@ def test_flip_average_is_the_mean_of_both_oriented_detections(monkeypatch):
     assert np.allclose(both.pose[:, 2], one.pose[:, 2] + 0.1)
     assert [hd is None for hd in both.hands] == [hd is None for hd in one.hands]  # a hand seen once is kept
     assert both.mask_soft is not None and np.allclose(both.mask_soft, 0.75 * mask)
+
+
+def test_bone_distances_are_the_exact_point_to_segment_distances():
+    """label_pixels compares the distance of every person pixel to the nearest bone of each group
+    (bsv._bsv.nearest_segment_distances): the same numbers as the point-to-segment formula in numpy."""
+    rng = np.random.default_rng(3)
+    p = rng.uniform(0, 640, (5000, 2))
+    bones = [(rng.uniform(0, 640, 2), rng.uniform(0, 640, 2)) for _ in range(25)] + [(np.array([5.0, 5.0]),) * 2]
+
+    def reference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        ab = b - a
+        den = float(ab @ ab)
+        t = np.zeros(len(p)) if den <= 1e-12 else np.clip((p - a) @ ab / den, 0.0, 1.0)
+        q = a + t[:, None] * ab
+        return np.hypot(p[:, 0] - q[:, 0], p[:, 1] - q[:, 1])
+
+    expected = np.min([reference(a, b) for a, b in bones], axis=0)
+    np.testing.assert_allclose(seg._bones_dist(p, bones), expected, rtol=1e-12, atol=1e-9)
+    assert np.isinf(seg._bones_dist(p, [])).all()
+    with pytest.raises(bsv.errors.InputError, match=r"segments must have shape \(N, 4\)") as e:
+        bsv._bsv.nearest_segment_distances(p, np.zeros((3, 2, 2)))
+    assert e.value.argument == "segments"

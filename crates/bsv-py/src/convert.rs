@@ -45,14 +45,14 @@ fn kind(a: &Bound<'_, PyUntypedArray>) -> u8 {
     a.dtype().kind()
 }
 
-/// An (N, 3) real array as rows, or an `InputError`.
-fn rows3(obj: &Bound<'_, PyAny>, what: &str, hint: &str) -> PyResult<Vec<[f64; 3]>> {
+/// An (N, D) real array as rows, or an `InputError`.
+fn rows<const D: usize>(obj: &Bound<'_, PyAny>, what: &str, hint: &str) -> PyResult<Vec<[f64; D]>> {
     let a = asarray(obj, None, what)?;
-    if a.ndim() != 2 || a.shape()[1] != 3 {
+    if a.ndim() != 2 || a.shape()[1] != D {
         return Err(input_error(
             what,
             None,
-            format!("{what} must have shape (N, 3) ({hint}), got {}", shape_text(a.shape())),
+            format!("{what} must have shape (N, {D}) ({hint}), got {}", shape_text(a.shape())),
         ));
     }
     if !matches!(kind(&a), b'f' | b'i' | b'u' | b'b') {
@@ -60,7 +60,22 @@ fn rows3(obj: &Bound<'_, PyAny>, what: &str, hint: &str) -> PyResult<Vec<[f64; 3
     }
     let f = asarray(a.as_any(), Some("float64"), what)?;
     let f = f.cast::<PyArray2<f64>>()?.readonly();
-    Ok(f.as_array().rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect())
+    Ok(f.as_array().rows().into_iter().map(|r| std::array::from_fn(|k| r[k])).collect())
+}
+
+/// An (N, 3) real array as rows, or an `InputError`.
+fn rows3(obj: &Bound<'_, PyAny>, what: &str, hint: &str) -> PyResult<Vec<[f64; 3]>> {
+    rows::<3>(obj, what, hint)
+}
+
+/// Copies an (N, 2) array of image-plane points (pixels), or an `InputError`.
+pub fn planar_points_from(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[f64; 2]>> {
+    rows::<2>(obj, what, "x, y in pixels")
+}
+
+/// Copies an (M, 4) array of image-plane line segments (`ax, ay, bx, by` in pixels), or an `InputError`.
+pub fn planar_segments_from(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[f64; 4]>> {
+    rows::<4>(obj, what, "ax, ay, bx, by in pixels: one line segment per row")
 }
 
 /// Copies an (N, 3) array of points (metres).

@@ -2,7 +2,8 @@
 
 use crate::classes::{from_kwargs, to_py, PyVolumeReport};
 use crate::convert::{
-    cloud_from, cloud_to, label_values, labelled_mesh_from, mesh_from, mesh_to, points_from, triangles_from,
+    cloud_from, cloud_to, label_values, labelled_mesh_from, mesh_from, mesh_to, planar_points_from,
+    planar_segments_from, points_from, triangles_from,
 };
 use crate::errors::{input_error, py_err};
 use bsv_capture::scanner::{self, Condition, Rig, Room};
@@ -212,6 +213,20 @@ fn surface_distances<'py>(
     Ok(PyArray1::from_vec(py, d))
 }
 
+/// For every image-plane point (N, 2), the distance to the nearest of the line segments (M, 4: ax, ay,
+/// bx, by; `bsv_capture::planar::nearest_segment_distances`); infinity when M is 0.
+#[pyfunction]
+fn nearest_segment_distances<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    segments: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let p = planar_points_from(points, "points")?;
+    let s = planar_segments_from(segments, "segments")?;
+    let d = py.detach(|| bsv_capture::planar::nearest_segment_distances(&p, &s));
+    Ok(PyArray1::from_vec(py, d))
+}
+
 /// Face labels from vertex labels: the one rule of `bsv_volume::face_labels_from_vertices` (the
 /// label shared by two corners; three different: the corner with the smallest vertex index).
 #[pyfunction]
@@ -296,6 +311,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(write_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(write_point_cloud, m)?)?;
     m.add_function(wrap_pyfunction!(check_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(nearest_segment_distances, m)?)?;
     m.add_function(wrap_pyfunction!(volumes, m)?)?;
     m.add_function(wrap_pyfunction!(default_template, m)?)?;
     m.add_function(wrap_pyfunction!(template_joints, m)?)?;

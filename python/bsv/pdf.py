@@ -7,8 +7,8 @@ mostly idle, so :class:`PdfRenderer` starts ``python -m bsv.pdf`` (:func:`main`)
 WeasyPrint while the capture is segmented and registered, then reads the report's HTML on its standard
 input and writes the PDF on its standard output.
 
-A process that has loaded WeasyPrint already (a station, a batch worker, a notebook after its first
-report) or a machine with one core renders in this process: :func:`render_pdf`, the function the worker
+A process's later reports (a station, a batch worker, a notebook: WeasyPrint is loaded once and kept),
+a process that has loaded WeasyPrint already or a machine with one core render in this process: :func:`render_pdf`, the function the worker
 runs. A worker that cannot start or dies is replaced by this process: the report is never lost to it.
 """
 
@@ -75,10 +75,16 @@ def _cores() -> int:
         return os.cpu_count() or 1
 
 
+#: Whether this process has started a PDF renderer before (see :func:`worker_pays`).
+_started_before = False
+
+
 def worker_pays() -> bool:
-    """Whether a worker process makes report.pdf sooner here: WeasyPrint not loaded yet in this process
-    and a second core to load it on."""
-    return RENDERER_MODULE not in sys.modules and _cores() > 1
+    """Whether a worker process makes report.pdf sooner here: this process's first report (one that makes
+    more, a batch worker, a station, a notebook, loads WeasyPrint once and keeps it: a worker for each
+    report would load it again each time), WeasyPrint not loaded yet here, and a second core to load it
+    on."""
+    return not _started_before and RENDERER_MODULE not in sys.modules and _cores() > 1
 
 
 class PdfRenderer:
@@ -99,6 +105,8 @@ class PdfRenderer:
     def start(self) -> Self:
         """Names a missing WeasyPrint (:class:`bsv.errors.MissingExtraError`) and starts loading it: in the
         worker, or here (then a missing pango raises :class:`bsv.errors.ReportError` now)."""
+        global _started_before
+        _started_before = True
         if self.worker and _installed(RENDERER_MODULE):
             package_root = str(Path(__file__).resolve().parent.parent)
             env = dict(os.environ)

@@ -96,15 +96,22 @@ def test_a_worker_not_used_is_stopped():
 
 
 def test_the_worker_only_where_it_pays(monkeypatch):
-    import weasyprint  # noqa: F401  (loaded in this process: laying out here costs nothing more)
+    import weasyprint  # loaded in this process: laying out here costs nothing more
 
     assert not pdf.worker_pays()
     assert not pdf.PdfRenderer().worker
     monkeypatch.delitem(sys.modules, "weasyprint")
+    monkeypatch.setattr(pdf, "_started_before", False)
     monkeypatch.setattr(pdf, "_cores", lambda: 1)
     assert not pdf.worker_pays()
     monkeypatch.setattr(pdf, "_cores", lambda: 2)
+    assert pdf.worker_pays()  # a fresh `bsv process`
+    pdf.PdfRenderer(worker=False)  # not started: nothing changes
     assert pdf.worker_pays()
+    monkeypatch.setitem(sys.modules, "weasyprint", weasyprint)
+    pdf.PdfRenderer(worker=False).start()
+    monkeypatch.delitem(sys.modules, "weasyprint")
+    assert not pdf.worker_pays()  # the second report of a process: WeasyPrint is loaded here, once
 
 
 # ----------------------------------------------------------------------------------------------------

@@ -274,7 +274,7 @@ def build_cloud(
     sor: bool = False,
     sor_k: int = 600,
     sor_std_ratio: float = 0.05,
-    normals: bool = True,
+    normals: bool = False,
     colors: str = "palette",
     remove_floor: bool = True,
     isolate_person: bool = True,
@@ -287,6 +287,12 @@ def build_cloud(
     edges, far behind the person and in 3-D parts separate from it; two comparable parts raise
     :class:`bsv.errors.PersonIsolationError`. Other keywords are ``FuseParams`` fields (thresholds:
     ``floor_margin_m``, ``edge_step_m``, ``far_m``, ``link_m``, ``second_part_ratio``, ...).
+
+    ``normals``: also each point's normal from its neighbouring pixels (oriented toward its camera). Off by
+    default, so the registration estimates its own (PCA over neighbours), as every benchmark does: fitted
+    with these, the camera path's segments came out 1-3 % larger and trunk_limbs +0.6 to +1.1 %
+    (benchmarks/BENCH.md, round 2 session 15); and cloud.ply without them gives ``bsv-cli register`` the fit
+    ``bsv process`` made.
 
     The report (a dict) has per view ``floor`` (``status`` "seen"/"not_seen", ``tilt_deg``, ``pitch_deg``,
     ``roll_deg``, ``height_mm`` at the subject), ``cleaning`` (``floor_removed``, ``edge_removed``,

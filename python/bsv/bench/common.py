@@ -124,7 +124,7 @@ def register_bsv(cloud: PointCloud, template: Mesh, params: Mapping[str, Any] | 
     kinds = kw.pop("keypoint_joints", None)  # e.g. --param keypoint_joints=elbow+knee
     choice = False if which in ("false", "0", "no", "off") else True if which in ("true", "1", "yes", "on") else None
     keypoints = camera_joints(keypoints, choice, str(kinds).replace("+", ",").split(",") if kinds else None)
-    reg = register(cloud.points, cloud.labels, template, label_source=label_source, keypoints=keypoints, **kw)
+    reg = register(cloud, None, template, label_source=label_source, keypoints=keypoints, **kw)  # as bsv process
     wall = time.perf_counter() - t0
     summary = dict(reg.volumes.get("registration", {}) or {})
     info = {k: summary[k] for k in ("rms_mesh_to_points_mm", "rms_points_to_mesh_mm", "iterations", "prealign")

@@ -14,6 +14,7 @@ runs. A worker that cannot start or dies is replaced by this process: the report
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
 import os
 import subprocess
@@ -87,6 +88,16 @@ def worker_pays() -> bool:
     return not _started_before and RENDERER_MODULE not in sys.modules and _cores() > 1
 
 
+def _reap(proc: subprocess.Popen[bytes]) -> None:
+    """Closes a stopped (or killed) worker's pipes and waits for it. Not ``communicate()``: that flushes
+    stdin, which :meth:`PdfRenderer.submit` has closed already."""
+    for pipe in (proc.stdin, proc.stdout):
+        if pipe is not None:
+            with contextlib.suppress(OSError, ValueError):
+                pipe.close()
+    proc.wait()
+
+
 class PdfRenderer:
     """Renders report.pdf, loading WeasyPrint as early as possible (module doc).
 
@@ -129,7 +140,7 @@ class PdfRenderer:
         proc = self._proc
         if proc is not None and proc.poll() is not None:
             self._proc = None
-            proc.communicate()
+            _reap(proc)
             self._failed(proc.returncode, self._stderr())
 
     def submit(self, doc: str) -> None:
@@ -190,7 +201,7 @@ class PdfRenderer:
         if proc is not None:
             if proc.poll() is None:
                 proc.kill()
-            proc.communicate()
+            _reap(proc)
         self._stderr()
 
     def __enter__(self) -> Self:

@@ -95,6 +95,16 @@ def test_a_worker_not_used_is_stopped():
     assert proc.poll() is not None
 
 
+def test_a_run_that_fails_after_submitting_stops_the_worker_quietly():
+    """An error between submit() and result() (a file that cannot be written) leaves the renderer to
+    close(): no error of its own on top of the run's, and no worker left behind."""
+    r = pdf.PdfRenderer(worker=True).start()
+    proc = r._proc
+    r.submit(DOC)
+    r.close()
+    assert proc is not None and proc.poll() is not None
+
+
 def test_the_worker_only_where_it_pays(monkeypatch):
     import weasyprint  # loaded in this process: laying out here costs nothing more
 

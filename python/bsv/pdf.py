@@ -88,6 +88,20 @@ def worker_pays() -> bool:
     return not _started_before and RENDERER_MODULE not in sys.modules and _cores() > 1
 
 
+def _worker_env() -> dict[str, str]:
+    """The worker's environment: this one, with this bsv's folder at the end of PYTHONPATH when it is not a
+    site-packages folder (a source checkout on the path; a site-packages folder first on PYTHONPATH would
+    come before the standard library)."""
+    import site
+
+    env = dict(os.environ)
+    root = str(Path(__file__).resolve().parent.parent)
+    sites = {str(Path(p).resolve()) for p in [*site.getsitepackages(), site.getusersitepackages()]}
+    if root not in sites:
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (env.get("PYTHONPATH"), root) if p)
+    return env
+
+
 def _reap(proc: subprocess.Popen[bytes]) -> None:
     """Closes a stopped (or killed) worker's pipes and waits for it. Not ``communicate()``: that flushes
     stdin, which :meth:`PdfRenderer.submit` has closed already."""
@@ -119,14 +133,12 @@ class PdfRenderer:
         global _started_before
         _started_before = True
         if self.worker and _installed(RENDERER_MODULE):
-            package_root = str(Path(__file__).resolve().parent.parent)
-            env = dict(os.environ)
-            env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
             try:
                 # a file, not a pipe: the worker never waits on it (closed by _stderr)
                 self._err = tempfile.TemporaryFile()  # noqa: SIM115
-                self._proc = subprocess.Popen([sys.executable, "-m", __name__], stdin=subprocess.PIPE,
-                                              stdout=subprocess.PIPE, stderr=self._err, env=env)
+                # -P: not the current folder on the worker's path (a stray weasyprint.py there)
+                self._proc = subprocess.Popen([sys.executable, "-P", "-m", __name__], stdin=subprocess.PIPE,
+                                              stdout=subprocess.PIPE, stderr=self._err, env=_worker_env())
                 return self
             except OSError:  # no process to be had: load it here
                 self._stderr()
@@ -152,27 +164,27 @@ class PdfRenderer:
         if self._proc is not None and self._proc.stdin is not None:
             try:
                 self._proc.stdin.write(doc.encode("utf-8"))  # the worker is waiting: it reads it all at once
-                self._proc.stdin.close()
             except OSError:  # the worker died: result() says why or renders here
                 pass
+            finally:
+                with contextlib.suppress(OSError):
+                    self._proc.stdin.close()
 
     def result(self) -> bytes:
         """The PDF of the submitted document (:func:`render_pdf`), from the worker if one was started."""
-        doc, proc, self._proc = self._doc, self._proc, None
+        doc, proc = self._doc, self._proc
         if doc is None:
             raise RuntimeError("PdfRenderer.result: submit a document first")
         if proc is None:
             return render_pdf(doc)
-        pdf = b""
-        if proc.stdout is not None:
-            with proc.stdout:
-                pdf = proc.stdout.read()
-        proc.wait()
-        if proc.returncode == 0 and pdf:
+        pdf = proc.stdout.read() if proc.stdout is not None else b""  # an interruption: close() reaps it
+        _reap(proc)
+        self._proc = None
+        if proc.returncode == 0 and pdf.startswith(b"%PDF-"):
             self._stderr()
             return pdf
         self._failed(proc.returncode, self._stderr())
-        return render_pdf(doc)
+        return render_pdf(doc)  # killed, or something else than a PDF on its stdout
 
     def render(self, doc: str) -> bytes:
         """:meth:`submit` then :meth:`result`: the PDF of ``doc``."""
@@ -216,16 +228,20 @@ def main() -> int:
     """The worker (``python -m bsv.pdf``): loads WeasyPrint, reads a report's HTML (UTF-8) on stdin until
     its end, writes the PDF on stdout. A BSV error (pango missing, a failed layout) is printed on stderr
     with exit code :data:`WORKER_ERROR_EXIT`."""
+    out = os.fdopen(os.dup(1), "wb")  # the PDF's channel; whatever else writes to stdout goes to stderr
+    os.dup2(2, 1)
+    sys.stdout = sys.stderr
     try:
         require_pdf()
-        render_pdf(WARM_UP_DOC)  # fonts, pango's font map, the user-agent style sheet: ready before the report
+        with contextlib.suppress(BsvError):  # only a warm-up: the report's own layout says what fails
+            render_pdf(WARM_UP_DOC)  # fonts, pango's font map, the user-agent style sheet: ready before the report
         doc = sys.stdin.buffer.read().decode("utf-8")
         pdf = render_pdf(doc)
     except BsvError as exc:
         sys.stderr.write(f"{exc}\n")
         return WORKER_ERROR_EXIT
-    sys.stdout.buffer.write(pdf)
-    sys.stdout.buffer.flush()
+    with out:
+        out.write(pdf)
     return 0
 
 

@@ -469,9 +469,11 @@ def process(
     steps = _Steps(progress)
     pdf_renderer = PdfRenderer()
     warm = warming_up(**(segment_params or {})) if segmentation == "camera" else contextlib.nullcontext()
-    steps.run("prepare", "starting the PDF renderer (report.pdf) in a worker process" if pdf_renderer.worker
-              else "loading the PDF renderer (report.pdf)", pdf_renderer.start)
-    with contextlib.closing(pdf_renderer), warm:
+    with contextlib.closing(pdf_renderer), contextlib.ExitStack() as stack:
+        steps.run("prepare", "starting the PDF renderer (report.pdf) in a worker process" if pdf_renderer.worker
+                  else "loading the PDF renderer (report.pdf)", pdf_renderer.start)
+        stack.enter_context(warm)
+
         def read_all() -> dict[str, dict[str, Any]]:
             return {cam: read_capture(d) for cam, d in dirs.items()}
 

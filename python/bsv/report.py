@@ -10,7 +10,8 @@ segments when known (a synthetic subject), proportions, left/right asymmetry ("n
 symmetric" when the interval holds 0), landmark and calibration warnings; the technical details (cloud
 cleaning per camera, registration figures and parameters, timings) are folded away in ``<details>`` in
 report.html and left out of report.pdf, the copy to print (:data:`TECHNICAL_IN_PDF`).
-Every file is rendered before any is written, and each is written atomically. The figures are drawn once
+Every file is rendered before any is written (``bsv process`` lays report.pdf out in a worker while it
+writes the others into a staging folder, :mod:`bsv.staging`), and each is written atomically. The figures are drawn once
 for both files; report.pdf embeds the shaded renders as JPEG, which WeasyPrint takes as they are.
 """
 
@@ -790,8 +791,8 @@ def render_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", 
                   segmentations: Mapping[str, np.ndarray] | None = None,
                   pdf_renderer: PdfRenderer | None = None) -> dict[str, tuple[Path, bytes]]:
     """The report's files rendered in memory, nothing written: {key: (path, bytes)} for ``report.html``
-    (self-contained), ``report.pdf`` (unless ``pdf`` is False) and ``volumes.csv`` (keys: report,
-    report_pdf, volumes_csv). Write them with :func:`write_rendered`. The figures are drawn once for both
+    (self-contained), ``report.pdf`` (unless ``pdf`` is False or a ``pdf_renderer`` is given, see below) and
+    ``volumes.csv`` (keys: report, report_pdf, volumes_csv). Write them with :func:`write_rendered`. The figures are drawn once for both
     files (report.pdf takes the shaded renders as JPEG)."""
     out = Path(out_dir)
     docs = _documents(result, out, title, segmentations, ("html", "pdf") if pdf else ("html",))

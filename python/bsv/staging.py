@@ -3,9 +3,10 @@
 :func:`staged_outputs` gives a hidden temporary folder inside the output folder; the run writes every file
 into it under its final relative path. When the block ends without error, each file is moved to its place
 (:func:`os.replace`: each file appears whole, never half-written) with the usual file mode, and the folder
-is removed; when it raises, the folder is removed and the output folder is as it was. So ``bsv process``
-can write its files while report.pdf is still being laid out, and a failure of that last file still leaves
-nothing behind.
+is removed; when it raises, the folder is removed and the output folder's files are as they were (the
+output folder itself may have been created). The files it replaces are moved aside first and put back if
+a move fails (:func:`commit`). So ``bsv process`` can write its files while report.pdf is still being laid
+out, and a failure of that last file still leaves nothing behind.
 """
 
 from __future__ import annotations
@@ -21,6 +22,8 @@ from .errors import OutputExistsError, WriteError
 
 #: Prefix of the temporary folder (hidden; a run killed outright may leave one, which can be deleted).
 STAGING_PREFIX = ".bsv-run-"
+#: Prefix of the folder inside the stage that holds the files being replaced until the new ones are in.
+REPLACED_PREFIX = ".replaced-"
 
 
 def _file_mode() -> int:
@@ -33,22 +36,41 @@ def _file_mode() -> int:
 def commit(stage: Path, out: Path, overwrite: bool) -> list[Path]:
     """Moves every file under ``stage`` to the same relative path under ``out``; returns the final paths.
     Without ``overwrite`` an existing file (created since the run checked) raises
-    :class:`bsv.errors.OutputExistsError` before anything moves."""
+    :class:`bsv.errors.OutputExistsError` before anything moves. The files replaced are first moved aside
+    into the stage; a move that fails (or an interruption) puts every file back as it was and raises
+    :class:`bsv.errors.WriteError` (or the interruption)."""
     files = sorted(p for p in stage.rglob("*") if p.is_file())
     targets = [out / p.relative_to(stage) for p in files]
     existing = [str(t.relative_to(out)) for t in targets if t.exists() or t.is_symlink()]
     if existing and not overwrite:
         raise OutputExistsError(f"{out} already holds {', '.join(existing)}; pass overwrite=True to replace them")
     mode = _file_mode()
-    for src, dst in zip(files, targets, strict=True):
-        try:
+    aside = Path(tempfile.mkdtemp(prefix=REPLACED_PREFIX, dir=stage))
+    replaced: list[tuple[Path, Path]] = []
+    moved: list[Path] = []
+    try:
+        for k, (src, dst) in enumerate(zip(files, targets, strict=True)):
             dst.parent.mkdir(parents=True, exist_ok=True)
             os.chmod(src, mode)
+            if dst.is_file() or dst.is_symlink():
+                old = aside / str(k)
+                os.replace(dst, old)
+                replaced.append((dst, old))
             os.replace(src, dst)
-        except OSError as exc:
-            err = WriteError(f"cannot move {src.name} into {dst.parent} ({exc}); is the folder writable?")
-            err.path = str(dst)
+            moved.append(dst)
+    except BaseException as exc:
+        for dst in moved:
+            with contextlib.suppress(OSError):
+                dst.unlink()
+        for dst, old in replaced:
+            with contextlib.suppress(OSError):
+                os.replace(old, dst)
+        if isinstance(exc, OSError):
+            err = WriteError(f"cannot move the run's files into {out} ({exc}); nothing was changed there: is the "
+                             "folder writable, or a file open in another program?")
+            err.path = str(out)
             raise err from exc
+        raise
     return targets
 
 
@@ -70,4 +92,4 @@ def staged_outputs(out: Path, overwrite: bool) -> Iterator[Path]:
         shutil.rmtree(stage, ignore_errors=True)
 
 
-__all__ = ["STAGING_PREFIX", "commit", "staged_outputs"]
+__all__ = ["REPLACED_PREFIX", "STAGING_PREFIX", "commit", "staged_outputs"]

@@ -165,3 +165,21 @@ def test_a_file_that_appeared_meanwhile_is_not_overwritten(tmp_path):
     with staged_outputs(out, overwrite=True) as stage:
         (stage / "b.txt").write_text("new")
     assert (out / "b.txt").read_text() == "new"
+
+
+def test_a_move_that_fails_puts_every_file_back(tmp_path):
+    """The last move fails (its target is a folder): the files already moved are taken out again and the
+    ones they replaced put back, so OUT is as it was, and the error names the folder."""
+    from bsv.errors import WriteError
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "a.json").write_text("old a")
+    (out / "z.png").mkdir()  # in the way of the last file
+    with pytest.raises(WriteError, match="nothing was changed") as e, staged_outputs(out, overwrite=True) as stage:
+        (stage / "a.json").write_text("new a")
+        (stage / "b.ply").write_text("new b")
+        (stage / "z.png").write_text("new z")
+    assert e.value.path == str(out)
+    assert sorted(p.name for p in out.iterdir()) == ["a.json", "z.png"]
+    assert (out / "a.json").read_text() == "old a" and (out / "z.png").is_dir()

@@ -22,7 +22,9 @@ pub fn segment_distance(p: [f64; 2], s: [f64; 4]) -> f64 {
 }
 
 /// For every point, the distance to the nearest of `segments` (each `[ax, ay, bx, by]`); infinity when
-/// there are none. Parallel over the points; the result does not depend on the number of threads.
+/// there are none. Parallel over the points; the result does not depend on the number of threads. A
+/// segment with a NaN coordinate is never the nearest (`f64::min` skips NaN), and a NaN point gets
+/// infinity: the callers pass finite landmarks and pixel centres.
 pub fn nearest_segment_distances(points: &[[f64; 2]], segments: &[[f64; 4]]) -> Vec<f64> {
     let mut out = vec![f64::INFINITY; points.len()];
     out.par_chunks_mut(CHUNK).zip(points.par_chunks(CHUNK)).for_each(|(d, p)| {

@@ -36,6 +36,7 @@ from . import _bsv, anatomy
 from .errors import OutputExistsError
 from .palette import colourise, hex_colour, plain_name, rgb01, segment_id
 from .pdf import PdfRenderer, render_pdf, require_pdf
+from .staging import file_mode
 from .types import SEGMENT_NAMES
 
 if TYPE_CHECKING:
@@ -778,9 +779,7 @@ def _write_atomic(path: Path, data: bytes) -> None:
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
-        umask = os.umask(0o22)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # a report is read by others: the usual file mode, not mkstemp's 0600
+        os.chmod(tmp, file_mode())  # a report is read by others: the usual file mode, not mkstemp's 0600
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

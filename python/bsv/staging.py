@@ -26,7 +26,7 @@ STAGING_PREFIX = ".bsv-run-"
 REPLACED_PREFIX = ".replaced-"
 
 
-def _file_mode() -> int:
+def file_mode() -> int:
     """The mode a new file gets from the umask (temporary files are created 0600)."""
     umask = os.umask(0o22)
     os.umask(umask)
@@ -44,7 +44,7 @@ def commit(stage: Path, out: Path, overwrite: bool) -> list[Path]:
     existing = [str(t.relative_to(out)) for t in targets if t.exists() or t.is_symlink()]
     if existing and not overwrite:
         raise OutputExistsError(f"{out} already holds {', '.join(existing)}; pass overwrite=True to replace them")
-    mode = _file_mode()
+    mode = file_mode()
     aside = Path(tempfile.mkdtemp(prefix=REPLACED_PREFIX, dir=stage))
     replaced: list[tuple[Path, Path]] = []
     moved: list[Path] = []
@@ -92,4 +92,4 @@ def staged_outputs(out: Path, overwrite: bool) -> Iterator[Path]:
         shutil.rmtree(stage, ignore_errors=True)
 
 
-__all__ = ["REPLACED_PREFIX", "STAGING_PREFIX", "commit", "staged_outputs"]
+__all__ = ["REPLACED_PREFIX", "STAGING_PREFIX", "commit", "file_mode", "staged_outputs"]

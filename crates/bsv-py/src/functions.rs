@@ -213,6 +213,27 @@ fn surface_distances<'py>(
     Ok(PyArray1::from_vec(py, d))
 }
 
+/// Distances (N,) and triangle indices (N,) of [`surface_nearest`].
+type NearestArrays<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<u32>>);
+
+/// Exact distance (metres) from every point to the surface of the mesh and the index of the triangle
+/// that holds the nearest surface point: `(distances (N,), triangles (N,))`.
+#[pyfunction]
+fn surface_nearest<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    vertices: &Bound<'py, PyAny>,
+    faces: &Bound<'py, PyAny>,
+) -> PyResult<NearestArrays<'py>> {
+    let p = points_from(points, "points")?;
+    let v = points_from(vertices, "vertices")?;
+    let t = triangles_from(faces, v.len(), "faces")?;
+    let mesh = TriMesh::new(v, t);
+    let near = py.detach(|| bsv_capture::distance::surface_nearest(&p, &mesh)).map_err(py_err)?;
+    let (d, f): (Vec<f64>, Vec<u32>) = near.into_iter().unzip();
+    Ok((PyArray1::from_vec(py, d), PyArray1::from_vec(py, f)))
+}
+
 /// For every image-plane point (N, 2), the distance to the nearest of the line segments (M, 4: ax, ay,
 /// bx, by; `bsv_capture::planar::nearest_segment_distances`); infinity when M is 0.
 #[pyfunction]
@@ -317,6 +338,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(template_joints, m)?)?;
     m.add_function(wrap_pyfunction!(scan, m)?)?;
     m.add_function(wrap_pyfunction!(surface_distances, m)?)?;
+    m.add_function(wrap_pyfunction!(surface_nearest, m)?)?;
     m.add_function(wrap_pyfunction!(face_labels_from_vertices, m)?)?;
     m.add_function(wrap_pyfunction!(vertex_labels_from_faces, m)?)?;
     m.add_function(wrap_pyfunction!(vertex_normals, m)?)?;

@@ -62,6 +62,21 @@ def cloud_far_pct(cloud: PointCloud, truth: Mesh) -> tuple[float, float]:
     return float(np.mean(d > near) * 100.0), float(np.mean(d > far) * 100.0)
 
 
+def surface_samples(mesh: Mesh, n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """``n`` points uniformly distributed on the mesh surface (area-weighted, deterministic for a seed)
+    and the index of each one's triangle."""
+    rng = np.random.default_rng(seed)
+    tri = np.asarray(mesh.vertices, dtype=np.float64)[np.asarray(mesh.faces)]
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    if not area.sum() > 0:
+        raise BenchError("mesh has zero area: cannot sample it")
+    f = rng.choice(len(tri), size=n, p=area / area.sum())
+    r1, r2 = rng.random(n), rng.random(n)
+    s = np.sqrt(r1)
+    w = np.stack([1 - s, s * (1 - r2), s * r2], axis=1)
+    return np.einsum("ij,ijk->ik", w, tri[f]), f
+
+
 #: ``--template`` value that takes each subject's sex's embedded template (:func:`bsv.default_template`).
 SEX_TEMPLATE = "sex"
 

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from ..types import Mesh
-from .common import BenchError, Run
+from .common import BenchError, Run, surface_samples
 from .reference import CONDITIONS
 
 SCAN_RE = re.compile(r"tr_scan_(\d{3})\.ply$")
@@ -130,17 +130,9 @@ def nearest_index(source: np.ndarray, queries: np.ndarray, chunk: int = 4096) ->
 
 
 def sample_surface(mesh: Mesh, n: int, seed: int = 0) -> np.ndarray:
-    """``n`` points uniformly distributed on the mesh surface (area-weighted, deterministic)."""
-    rng = np.random.default_rng(seed)
-    tri = mesh.vertices[mesh.faces]
-    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
-    if not area.sum() > 0:
-        raise BenchError("mesh has zero area: cannot sample it")
-    f = rng.choice(len(tri), size=n, p=area / area.sum())
-    r1, r2 = rng.random(n), rng.random(n)
-    s = np.sqrt(r1)
-    w = np.stack([1 - s, s * (1 - r2), s * r2], axis=1)
-    return np.einsum("ij,ijk->ik", w, tri[f])
+    """``n`` points uniformly distributed on the mesh surface (area-weighted, deterministic):
+    :func:`bsv.bench.common.surface_samples` without their triangles."""
+    return surface_samples(mesh, n, seed)[0]
 
 
 def label_registration(reg: Mesh, params: dict[str, Any] | None = None, samples: int = 60_000) -> tuple[Mesh, dict]:

@@ -33,7 +33,7 @@ from .tables import (
 #: Files every benchmark writes into its output folder (besides the figures, :data:`FIGURE_PATTERNS`).
 OUTPUT_FILES = ("results.json", "results.csv", "report.md")
 #: Glob patterns of the figures a benchmark writes.
-FIGURE_PATTERNS = ("rve_per_segment.png", "trunk_limbs_hist_*.png", "joint_errors.png", "coverage.png")
+FIGURE_PATTERNS = ("rve_per_segment.png", "trunk_limbs_hist_*.png", "joint_errors.png", "boundary_errors.png", "coverage.png")
 
 
 def existing_outputs(out: str | Path) -> list[str]:
@@ -121,6 +121,12 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
     md += joints_markdown(runs)
     if joint_figure(runs, d / "joint_errors.png") is not None:
         figs.append("joint_errors.png")
+    from .boundaries import FIGURE as BOUNDARY_FIGURE
+    from .boundaries import boundaries_markdown, boundary_figure
+
+    md += boundaries_markdown(runs)
+    if boundary_figure(runs, d / BOUNDARY_FIGURE) is not None:
+        figs.append(BOUNDARY_FIGURE)
     md += ["## Registration time per subject (s)", "", timing_table(runs), ""]
     far = cloud_table(runs)
     if far:

@@ -211,6 +211,9 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
                 from .coverage import record
 
                 run.info["uncertainty"] = record(fit.mesh, truth_surface, cams, segmentation=segmentation)
+                from .boundaries import INFO_KEY, boundary_errors
+
+                run.info[INFO_KEY] = boundary_errors(fit.mesh, truth_surface)
                 if refined is not None:
                     run.info["refined"] = refined.register(kinds, seed, template, params, joints, segmentation)
         except Exception as exc:  # a failed registration is reported, the run goes on

@@ -1,0 +1,90 @@
+"""bsv.bench.boundaries: the fitted mesh's segment boundaries against the true ones, in millimetres along
+the limb, checked on the template against copies of it whose loops were moved by a known distance."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import bsv
+from bsv.bench.boundaries import (
+    INFO_KEY,
+    KINDS,
+    best_split,
+    boundaries_markdown,
+    boundary_errors,
+    distance_to_segments,
+    loop_edges,
+    summarise,
+)
+from bsv.bench.common import Run
+from bsv.bodies.template import subdivide_midpoint
+from bsv.types import SEGMENT_IDS, Mesh
+
+
+@pytest.fixture(scope="module")
+def template() -> Mesh:
+    return bsv.default_template()
+
+
+@pytest.fixture(scope="module")
+def fine(template: Mesh) -> Mesh:
+    """The template with its faces split twice (edges of about 8 mm): a truth whose loops can be moved finely."""
+    return subdivide_midpoint(subdivide_midpoint(template))
+
+
+def moved(mesh: Mesh, grow: str, into: str, mm: float) -> Mesh:
+    """``mesh`` with the faces of ``into`` within ``mm`` of its loop with ``grow`` relabelled ``grow``."""
+    v, f = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    fl = np.asarray(mesh.face_labels).copy()
+    g, i = SEGMENT_IDS[grow], SEGMENT_IDS[into]
+    e = loop_edges(f, fl, g, i)
+    d = distance_to_segments(v[f].mean(axis=1), v[e[:, 0]], v[e[:, 1]])
+    fl[(fl == i) & (d < mm / 1000.0)] = g
+    return Mesh(v, f, None, fl)
+
+
+def test_a_mesh_against_itself_has_no_boundary_error(template: Mesh) -> None:
+    errs = boundary_errors(template, template)
+    assert set(errs) == {f"{k}_{s}" for k in KINDS for s in "lr"}
+    assert max(abs(e) for e in errs.values()) < 0.2
+
+
+def test_a_true_loop_moved_down_the_shin_reads_as_the_fitted_loop_too_high(template: Mesh, fine: Mesh) -> None:
+    errs = boundary_errors(template, moved(fine, "thigh_l", "shin_l", 20.0))
+    assert errs["knee_l"] == pytest.approx(-20.0, abs=2.0)  # the fitted loop lies 20 mm proximal of the truth
+    assert all(abs(e) < 1.0 for j, e in errs.items() if j != "knee_l")
+
+
+def test_a_true_loop_moved_into_the_torso_reads_as_the_fitted_loop_too_low(template: Mesh, fine: Mesh) -> None:
+    errs = boundary_errors(template, moved(fine, "thigh_r", "torso", 12.0))
+    assert errs["hip_r"] == pytest.approx(12.0, abs=2.0)  # the true thigh reaches 12 mm higher
+    assert abs(errs["hip_l"]) < 1.0 and abs(errs["knee_r"]) < 1.0
+
+
+def test_a_joint_whose_segments_a_mesh_lacks_is_left_out(template: Mesh) -> None:
+    fl = np.asarray(template.face_labels).copy()
+    fl[fl == SEGMENT_IDS["forearm_l"]] = SEGMENT_IDS["upper_arm_l"]  # no left elbow loop
+    errs = boundary_errors(Mesh(template.vertices, template.faces, None, fl), template)
+    assert "elbow_l" not in errs and "elbow_r" in errs
+
+
+def test_the_best_split_is_the_middle_of_the_gap() -> None:
+    h = np.array([-3.0, -2.0, -1.0, 1.0, 2.0, 3.0])
+    assert best_split(h, h > 0) == pytest.approx(0.0)
+    assert best_split(h, h > 1.5) == pytest.approx(1.5)
+    noisy = np.array([False, False, True, False, True, True])  # one point on each wrong side
+    assert -1.0 <= best_split(h, noisy) <= 1.0
+
+
+def test_the_table_pools_sides_and_names_the_worst() -> None:
+    runs = [Run(f"subject_{i:03d}", "noer", "bsv", True, info={INFO_KEY: {"knee_l": e, "knee_r": -e, "hip_l": 1.0}})
+            for i, e in enumerate((2.0, 6.0))]
+    runs.append(Run("subject_009", "noer", "trimesh", True, info={INFO_KEY: {"knee_l": 99.0}}))  # not bsv: left out
+    table = summarise(runs)["noer"]
+    assert table["knee"]["n"] == 4 and table["knee"]["mean_mm"] == pytest.approx(0.0)
+    assert table["knee"]["median_abs_mm"] == pytest.approx(4.0) and abs(table["knee"]["worst_mm"]) == 6.0
+    assert table["hip"]["n"] == 2
+    md = "\n".join(boundaries_markdown(runs))
+    assert "| knee | 4 | +0.0 |" in md and "subject_001" in md
+    assert boundaries_markdown([]) == []

@@ -67,6 +67,7 @@ def test_a_joint_whose_segments_a_mesh_lacks_is_left_out(template: Mesh) -> None
     fl[fl == SEGMENT_IDS["forearm_l"]] = SEGMENT_IDS["upper_arm_l"]  # no left elbow loop
     errs = boundary_errors(Mesh(template.vertices, template.faces, None, fl), template)
     assert "elbow_l" not in errs and "elbow_r" in errs
+    assert boundary_errors(Mesh(template.vertices, template.faces), template) == {}  # no labels, no boundaries
 
 
 def test_the_best_split_is_the_middle_of_the_gap() -> None:

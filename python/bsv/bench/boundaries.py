@@ -44,13 +44,13 @@ BAND_M = 0.06
 MIN_POINTS = 100
 
 
-def _face_labels(mesh: Mesh) -> np.ndarray:
-    faces = np.asarray(mesh.faces)
+def _face_labels(mesh: Mesh) -> np.ndarray | None:
+    """The mesh's face labels (from its vertex labels when it has no face labels); None without labels."""
     if mesh.face_labels is not None:
         return np.asarray(mesh.face_labels, dtype=np.uint8)
     if mesh.vertex_labels is None:
-        raise ValueError("the mesh has no segment labels")
-    return np.asarray(_bsv.face_labels_from_vertices(faces, mesh.vertex_labels), dtype=np.uint8)
+        return None
+    return np.asarray(_bsv.face_labels_from_vertices(np.asarray(mesh.faces), mesh.vertex_labels), dtype=np.uint8)
 
 
 def loop_edges(faces: np.ndarray, face_labels: np.ndarray, a: int, b: int) -> np.ndarray:
@@ -93,8 +93,11 @@ def best_split(h: np.ndarray, distal: np.ndarray) -> float:
 def boundary_errors(fitted: Mesh, truth: Mesh, samples: int = SAMPLES) -> dict[str, float]:
     """{joint: mm} for every limb joint of :data:`KINDS` (both sides) whose two segments both meshes have:
     the fitted loop's place along the limb minus the true loop's, + = distal (see the module notes).
-    ``truth``: the true body, labelled like the fitted mesh (the same segment ids)."""
+    ``truth``: the true body, labelled like the fitted mesh (the same segment ids). Empty when either mesh
+    has no labels."""
     fl, tl = _face_labels(fitted), _face_labels(truth)
+    if fl is None or tl is None:  # an unlabelled mesh has no boundaries
+        return {}
     pts, tri = surface_samples(fitted, samples)
     dist, tface = _bsv.surface_nearest(pts, truth.vertices, truth.faces)
     own, true = fl[tri], tl[np.asarray(tface, dtype=np.int64)]

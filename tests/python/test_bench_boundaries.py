@@ -62,6 +62,11 @@ def test_a_true_loop_moved_into_the_torso_reads_as_the_fitted_loop_too_low(templ
     assert abs(errs["hip_l"]) < 1.0 and abs(errs["knee_r"]) < 1.0
 
 
+def test_a_loop_far_off_is_found_in_the_wider_band(template: Mesh, fine: Mesh) -> None:
+    errs = boundary_errors(template, moved(fine, "thigh_l", "shin_l", 80.0))  # beyond BAND_M
+    assert errs["knee_l"] == pytest.approx(-80.0, abs=3.0)
+
+
 def test_a_joint_whose_segments_a_mesh_lacks_is_left_out(template: Mesh) -> None:
     fl = np.asarray(template.face_labels).copy()
     fl[fl == SEGMENT_IDS["forearm_l"]] = SEGMENT_IDS["upper_arm_l"]  # no left elbow loop

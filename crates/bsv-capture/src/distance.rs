@@ -9,7 +9,7 @@ use parry3d_f64::math::Vector;
 use parry3d_f64::query::PointQuery;
 use rayon::prelude::*;
 
-/// Errors of [`surface_distances`].
+/// Errors of [`surface_distances`] and [`surface_nearest`].
 #[derive(Debug, thiserror::Error)]
 pub enum DistanceError {
     /// The mesh cannot be used (empty, bad index, non-finite vertex).

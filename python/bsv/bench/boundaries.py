@@ -38,10 +38,15 @@ KINDS: tuple[str, ...] = ("shoulder", "elbow", "hip", "knee")
 SAMPLES = 200_000
 #: A drawn point counts only within this distance of the true surface (metres).
 NEAR_M = 0.005
-#: ... and within this distance of the fitted loop (metres): the loop's neighbourhood.
+#: ... and within this distance of the fitted loop (metres): the loop's neighbourhood; widened to
+#: :data:`WIDE_BAND_M` when the true loop lies beyond it (every point of the band on one side).
 BAND_M = 0.06
+#: The widest neighbourhood searched (metres); a loop farther off than that is not measured.
+WIDE_BAND_M = 0.15
 #: Fewer points than this on either side of a loop: no error is given for it.
 MIN_POINTS = 100
+#: File name of the boundary-error figure in a benchmark's output folder.
+FIGURE = "boundary_errors.png"
 
 
 def _face_labels(mesh: Mesh) -> np.ndarray | None:
@@ -79,28 +84,32 @@ def distance_to_segments(points: np.ndarray, a: np.ndarray, b: np.ndarray, chunk
 
 
 def best_split(h: np.ndarray, distal: np.ndarray) -> float:
-    """The threshold on ``h`` that puts the fewest points on the wrong side (``distal`` ones below it,
-    the others above it): the median of the middles of the gaps where that fewest is reached."""
+    """The threshold on ``h`` (at least one value) that puts the fewest points on the wrong side
+    (``distal`` ones below it, the others above it): the median of the middles of the gaps where that
+    fewest is reached (beyond the ends: a tenth of the values' range, or 1e-3, past the last value)."""
     order = np.argsort(h, kind="stable")
     hs, ds = h[order], distal[order]
+    pad = max(1e-3, 0.1 * float(hs[-1] - hs[0]))
     # errors if the threshold lies just below hs[j]: distal points before j + proximal points from j on
     errors = np.concatenate([[0], np.cumsum(ds)]) + np.concatenate([np.cumsum((~ds)[::-1])[::-1], [0]])
     best = np.flatnonzero(errors == errors.min())
-    ext = np.concatenate([[hs[0] - 1e-3], hs, [hs[-1] + 1e-3]])
+    ext = np.concatenate([[hs[0] - pad], hs, [hs[-1] + pad]])
     return float(np.median(0.5 * (ext[best] + ext[best + 1])))
 
 
 def boundary_errors(fitted: Mesh, truth: Mesh, samples: int = SAMPLES) -> dict[str, float]:
     """{joint: mm} for every limb joint of :data:`KINDS` (both sides) whose two segments both meshes have:
     the fitted loop's place along the limb minus the true loop's, + = distal (see the module notes).
-    ``truth``: the true body, labelled like the fitted mesh (the same segment ids). Empty when either mesh
-    has no labels."""
+    ``truth``: the true body, labelled like the fitted mesh (the same segment ids). A joint is left out when
+    the fitted mesh has no loop between its segments, the truth lacks one of them, or fewer than
+    :data:`MIN_POINTS` points fall on either side within :data:`WIDE_BAND_M` of the fitted loop (a loop
+    that far off); empty when either mesh has no labels."""
     fl, tl = _face_labels(fitted), _face_labels(truth)
     if fl is None or tl is None:  # an unlabelled mesh has no boundaries
         return {}
     pts, tri = surface_samples(fitted, samples)
     dist, tface = _bsv.surface_nearest(pts, truth.vertices, truth.faces)
-    own, true = fl[tri], tl[np.asarray(tface, dtype=np.int64)]
+    own, true_lab = fl[tri], tl[np.asarray(tface, dtype=np.int64)]
     near = np.asarray(dist) < NEAR_M
     v = np.asarray(fitted.vertices, dtype=np.float64)
     out: dict[str, float] = {}
@@ -111,16 +120,18 @@ def boundary_errors(fitted: Mesh, truth: Mesh, samples: int = SAMPLES) -> dict[s
             edges = loop_edges(fitted.faces, fl, a, b)
             if len(edges) == 0 or not (np.any(tl == a) and np.any(tl == b)):
                 continue
-            ends = v[edges.ravel()]
-            lo, hi = ends.min(axis=0) - BAND_M, ends.max(axis=0) + BAND_M
-            sel = near & np.isin(own, (a, b)) & np.isin(true, (a, b)) & np.all((pts >= lo) & (pts <= hi), axis=1)
-            d = distance_to_segments(pts[sel], v[edges[:, 0]], v[edges[:, 1]])
-            keep = d < BAND_M
-            h = np.where(own[sel][keep] == b, d[keep], -d[keep])
-            is_distal = true[sel][keep] == b
-            if min(int(is_distal.sum()), int((~is_distal).sum())) < MIN_POINTS:
-                continue
-            out[joint] = round(-1000.0 * best_split(h, is_distal), 2)
+            for band in (BAND_M, WIDE_BAND_M):
+                ends = v[edges.ravel()]
+                lo, hi = ends.min(axis=0) - band, ends.max(axis=0) + band
+                sel = (near & np.isin(own, (a, b)) & np.isin(true_lab, (a, b))
+                       & np.all((pts >= lo) & (pts <= hi), axis=1))
+                d = distance_to_segments(pts[sel], v[edges[:, 0]], v[edges[:, 1]])
+                keep = d < band
+                h = np.where(own[sel][keep] == b, d[keep], -d[keep])
+                is_distal = true_lab[sel][keep] == b
+                if min(int(is_distal.sum()), int((~is_distal).sum())) >= MIN_POINTS:
+                    out[joint] = round(-1000.0 * best_split(h, is_distal), 2)
+                    break
     return out
 
 
@@ -137,6 +148,7 @@ def _collect(runs: Sequence[Run]) -> dict[tuple[str, str], list[tuple[str, float
 
 
 def _ordered(conditions: set[str]) -> list[str]:
+    """Conditions in the benchmark's order (unknown ones last, by name)."""
     return sorted(conditions, key=lambda c: (CONDITIONS.index(c) if c in CONDITIONS else len(CONDITIONS), c))
 
 
@@ -157,10 +169,6 @@ def summarise(runs: Sequence[Run]) -> dict[str, dict[str, dict[str, Any]]]:
                           "worst": items[w][0], "worst_mm": float(e[w])}
         table[cond] = rows
     return table
-
-
-#: File name of the boundary-error figure in a benchmark's output folder.
-FIGURE = "boundary_errors.png"
 
 
 def boundary_figure(runs: Sequence[Run], path: str | Path) -> Path | None:
@@ -214,5 +222,5 @@ def boundaries_markdown(runs: Sequence[Run]) -> list[str]:
     return md
 
 
-__all__ = ["BAND_M", "FIGURE", "INFO_KEY", "KINDS", "MIN_POINTS", "NEAR_M", "SAMPLES", "best_split", "boundaries_markdown",
+__all__ = ["BAND_M", "FIGURE", "WIDE_BAND_M", "INFO_KEY", "KINDS", "MIN_POINTS", "NEAR_M", "SAMPLES", "best_split", "boundaries_markdown",
            "boundary_errors", "boundary_figure", "distance_to_segments", "loop_edges", "summarise"]

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import OutputExistsError
+from .boundaries import FIGURE as BOUNDARY_FIGURE
 from .common import Run
 from .coverage import refinement_rows
 from .figures import rve_bars, trunk_limbs_histogram
@@ -33,7 +34,7 @@ from .tables import (
 #: Files every benchmark writes into its output folder (besides the figures, :data:`FIGURE_PATTERNS`).
 OUTPUT_FILES = ("results.json", "results.csv", "report.md")
 #: Glob patterns of the figures a benchmark writes.
-FIGURE_PATTERNS = ("rve_per_segment.png", "trunk_limbs_hist_*.png", "joint_errors.png", "boundary_errors.png", "coverage.png")
+FIGURE_PATTERNS = ("rve_per_segment.png", "trunk_limbs_hist_*.png", "joint_errors.png", BOUNDARY_FIGURE, "coverage.png")
 
 
 def existing_outputs(out: str | Path) -> list[str]:
@@ -121,7 +122,6 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
     md += joints_markdown(runs)
     if joint_figure(runs, d / "joint_errors.png") is not None:
         figs.append("joint_errors.png")
-    from .boundaries import FIGURE as BOUNDARY_FIGURE
     from .boundaries import boundaries_markdown, boundary_figure
 
     md += boundaries_markdown(runs)

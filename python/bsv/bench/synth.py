@@ -213,7 +213,10 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
                 run.info["uncertainty"] = record(fit.mesh, truth_surface, cams, segmentation=segmentation)
                 from .boundaries import INFO_KEY, boundary_errors
 
-                run.info[INFO_KEY] = boundary_errors(fit.mesh, truth_surface)
+                try:  # a metric that cannot be read (a diverged fit) is said, the run keeps its volumes
+                    run.info[INFO_KEY] = boundary_errors(fit.mesh, truth_surface)
+                except (BenchError, ValueError) as exc:
+                    run.info[INFO_KEY + "_error"] = f"{type(exc).__name__}: {exc}"
                 if refined is not None:
                     run.info["refined"] = refined.register(kinds, seed, template, params, joints, segmentation)
         except Exception as exc:  # a failed registration is reported, the run goes on

@@ -222,5 +222,20 @@ def boundaries_markdown(runs: Sequence[Run]) -> list[str]:
     return md
 
 
-__all__ = ["BAND_M", "FIGURE", "WIDE_BAND_M", "INFO_KEY", "KINDS", "MIN_POINTS", "NEAR_M", "SAMPLES", "best_split", "boundaries_markdown",
-           "boundary_errors", "boundary_figure", "distance_to_segments", "loop_edges", "summarise"]
+__all__ = [
+    "BAND_M",
+    "FIGURE",
+    "INFO_KEY",
+    "KINDS",
+    "MIN_POINTS",
+    "NEAR_M",
+    "SAMPLES",
+    "WIDE_BAND_M",
+    "best_split",
+    "boundaries_markdown",
+    "boundary_errors",
+    "boundary_figure",
+    "distance_to_segments",
+    "loop_edges",
+    "summarise",
+]

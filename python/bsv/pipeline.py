@@ -461,9 +461,10 @@ def process(
         if bsip_sex not in SEXES:
             raise BsipError(f"bsip_sex must be one of {SEXES}, got {bsip_sex!r}")
         densities(bsip_density, [n for n in SEGMENT_IDS if n != "unlabelled"])  # a bad density fails before the work
-    # The capture folders before the warm-up, which an error waits for (the calibration is checked after the
-    # PDF renderer: a missing extra is named first).
+    # The capture folders and the calibration's source before the PDF worker and MediaPipe's warm-up, which
+    # an error would wait for (a forgotten --calibration answers at once, not after a second).
     dirs = _camera_dirs(cap, cameras)
+    _calibration_source(calibration, cap)
     # Timed from here. WeasyPrint loads in a worker process (bsv.pdf) while MediaPipe prepares on a thread of
     # this one and the capture is read (the worker first: MediaPipe's thread redirects stderr while it runs).
     steps = _Steps(progress)

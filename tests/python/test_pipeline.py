@@ -220,6 +220,22 @@ def test_missing_calibration_is_a_clear_error(capture, tmp_path):
     assert pipeline.main_process([str(cap), "-o", str(tmp_path / "out2"), "--segmentation", "oracle", "--quiet"]) == 1
 
 
+def test_a_missing_calibration_is_said_before_the_pdf_worker_and_mediapipe_start(capture, tmp_path, monkeypatch):
+    import bsv.frontend.segment as seg
+    import bsv.pdf
+
+    started: list[str] = []
+    monkeypatch.setattr(bsv.pdf.PdfRenderer, "start", lambda self: started.append("pdf"))
+
+    monkeypatch.setattr(seg, "warming_up", lambda **kw: started.append("mediapipe"))
+    cap, _ = capture
+    with pytest.raises(CalibrationFileError, match="no calibration given"):
+        pipeline.process(cap, None, tmp_path / "out", segmentation="camera", progress=False)
+    with pytest.raises(CalibrationFileError, match="does not exist"):
+        pipeline.process(cap, tmp_path / "nope.json", tmp_path / "out", segmentation="camera", progress=False)
+    assert started == [] and not (tmp_path / "out").exists()
+
+
 def test_empty_or_missing_capture_is_a_clear_error(tmp_path):
     (tmp_path / "empty").mkdir()
     with pytest.raises(CaptureError, match="no 'front' camera capture"):

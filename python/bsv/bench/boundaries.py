@@ -28,7 +28,7 @@ from .. import _bsv
 from ..biomech.tables import JOINTS
 from ..types import SEGMENT_IDS, Mesh
 from .common import Run, surface_samples
-from .reference import CONDITIONS
+from .reference import ordered_conditions
 
 #: Key of :attr:`Run.info` holding a run's boundary errors ({joint: mm, + = the fitted loop distal}).
 INFO_KEY = "boundary_errors_mm"
@@ -147,16 +147,11 @@ def _collect(runs: Sequence[Run]) -> dict[tuple[str, str], list[tuple[str, float
     return out
 
 
-def _ordered(conditions: set[str]) -> list[str]:
-    """Conditions in the benchmark's order (unknown ones last, by name)."""
-    return sorted(conditions, key=lambda c: (CONDITIONS.index(c) if c in CONDITIONS else len(CONDITIONS), c))
-
-
 def summarise(runs: Sequence[Run]) -> dict[str, dict[str, dict[str, Any]]]:
     """{condition: {kind: {n, mean_mm, sd_mm, median_abs_mm, p95_abs_mm, worst, worst_mm}}}."""
     data = _collect(runs)
     table: dict[str, dict[str, dict[str, Any]]] = {}
-    for cond in _ordered({c for c, _ in data}):
+    for cond in ordered_conditions({c for c, _ in data}):
         rows = {}
         for kind in KINDS:
             items = data.get((cond, kind), [])
@@ -174,32 +169,15 @@ def summarise(runs: Sequence[Run]) -> dict[str, dict[str, dict[str, Any]]]:
 def boundary_figure(runs: Sequence[Run], path: str | Path) -> Path | None:
     """Box plot of the signed boundary errors (mm) per joint kind, one box per condition; None (nothing
     written) when no run measured them."""
-    from .figures import _plt
+    from .figures import kind_boxplot
 
     data = _collect(runs)
-    conds = _ordered({c for c, _ in data})
+    conds = ordered_conditions({c for c, _ in data})
     if not conds:
         return None
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(7.0, 4.0))
-    width = 0.8 / len(conds)
-    for k, cond in enumerate(conds):
-        vals = [[e for _, e in data.get((cond, kind), [])] or [np.nan] for kind in KINDS]
-        pos = np.arange(len(KINDS)) + (k - len(conds) / 2 + 0.5) * width
-        b = ax.boxplot(vals, positions=pos, widths=width * 0.9, patch_artist=True, showfliers=True)
-        for patch in b["boxes"]:
-            patch.set_facecolor(plt.get_cmap("tab10")(k))
-        ax.plot([], [], color=plt.get_cmap("tab10")(k), lw=6, label=cond)
-    ax.axhline(0.0, color="k", lw=0.8)
-    ax.set_xticks(np.arange(len(KINDS)), KINDS)
-    ax.set_ylabel("fitted loop - true loop along the limb (mm, + distal)")
-    ax.set_title("Segment boundaries of the fitted mesh against the truth")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    out = Path(path)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out
+    values = {c: [[e for _, e in data.get((c, kind), [])] for kind in KINDS] for c in conds}
+    return kind_boxplot(values, KINDS, path, ylabel="fitted loop - true loop along the limb (mm, + distal)",
+                        title="Segment boundaries of the fitted mesh against the truth", line=(0.0, None))
 
 
 def boundaries_markdown(runs: Sequence[Run]) -> list[str]:

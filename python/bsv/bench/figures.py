@@ -86,3 +86,31 @@ def trunk_limbs_histogram(table: Sequence[Mapping[str, Any]], path: str | Path, 
     fig.savefig(out, dpi=110)
     plt.close(fig)
     return out
+
+
+def kind_boxplot(values: Mapping[str, Sequence[Sequence[float]]], kinds: Sequence[str], path: str | Path, *,
+                 ylabel: str, title: str, line: tuple[float, str | None]) -> Path:
+    """Box plot of per-kind values, one box per condition and kind (``values[condition][k]`` are kind
+    ``kinds[k]``'s values; an empty list draws nothing), with a horizontal ``line`` (y, legend label or
+    None); written to ``path``."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(8.0, 4.0))
+    width = 0.8 / max(1, len(values))
+    for k, (cond, per_kind) in enumerate(values.items()):
+        vals = [list(v) or [np.nan] for v in per_kind]
+        pos = np.arange(len(kinds)) + (k - len(values) / 2 + 0.5) * width
+        b = ax.boxplot(vals, positions=pos, widths=width * 0.9, patch_artist=True, showfliers=True)
+        for patch in b["boxes"]:
+            patch.set_facecolor(plt.get_cmap("tab10")(k))
+        ax.plot([], [], color=plt.get_cmap("tab10")(k), lw=6, label=cond)
+    y, label = line
+    ax.axhline(y, color="k", ls="--" if label else "-", lw=1 if label else 0.8, label=label)
+    ax.set_xticks(np.arange(len(kinds)), list(kinds))
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    out = Path(path)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out

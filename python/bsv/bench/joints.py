@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from .common import Run
-from .reference import CONDITIONS
+from .reference import ordered_conditions
 
 #: Key of :attr:`Run.info` holding a run's joint errors ({joint: [lateral, up, forward] mm}).
 INFO_KEY = "joint_errors_mm"
@@ -82,7 +82,7 @@ def summarise(runs: Sequence[Run]) -> dict[str, dict[str, dict[str, Any]]]:
     """{condition: {kind or "all": {n, median_mm, p95_mm, signed_median_mm [lat, up, fwd], worst, worst_mm}}}."""
     table: dict[str, dict[str, dict[str, Any]]] = {}
     data = _collect(runs)
-    for cond in _ordered({c for c, _ in data}):
+    for cond in ordered_conditions({c for c, _ in data}):
         rows: dict[str, dict[str, Any]] = {}
         everything: list[tuple[str, np.ndarray]] = []
         for kind in KINDS:
@@ -94,11 +94,6 @@ def summarise(runs: Sequence[Run]) -> dict[str, dict[str, dict[str, Any]]]:
             rows["all"] = _stats(everything)
         table[cond] = rows
     return table
-
-
-def _ordered(conditions: set[str]) -> list[str]:
-    """Conditions in the benchmark's order (unknown ones last, by name)."""
-    return sorted(conditions, key=lambda c: (CONDITIONS.index(c) if c in CONDITIONS else len(CONDITIONS), c))
 
 
 def _stats(items: Sequence[tuple[str, np.ndarray]]) -> dict[str, Any]:
@@ -117,32 +112,16 @@ FIGURE = "joint_errors.png"
 def joint_figure(runs: Sequence[Run], path: str | Path) -> Path | None:
     """Box plot of the 3-D joint-centre error (mm) per joint kind, one box per condition, with the target
     line; None (nothing written) when no run measured joints."""
-    from .figures import _plt
+    from .figures import kind_boxplot
 
     data = _collect(runs)
-    conds = _ordered({c for c, _ in data})
+    conds = ordered_conditions({c for c, _ in data})
     if not conds:
         return None
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(8.0, 4.0))
-    width = 0.8 / len(conds)
-    for k, cond in enumerate(conds):
-        vals = [[float(np.linalg.norm(e)) for _, e in data.get((cond, kind), [])] or [np.nan] for kind in KINDS]
-        pos = np.arange(len(KINDS)) + (k - len(conds) / 2 + 0.5) * width
-        b = ax.boxplot(vals, positions=pos, widths=width * 0.9, patch_artist=True, showfliers=True)
-        for patch in b["boxes"]:
-            patch.set_facecolor(plt.get_cmap("tab10")(k))
-        ax.plot([], [], color=plt.get_cmap("tab10")(k), lw=6, label=cond)
-    ax.axhline(TARGET_MEDIAN_MM, color="k", ls="--", lw=1, label=f"target median {TARGET_MEDIAN_MM:.0f} mm")
-    ax.set_xticks(np.arange(len(KINDS)), KINDS)
-    ax.set_ylabel("3-D joint-centre error (mm)")
-    ax.set_title("Joint centres from the camera path against the rig")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    out = Path(path)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out
+    values = {c: [[float(np.linalg.norm(e)) for _, e in data.get((c, kind), [])] for kind in KINDS] for c in conds}
+    return kind_boxplot(values, KINDS, path, ylabel="3-D joint-centre error (mm)",
+                        title="Joint centres from the camera path against the rig",
+                        line=(TARGET_MEDIAN_MM, f"target median {TARGET_MEDIAN_MM:.0f} mm"))
 
 
 def joints_markdown(runs: Sequence[Run]) -> list[str]:

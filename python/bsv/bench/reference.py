@@ -57,3 +57,8 @@ def paper_value(segment: str, condition: str) -> float | None:
     if row is None or col is None:
         return None
     return row[col]
+
+
+def ordered_conditions(conditions: set[str]) -> list[str]:
+    """Conditions in the benchmark's order (:data:`CONDITIONS`; unknown ones last, by name)."""
+    return sorted(conditions, key=lambda c: (CONDITIONS.index(c) if c in CONDITIONS else len(CONDITIONS), c))

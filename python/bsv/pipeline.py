@@ -462,9 +462,14 @@ def process(
             raise BsipError(f"bsip_sex must be one of {SEXES}, got {bsip_sex!r}")
         densities(bsip_density, [n for n in SEGMENT_IDS if n != "unlabelled"])  # a bad density fails before the work
     # The capture folders and the calibration's source before the PDF worker and MediaPipe's warm-up, which
-    # an error would wait for (a forgotten --calibration answers at once, not after a second).
+    # an error would wait for (a forgotten --calibration answers at once, not after a second); a missing
+    # extra that reading the capture needs is named first.
     dirs = _camera_dirs(cap, cameras)
-    _calibration_source(calibration, cap)
+    try:
+        _calibration_source(calibration, cap)
+    except CalibrationFileError:
+        require("cv2")
+        raise
     # Timed from here. WeasyPrint loads in a worker process (bsv.pdf) while MediaPipe prepares on a thread of
     # this one and the capture is read (the worker first: MediaPipe's thread redirects stderr while it runs).
     steps = _Steps(progress)

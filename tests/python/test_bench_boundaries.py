@@ -19,6 +19,7 @@ from bsv.bench.boundaries import (
 )
 from bsv.bench.common import Run
 from bsv.bodies.template import subdivide_midpoint
+from bsv.errors import BsvError
 from bsv.types import SEGMENT_IDS, Mesh
 
 
@@ -73,6 +74,13 @@ def test_a_joint_whose_segments_a_mesh_lacks_is_left_out(template: Mesh) -> None
     errs = boundary_errors(Mesh(template.vertices, template.faces, None, fl), template)
     assert "elbow_l" not in errs and "elbow_r" in errs
     assert boundary_errors(Mesh(template.vertices, template.faces), template) == {}  # no labels, no boundaries
+
+
+def test_a_diverged_fit_is_a_bsv_error(template: Mesh) -> None:
+    v = np.asarray(template.vertices).copy()
+    v[0] = np.nan
+    with pytest.raises(BsvError):
+        boundary_errors(Mesh(v, template.faces, template.vertex_labels, template.face_labels), template)
 
 
 def test_the_best_split_is_the_middle_of_the_gap() -> None:

@@ -103,7 +103,8 @@ def boundary_errors(fitted: Mesh, truth: Mesh, samples: int = SAMPLES) -> dict[s
     ``truth``: the true body, labelled like the fitted mesh (the same segment ids). A joint is left out when
     the fitted mesh has no loop between its segments, the truth lacks one of them, or fewer than
     :data:`MIN_POINTS` points fall on either side within :data:`WIDE_BAND_M` of the fitted loop (a loop
-    that far off); empty when either mesh has no labels."""
+    that far off); empty when either mesh has no labels. A mesh that cannot be measured (a non-finite
+    vertex, no area) raises a :class:`bsv.errors.BsvError`."""
     fl, tl = _face_labels(fitted), _face_labels(truth)
     if fl is None or tl is None:  # an unlabelled mesh has no boundaries
         return {}

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..bodies.cohort import ARM_DOWN_RANGE_DEG, check_arm_range
-from ..errors import PoseError
+from ..errors import BsvError, PoseError
 from ..types import Mesh, PointCloud
 from .common import BenchError, Run, keep_trunk_limbs, load_template, register_method
 from .outliers import inject, split_request
@@ -190,7 +190,6 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
     posing = str(params.pop("pose_template", "true")).lower() not in ("false", "0", "no", "off")
     template_info: dict[str, Any] = {}
     if segmentation == "camera" and params.get("labels") == "template" and posing:
-        from ..errors import BsvError
         from ..posed_template import camera_template, template_record
 
         try:  # as bsv process: the template posed like the subject
@@ -215,7 +214,7 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
 
                 try:  # a metric that cannot be read (a diverged fit) is said, the run keeps its volumes
                     run.info[INFO_KEY] = boundary_errors(fit.mesh, truth_surface)
-                except (BenchError, ValueError) as exc:
+                except (BsvError, ValueError) as exc:
                     run.info[INFO_KEY + "_error"] = f"{type(exc).__name__}: {exc}"
                 if refined is not None:
                     run.info["refined"] = refined.register(kinds, seed, template, params, joints, segmentation)

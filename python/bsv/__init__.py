@@ -296,7 +296,7 @@ def scan(
 
     ``room``: ``True`` puts the rig in a clinic room (a floor, walls 0.6 m behind each camera, side
     walls, a ceiling; distances varied by ``seed``) and paints a varied subject (skin tone, underwear,
-    hair, two lights, chosen by ``seed``); a dict of room keys (``floor_width``, ``floor_length``,
+    hair, the lights: four set-ups, three colours; chosen by ``seed``); a dict of room keys (``floor_width``, ``floor_length``,
     ``back_wall_z``, ``front_wall_z``, ``side_wall_x``, ``wall_height``, ``ceiling``, ``objects``)
     sets that room exactly (missing keys: the clinic's). The room shows in the images (depth, label 0,
     colour); the returned cloud holds the body's points only. A bad value raises

@@ -20,7 +20,7 @@ mod noise;
 mod rig;
 mod room;
 
-pub use appearance::{Appearance, BodyHeights, Light, SurfacePixel, UnderwearStyle, SKIN_TONES};
+pub use appearance::{Appearance, BodyHeights, Light, LightSetup, SurfacePixel, UnderwearStyle, SKIN_TONES};
 pub use capture::{write_capture, CaptureCamera, ExtrinsicsCovariance, DEPTH_SCALE};
 pub use cast::SurfaceImage;
 pub use rig::{

@@ -74,6 +74,15 @@ fn appearance_is_deterministic_and_varied() {
     assert_eq!(tones.len(), SKIN_TONES.len());
     assert!(all.iter().any(|a| a.hair_length_m == 0.0) && all.iter().any(|a| a.hair_length_m > 0.0));
     assert!(all.windows(2).any(|w| w[0] != w[1]));
+    // Every light set-up and colour occurs; the light stays in the range the renders were made for.
+    let setups: HashSet<String> = all.iter().map(|a| format!("{:?}", a.light_setup)).collect();
+    assert_eq!(setups.len(), 4, "{setups:?}");
+    let tints: HashSet<String> = all.iter().map(|a| format!("{:?}", a.tint)).collect();
+    assert_eq!(tints.len(), 3, "{tints:?}");
+    for a in &all {
+        let total = a.ambient + a.lights.iter().map(|l| l.intensity).sum::<f64>();
+        assert!((1.0..=1.25).contains(&total) && a.lights.iter().all(|l| l.intensity >= 0.1), "{a:?}");
+    }
     // Room variation is deterministic and keeps the walls beyond the cameras.
     let r = Room::clinic().varied(4);
     assert_eq!(r, Room::clinic().varied(4));
@@ -100,6 +109,13 @@ fn the_colour_render_shows_the_room_and_is_deterministic() {
     assert!(distinct.len() > 200, "{} colours", distinct.len());
     let depth = image::open(dir.join("room/front/depth.png")).unwrap().to_luma16();
     assert!(depth.pixels().filter(|p| p.0[0] > 0).count() > 900_000 * 3 / 4);
+    // scan.json says how the room's render looks (a benchmark groups by it); the plain render has no look.
+    let info = |sub: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join(sub).join("scan.json")).unwrap()).unwrap()
+    };
+    let look: Appearance = serde_json::from_value(info("room")["appearance"].clone()).unwrap();
+    assert_eq!(look, Appearance::from_seed(2));
+    assert!(info("plain").get("appearance").is_none());
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -1,7 +1,8 @@
 //! How a scan with a room looks in the colour render: the subject's skin tone, underwear and hair, the
-//! floor and wall colours, and the lighting (two directional lights and ambient, Lambert). Chosen
-//! deterministically from the scan seed ([`Appearance::from_seed`]), so that a segmentation front-end
-//! meets varied subjects in a room rather than one skin tone on grey.
+//! floor and wall colours, and the lighting (two directional lights and ambient, Lambert, in one of four
+//! set-ups and three colour temperatures). Chosen deterministically from the scan seed
+//! ([`Appearance::from_seed`]), so that a segmentation front-end meets varied subjects under varied
+//! lights in a room rather than one skin tone on grey under one lamp.
 
 use super::mix_seed;
 use super::room::SurfaceKind;
@@ -21,6 +22,38 @@ const HAIR_COLOURS: [[u8; 3]; 6] =
     [[20, 18, 18], [55, 38, 28], [100, 70, 45], [200, 170, 110], [160, 160, 160], [140, 60, 30]];
 const FLOOR_COLOURS: [[u8; 3]; 4] = [[150, 150, 145], [190, 175, 150], [150, 110, 70], [110, 120, 130]];
 const WALL_COLOURS: [[u8; 3]; 4] = [[225, 222, 215], [200, 215, 200], [200, 210, 225], [215, 205, 185]];
+/// Colour temperatures of the lights (per-channel factor): neutral, warm (tungsten-like), cool (daylight
+/// through a window, cold LED panels).
+const LIGHT_TINTS: [[f64; 3]; 3] = [[1.0, 1.0, 1.0], [1.0, 0.92, 0.78], [0.88, 0.95, 1.05]];
+
+/// Where the two lights of a room hang ([`Appearance::from_seed`] draws one per scan). Directions are
+/// world-frame (x: the subject's left, y: up, z: toward the front camera).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LightSetup {
+    /// A key light from the front left above and a fill from the back right above (the rig's lamp
+    /// until round 2 session 17, still one scan in four).
+    KeyFrontLeft,
+    /// The same mirrored: key from the front right, fill from the back left.
+    KeyFrontRight,
+    /// Ceiling lights: both steeply from above (dim vertical surfaces, bright shoulders and feet).
+    Overhead,
+    /// A strong light from one side (a window): one half of the body bright, the other lit by the fill
+    /// and the ambient only.
+    Side,
+}
+
+impl LightSetup {
+    /// The key and fill directions (unit vectors toward the lights).
+    fn directions(self) -> [[f64; 3]; 2] {
+        match self {
+            LightSetup::KeyFrontLeft => [unit([0.5, 0.8, 0.7]), unit([-0.5, 0.7, -0.7])],
+            LightSetup::KeyFrontRight => [unit([-0.5, 0.8, 0.7]), unit([0.5, 0.7, -0.7])],
+            LightSetup::Overhead => [unit([0.15, 1.0, 0.35]), unit([-0.15, 1.0, -0.35])],
+            LightSetup::Side => [unit([1.0, 0.35, 0.1]), unit([-1.0, 0.5, -0.2])],
+        }
+    }
+}
 
 /// Cut of the underwear.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -65,8 +98,12 @@ pub struct Appearance {
     pub wall: [u8; 3],
     /// Ambient light (fraction of the albedo everywhere).
     pub ambient: f64,
-    /// The two directional lights.
+    /// Where the lights hang.
+    pub light_setup: LightSetup,
+    /// The two directional lights: the key, then the fill.
     pub lights: [Light; 2],
+    /// Colour of the light (per-channel factor on every lit surface: ambient and directional alike).
+    pub tint: [f64; 3],
 }
 
 fn unit(v: [f64; 3]) -> [f64; 3] {
@@ -76,8 +113,11 @@ fn unit(v: [f64; 3]) -> [f64; 3] {
 
 impl Appearance {
     /// The appearance of scan seed `seed`: a skin tone of [`SKIN_TONES`], underwear (briefs or
-    /// trunks, six colours), hair (six colours, 1 in 8 bald), floor and wall colours, a key light
-    /// from the front left above and a fill light from the back right above. Deterministic.
+    /// trunks, six colours), hair (six colours, 1 in 8 bald), floor and wall colours, and the light: a
+    /// set-up of [`LightSetup`], an ambient of 0.2-0.4 and two lights making the total 1.0-1.25 (1.2 before; the key
+    /// 0.6-0.8 of the directional part, the fill the rest), and a colour of [`LIGHT_TINTS`].
+    /// Deterministic; the subject's and the room's draws come first, as before the lights varied, so a
+    /// seed dresses its subject as it always did.
     pub fn from_seed(seed: u64) -> Appearance {
         let mut rng = rand::rngs::StdRng::seed_from_u64(mix_seed(seed, STREAM_APPEARANCE, 0));
         let mut pick = |n: usize| rng.random_range(0..n);
@@ -92,6 +132,14 @@ impl Appearance {
         let waist_rise_m = rng.random_range(0.10..0.18);
         let hair_length_m = if bald { 0.0 } else { rng.random_range(0.04..0.08) };
         let key = rng.random_range(0.5..0.65);
+        let light_setup = [LightSetup::KeyFrontLeft, LightSetup::KeyFrontRight, LightSetup::Overhead, LightSetup::Side]
+            [rng.random_range(0..4)];
+        let key_share = 0.6 + (key - 0.5) / 0.15 * 0.2; // the same draw, as the key's share: 0.6-0.8
+        let ambient: f64 = rng.random_range(0.2..0.4);
+        let directional = rng.random_range(1.0..1.25) - ambient;
+        let (key, fill) = (key_share * directional, (1.0 - key_share) * directional);
+        let tint = LIGHT_TINTS[rng.random_range(0..LIGHT_TINTS.len())];
+        let [toward_key, toward_fill] = light_setup.directions();
         Appearance {
             skin,
             underwear,
@@ -102,11 +150,10 @@ impl Appearance {
             floor,
             floor_tile_m: tile,
             wall,
-            ambient: 0.3,
-            lights: [
-                Light { toward: unit([0.5, 0.8, 0.7]), intensity: key },
-                Light { toward: unit([-0.5, 0.7, -0.7]), intensity: 0.9 - key },
-            ],
+            ambient,
+            light_setup,
+            lights: [Light { toward: toward_key, intensity: key }, Light { toward: toward_fill, intensity: fill }],
+            tint,
         }
     }
 }
@@ -188,7 +235,8 @@ impl Appearance {
         self.floor.map(|c| f64::from(c) * f)
     }
 
-    /// The sRGB colour of one pixel: albedo x (ambient + sum of the lights' Lambert terms).
+    /// The sRGB colour of one pixel: albedo x (ambient + sum of the lights' Lambert terms) x the lights'
+    /// colour.
     pub fn shade(&self, heights: &BodyHeights, px: &SurfacePixel) -> [u8; 3] {
         let albedo = match px.kind {
             SurfaceKind::None => return [0, 0, 0],
@@ -209,6 +257,7 @@ impl Appearance {
                 .iter()
                 .map(|l| l.intensity * (n[0] * l.toward[0] + n[1] * l.toward[1] + n[2] * l.toward[2]).max(0.0))
                 .sum::<f64>();
-        albedo.map(|c| (c * light).round().clamp(0.0, 255.0) as u8)
+        let lit = |k: usize| (albedo[k] * light * self.tint[k]).round().clamp(0.0, 255.0) as u8;
+        [lit(0), lit(1), lit(2)]
     }
 }

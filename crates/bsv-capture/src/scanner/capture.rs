@@ -12,10 +12,11 @@
 //!   "extrinsics_covariance"}, "back": ...}}` with the estimated extrinsics and their covariance
 //!   ([`ExtrinsicsCovariance`]: the spread the rig drew the calibration error from, zero in noer/l515);
 //! - `scan.json`: condition, seed, cameras, the cloud's size and each camera's range of it
-//!   (`camera_points`: name -> [start, end)).
+//!   (`camera_points`: name -> [start, end)) and, with a room, the subject's look and the lights
+//!   (`appearance`: [`super::Appearance`]).
 
 use super::{
-    CameraView, ExtrinsicError, ExtrinsicSigma, Scan, ScanError, SurfaceKind, SurfacePixel, COVARIANCE_FRAME,
+    Appearance, CameraView, ExtrinsicError, ExtrinsicSigma, Scan, ScanError, SurfaceKind, SurfacePixel, COVARIANCE_FRAME,
     COVARIANCE_PARAMETERS,
 };
 use crate::camera::{CameraCalibration, Extrinsics, Intrinsics};
@@ -106,6 +107,10 @@ struct ScanInfo<'a> {
     /// cloud is the cameras' points in this order): lets a consumer re-express each camera's points
     /// with other extrinsics (a refined calibration) without re-scanning.
     camera_points: BTreeMap<&'a str, [usize; 2]>,
+    /// With a room: how the colour render painted the subject and lit the scene (skin, underwear, hair,
+    /// lights), so that a benchmark can group its results by look.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    appearance: Option<&'a Appearance>,
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ScanError + '_ {
@@ -226,6 +231,7 @@ pub fn write_capture(scan: &Scan, dir: &Path) -> Result<(), ScanError> {
         cameras: scan.views.iter().map(|v| v.name.as_str()).collect(),
         n_points: scan.cloud.len(),
         camera_points: scan.views.iter().map(|v| (v.name.as_str(), [v.cloud_range.start, v.cloud_range.end])).collect(),
+        appearance: scan.appearance.as_ref().map(|(a, _)| a),
     };
     write_json(&dir.join("scan.json"), &info)
 }

@@ -115,6 +115,35 @@ def test_depth_refines_the_mask(scans):
     assert iou(refined) > 0.99 > iou(s.mask)  # the scanner's background has no depth
 
 
+def test_depth_completes_a_limb_the_colour_mask_lost():
+    """A shin whose lower half MediaPipe's mask dropped (a dark leg over a brown floor in dim light) comes
+    back from the depth image; the wall behind stays out, and a limb absent from the mask is not invented."""
+    h, w = 300, 240
+    depth = np.full((h, w), 3.0)  # a wall 3 m away
+    depth[100:200, 90:111] = 2.0  # the left shin, knee (100, 100) to ankle (100, 200), 2 m away
+    depth[100:200, 150:171] = 2.0  # the right shin, not in the mask at all
+    depth[120:130, 95:105] = 0.0  # a hole without depth stays a hole
+    pose = np.full((33, 3), np.nan)
+    pose[25] = (100.0, 100.0, 1.0)  # left knee
+    pose[27] = (100.0, 200.0, 1.0)  # left ankle
+    pose[26] = (160.0, 100.0, 1.0)  # right knee
+    pose[28] = (160.0, 200.0, 1.0)  # right ankle
+    mask = np.zeros((h, w), bool)
+    mask[100:150, 90:111] = True  # the upper half of the left shin only
+    mask[120:130, 95:105] = False
+    done = seg.complete_limbs_with_depth(mask, depth, pose)
+    shin = depth == 2.0
+    left = np.zeros((h, w), bool)
+    left[:, :130] = True
+    assert (done & shin & left).sum() == (shin & left).sum()  # the whole left shin
+    assert not (done & (depth == 3.0)).any()  # no wall
+    assert not (done & ~left).any()  # the right shin had nothing to anchor its depth: left out
+    assert not done[120:130, 95:105].any()
+    assert not seg.complete_limbs_with_depth(mask, depth, pose, width=0.0)[150:200].any()
+    with pytest.raises(errors.SegmentationError, match="limb_fill_width"):
+        seg.SegmentParams(limb_fill_width=1.5)
+
+
 def test_blank_image_has_no_person():
     with pytest.raises(errors.PersonNotFoundError, match="no person"):
         seg.segment_image(np.full((1024, 768, 3), 128, np.uint8), "front")

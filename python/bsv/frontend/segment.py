@@ -25,6 +25,11 @@ scanner's renders, the unflipped image gives better back-view labels (mean accur
 8 held-out subjects), so it is off by default. What is on by default (``flip_average``) is both: each view
 is detected on the image and on its mirror image, and the two oriented detections are averaged.
 
+The person mask is MediaPipe's, refined with the aligned depth image when there is one: pixels whose depth
+is far from the person's are dropped (:func:`refine_mask_with_depth`), and each limb is completed along
+its bone from the depth (:func:`complete_limbs_with_depth`): under a dim or side light MediaPipe's mask can
+lose a lower leg whose colour matches the floor behind it, the depth cannot.
+
 Landmarks: the 33 pose landmarks without the four pose knuckles (17-20, left/right pinky and index), which
 the hand model gives more precisely (pinky_mcp, index_finger_mcp), then 21 per hand: 29 + 42 = 71 rows of
 (x, y, visibility) in pixels of the input image (NaN and visibility 0 where a hand was not found).
@@ -159,6 +164,16 @@ class SegmentParams:
     depth_band: float = 0.6
     #: Depth refinement: the mask may grow by this many pixels where the depth says "person".
     depth_grow_px: int = 6
+    #: Depth completion of the limbs (:func:`complete_limbs_with_depth`): the pixels within this fraction of
+    #: each limb bone's length of the bone (shoulder-elbow, elbow-wrist, hip-knee, knee-ankle; nothing beyond
+    #: the joints) whose depth lies within ``limb_fill_band_m`` of the limb's own depth join the person mask.
+    #: MediaPipe's mask drops a lower leg where the light makes skin and background alike (a dark shin over
+    #: a brown floor in a dim back view: shins -18 to -24 %); the depth does not care about the light. 0
+    #: turns it off.
+    limb_fill_width: float = 0.25
+    #: Depth completion of the limbs: the depth band (metres) around the median depth of the limb's masked
+    #: pixels. Floor pixels it lets in beside the ankles are removed with the floor when the cloud is built.
+    limb_fill_band_m: float = 0.1
 
     def __post_init__(self) -> None:
         if self.model_complexity not in _POSE_MODELS:
@@ -172,6 +187,9 @@ class SegmentParams:
                                     f"{self.min_visibility}")
         if self.depth_band <= 0 or self.depth_grow_px < 0 or self.torso_weight <= 0:
             raise SegmentationError("depth_band and torso_weight must be positive and depth_grow_px >= 0")
+        if not (0.0 <= self.limb_fill_width <= 1.0) or self.limb_fill_band_m <= 0:
+            raise SegmentationError(f"limb_fill_width must lie in [0, 1] (got {self.limb_fill_width!r}) and "
+                                    f"limb_fill_band_m must be positive (got {self.limb_fill_band_m!r})")
 
 
 #: Defaults per view. First fitted (coordinate search on pixel accuracy) to the virtual scanner's renders of
@@ -596,6 +614,8 @@ def label_detection(det: Detection, depth: np.ndarray | None = None, pose: np.nd
     mask = _clean_mask(det.mask_soft > prm.mask_threshold)
     if depth is not None:
         mask = refine_mask_with_depth(mask, depth, prm.depth_band, prm.depth_grow_px)
+        if prm.limb_fill_width > 0:
+            mask = complete_limbs_with_depth(mask, depth, pose, prm.limb_fill_width, prm.limb_fill_band_m)
     if mask.sum() < 100:
         raise PersonNotFoundError(f"the person mask of the {det.view} image is (nearly) empty ({int(mask.sum())} px)")
     hands = det.hands
@@ -798,6 +818,55 @@ def refine_mask_with_depth(mask: np.ndarray, depth_m: np.ndarray, band_m: float 
     else:
         zone = mask
     return _clean_mask(zone & near)
+
+
+#: The limb bones :func:`complete_limbs_with_depth` fills along, as pairs of :data:`POSE_NAMES` indices
+#: (subject-oriented): upper arms, forearms, thighs, shins.
+LIMB_BONES: tuple[tuple[int, int], ...] = ((11, 13), (13, 15), (12, 14), (14, 16), (23, 25), (25, 27), (24, 26), (26, 28))
+#: A limb with fewer masked pixels with depth than this along its bone is left as it is (nothing anchors
+#: its depth: a limb the mask lost entirely is not invented).
+LIMB_FILL_MIN_PX = 20
+
+
+def complete_limbs_with_depth(mask: np.ndarray, depth_m: np.ndarray, pose: np.ndarray, width: float = 0.25,
+                              band_m: float = 0.1) -> np.ndarray:
+    """The person mask with each limb completed from the depth image: along every bone of
+    :data:`LIMB_BONES` (from subject-oriented pose landmarks, pixels), the rectangle reaching ``width`` times
+    the bone's length to either side of it and ending at the two joints; its pixels whose depth (metres,
+    aligned, 0 = none) lies within ``band_m`` of the median depth of the limb's pixels already in the mask
+    join the mask. Walls are beyond the band; the floor beside the ankles is removed with the floor when
+    the cloud is built."""
+    cv2 = require("cv2")
+
+    d = np.asarray(depth_m, dtype=np.float64)
+    if d.shape != mask.shape:
+        raise SegmentationError(f"depth image {d.shape} is not aligned to the colour image {mask.shape}; "
+                                "align the depth to the colour stream first")
+    h, w = mask.shape
+    out = mask.astype(bool).copy()
+    if width <= 0:
+        return out
+    for a, b in LIMB_BONES:
+        p, q = np.asarray(pose[a, :2], dtype=np.float64), np.asarray(pose[b, :2], dtype=np.float64)
+        length = float(np.hypot(*(q - p)))
+        if not (np.all(np.isfinite(p)) and np.all(np.isfinite(q))) or length < 2.0:
+            continue
+        n = np.array([p[1] - q[1], q[0] - p[0]]) / length * width * length
+        corners = np.array([p + n, q + n, q - n, p - n])
+        x0, y0 = np.maximum(np.floor(corners.min(axis=0)).astype(int), 0)
+        x1, y1 = np.minimum(np.ceil(corners.max(axis=0)).astype(int) + 1, [w, h])
+        if x1 <= x0 or y1 <= y0:
+            continue
+        zone = np.zeros((y1 - y0, x1 - x0), dtype=np.uint8)
+        cv2.fillConvexPoly(zone, np.round(corners - [x0, y0]).astype(np.int32), 1)
+        box = d[y0:y1, x0:x1]
+        has_depth = (box > 0) & np.isfinite(box) & (zone > 0)
+        seen = has_depth & out[y0:y1, x0:x1]
+        if int(seen.sum()) < LIMB_FILL_MIN_PX:
+            continue
+        ref = float(np.median(box[seen]))
+        out[y0:y1, x0:x1] |= has_depth & (np.abs(box - ref) < band_m)
+    return out
 
 
 # ----------------------------------------------------------------------------------------------------

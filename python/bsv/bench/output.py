@@ -127,6 +127,9 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
     md += boundaries_markdown(runs)
     if boundary_figure(runs, d / BOUNDARY_FIGURE) is not None:
         figs.append(BOUNDARY_FIGURE)
+    from .looks import looks_markdown
+
+    md += looks_markdown(runs)
     md += ["## Registration time per subject (s)", "", timing_table(runs), ""]
     far = cloud_table(runs)
     if far:

@@ -151,8 +151,13 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
     lab = cloud_mode == "lab" or segmentation == "camera"
     need_files = condition in CALIBRATED or lab
     refined: Refined | None = None
+    look: dict[str, str] | None = None
     with tempfile.TemporaryDirectory(prefix="bsv-bench-") as tmp:
         raw = scan(mesh, condition, seed, images=tmp if need_files else None, overwrite=True, room=room)
+        if need_files and room:
+            from .looks import read_look
+
+            look = read_look(tmp)
         cams = read_camera_poses(tmp) if condition in CALIBRATED else None
         if cams is not None:
             floor = floor_volumes(mesh if truth_mesh is None else truth_mesh, cams)
@@ -223,6 +228,10 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
             run.info = {"traceback": traceback.format_exc(limit=3)}
         if joint_errs:
             run.info["joint_errors_mm"] = joint_errs
+        if look is not None:
+            from .looks import INFO_KEY as LOOK_KEY
+
+            run.info[LOOK_KEY] = look
         runs.append(run)
     return runs
 

@@ -1,0 +1,60 @@
+"""bsv.bench.looks: the rig's record of a capture's look (scan.json) read into factors, and the camera
+path's errors tabulated per factor level."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+import bsv
+from bsv.bench.common import Run
+from bsv.bench.looks import INFO_KEY, look_of, looks_markdown, read_look, summarise
+from bsv.bodies.variants import LIMB_SEGMENTS
+
+
+def test_a_room_scan_records_its_look_and_a_plain_one_does_not(tmp_path: Path) -> None:
+    body = bsv.bodies.make_body().mesh()
+    bsv.scan(body, "noer", 3, images=tmp_path / "room", room=True)
+    bsv.scan(body, "noer", 3, images=tmp_path / "plain")
+    look = read_look(tmp_path / "room")
+    assert look is not None and set(look) == {"lights", "light_colour", "skin", "underwear"}
+    assert look["lights"] in {"key_front_left", "key_front_right", "overhead", "side"}
+    assert read_look(tmp_path / "plain") is None
+    assert read_look(tmp_path / "nowhere") is None
+    # The same seed, the same look; the record is what the rig drew.
+    appearance = json.loads((tmp_path / "room" / "scan.json").read_text())["appearance"]
+    assert look == look_of(appearance)
+
+
+def test_look_of_names_the_levels() -> None:
+    rec = {"skin": [80, 52, 36], "tint": [1.0, 0.92, 0.78], "light_setup": "side", "underwear_style": "trunks"}
+    assert look_of(rec) == {"lights": "side", "light_colour": "warm", "skin": "darker", "underwear": "trunks"}
+    rec = {"skin": [255, 224, 196], "tint": [0.88, 0.95, 1.05], "light_setup": "overhead", "underwear_style": "briefs"}
+    assert look_of(rec)["light_colour"] == "cool" and look_of(rec)["skin"] == "lighter"
+    rec["tint"] = [1.0, 1.0, 1.0]
+    assert look_of(rec)["light_colour"] == "neutral"
+
+
+def _run(subject: str, error_pct: float, lights: str) -> Run:
+    truth = dict.fromkeys((*LIMB_SEGMENTS, "trunk_limbs"), 1.0)
+    est = dict.fromkeys(LIMB_SEGMENTS, 1.0 + error_pct / 100.0) | {"trunk_limbs": 1.0}
+    est["shin_l"] = 1.0 - 2 * error_pct / 100.0
+    look = {"lights": lights, "light_colour": "neutral", "skin": "lighter", "underwear": "briefs"}
+    return Run(subject, "noer", "bsv", True, truth_l=truth, estimated_l=est, info={INFO_KEY: look})
+
+
+def test_the_table_shows_the_look_that_is_worse() -> None:
+    runs = [_run("s0", 1.0, "overhead"), _run("s1", 3.0, "side"), _run("s2", 1.0, "side"),
+            Run("s3", "noer", "bsv", False), Run("s4", "noer", "trimesh", True)]
+    table = summarise(runs)["noer"]
+    side, overhead = table["lights"]["side"], table["lights"]["overhead"]
+    assert side["n"] == 2 and overhead["n"] == 1
+    # seven limbs +e %, one -2e %: mean RVE 9e/8
+    assert overhead["limbs_rve"] == pytest.approx(9 / 8) and side["limbs_rve"] == pytest.approx((27 / 8 + 9 / 8) / 2)
+    assert side["worst"] == pytest.approx(-6.0) and side["worst_subject"] == "s1 shin_l"
+    assert table["skin"]["lighter"]["n"] == 3
+    md = "\n".join(looks_markdown(runs))
+    assert "| light set-up | side | 2 | 2.25 | 0.00 | -6.0 (s1 shin_l) |" in md
+    assert looks_markdown([Run("s0", "noer", "bsv", True)]) == []

@@ -187,6 +187,36 @@ def test_a_view_whose_landmark_is_not_repeatable_is_left_out(capture, monkeypatc
     assert float(np.linalg.norm(plain.xyz - truth)) * 1000 > err + 5.0
 
 
+def test_a_landmark_one_view_does_not_repeat_is_labelled_from_the_other(capture, monkeypatch):
+    """The back view's elbows detected 60 px lower in its mirror image than in the image (a dim back lit
+    from one side does that; the front's two detections agree): the back view's labels take the front's
+    elbows through the calibration, each a warning, and come out as with the clean detection."""
+    _, data, cams, _ = capture
+    _lower(monkeypatch, data, {})
+    clean = lm.segment_views(_images(data), cams)
+    mirrored_back = hashlib.sha1(np.ascontiguousarray(data["back"]["colour"][:, ::-1]).tobytes()).hexdigest()
+    elbows = [seg.POSE_NAMES.index("left_elbow"), seg.POSE_NAMES.index("right_elbow")]
+
+    def fake(rgb, params=None):
+        r = _cached(rgb, params)
+        if hashlib.sha1(np.ascontiguousarray(rgb).tobytes()).hexdigest() == mirrored_back:
+            r["pose"][elbows, 1] += 60.0
+        return r
+
+    monkeypatch.setattr(seg, "run_holistic", fake)
+    segs = lm.segment_views(_images(data), cams)
+    assert segs["back"].sources == {"left_elbow": "other view", "right_elbow": "other view"}
+    assert segs["front"].sources == {}
+    assert len(segs["back"].warnings) == 2 and all("not repeatable" in w for w in segs["back"].warnings)
+    for name in ("left_elbow", "right_elbow"):  # near MediaPipe's own clean back-view elbow, not 30 px off
+        got, own = segs["back"].landmark(name), clean["back"].landmark(name)
+        assert np.hypot(*(got[:2] - own[:2])) < 12.0, (name, got, own)
+    assert (segs["back"].labels == clean["back"].labels).mean() > 0.99
+    # The joint centres take the elbows from the front view alone.
+    joints = lm.joint_centres(segs, {v: data[v]["depth_m"] for v in seg.VIEWS}, cams)
+    assert joints["elbow_l"].source == "front" and joints["elbow_r"].source == "front"
+
+
 def test_process_keeps_the_capture_and_records_the_warning(capture, monkeypatch, tmp_path):
     folder, data, _, _ = capture
     _lower(monkeypatch, data, {("back", "right_wrist"): 0.7})

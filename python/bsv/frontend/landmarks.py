@@ -12,6 +12,11 @@ usable, in this order (:func:`bsv.frontend.segment.resolve_landmarks`):
 4. this view's own landmark, if its visibility is at least the documented lower threshold
    ``fallback_visibility`` (0.5).
 
+A landmark seen confidently but not repeatably in one view (its image and mirror-image detections lie
+centimetres apart while the other view's agree: :func:`unrepeatable_landmarks`, the same test that leaves
+a view out of a joint centre) is also taken from the other view, for the labels as for the joints: a dim
+back view lit from one side put both wrists 160 px from where its mirror image put them.
+
 Every substitute is a warning naming the landmark (:attr:`Segmentation.warnings`, the volumes JSON's
 ``warnings``, the report). Only a landmark that none of these gives (in practice: a limb not seen in
 either view) fails, with :class:`bsv.errors.LimbMissingError` naming the limb and what to do.
@@ -40,6 +45,7 @@ from ..keypoints import JOINT_NAMES
 from .intrinsics import Intrinsics
 from .segment import (
     POSE_NAMES,
+    REQUIRED_LANDMARKS,
     SEGMENT_IDS,
     VIEWS,
     Detection,
@@ -277,6 +283,46 @@ def _half_thickness(mask: np.ndarray, pose: np.ndarray, joint: str, depth_m: flo
     return 0.5 * wpx * depth_m / fx if np.isfinite(wpx) else float("nan")
 
 
+def view_weight(spread_px: float, depth_m: float, fx: float) -> float:
+    """The weight of one view's landmark across the viewing axis: ``1 / (LANDMARK_SD_M^2 + s^2)``, ``s`` its
+    image-vs-mirror spread (pixels; NaN: unknown, taken as 0) in metres at ``depth_m``."""
+    s = spread_px * depth_m / fx if np.isfinite(spread_px) else 0.0
+    return 1.0 / (LANDMARK_SD_M**2 + s**2)
+
+
+def unrepeatable_landmarks(dets: Mapping[str, Detection], cameras: Mapping[str, Camera],
+                           depths: Mapping[str, np.ndarray]) -> dict[str, dict[str, float]]:
+    """Per view, the required landmarks that view does not repeat while the other view does: its weight
+    (:func:`view_weight`, at the person's median depth in that view) under a
+    :data:`UNRELIABLE_WEIGHT_RATIO`-th of the other view's, the other view's landmark confident: ``{view:
+    {name: spread px}}``. Both views' image-and-mirror detections are needed (``flip_average``)."""
+    out: dict[str, dict[str, float]] = {v: {} for v in dets}
+    spreads = {v: d.spread for v, d in dets.items() if d.spread is not None}
+    if len(dets) != 2 or len(spreads) != 2:
+        return out
+    depth_at: dict[str, float] = {}
+    for v, det in dets.items():
+        d = np.asarray(depths[v], dtype=np.float64)
+        person = (d > 0) & np.isfinite(d)
+        if det.mask_soft is not None and det.mask_soft.shape == d.shape:
+            person &= det.mask_soft > det.params.mask_threshold
+        depth_at[v] = float(np.median(d[person])) if person.any() else float("nan")
+    if not all(np.isfinite(x) for x in depth_at.values()):
+        return out
+    for v in dets:
+        o = next(x for x in dets if x != v)
+        other_bad = {n for n, _ in _unconfident(dets[o])}
+        for name in REQUIRED_LANDMARKS:
+            if name in other_bad:
+                continue
+            i = POSE_NAMES.index(name)
+            w = view_weight(float(spreads[v][i]), depth_at[v], cameras[v].intrinsics.fx)
+            w_o = view_weight(float(spreads[o][i]), depth_at[o], cameras[o].intrinsics.fx)
+            if w_o > UNRELIABLE_WEIGHT_RATIO * w:
+                out[v][name] = float(spreads[v][i])
+    return out
+
+
 def _region(labels: np.ndarray, kind: str, side: str) -> np.ndarray:
     """Pixels of the side's two segments meeting at a joint of this kind (the torso has no side)."""
     sfx = "_l" if side == "left" else "_r"
@@ -314,10 +360,12 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
                                 f"{sorted(images)} and cameras {sorted(cameras)}")
     dets = {v: detect(images[v]["colour"], v, **params) for v in views}
     depths = {v: np.asarray(images[v]["depth_m"], dtype=np.float64) for v in views}
+    unrepeatable = unrepeatable_landmarks(dets, cameras, depths)
     resolved = {}
     for v in views:
         o = "back" if v == "front" else "front"
         own_bad = [n for n, _ in _unconfident(dets[v])]
+        own_bad += [n for n in unrepeatable[v] if n not in own_bad]
         other_bad = {n for n, _ in _unconfident(dets[o])}
         from_other: dict[str, np.ndarray] = {}
         for name in own_bad:
@@ -327,7 +375,7 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
             if p is not None:
                 uv = cameras[v].project(p[None])[0]
                 from_other[name] = np.array([uv[0], uv[1], dets[o].pose[POSE_NAMES.index(name), 2]])
-        resolved[v] = resolve_landmarks(dets[v], from_other)
+        resolved[v] = resolve_landmarks(dets[v], from_other, unrepeatable[v])
     missing = {v: dict(r[3]) for v, r in resolved.items()}
     if any(missing.values()):
         raise _limb_error(missing)
@@ -405,8 +453,7 @@ def joint_centres(segs: Mapping[str, Segmentation], depths: Mapping[str, np.ndar
             half = _half_thickness(s.mask, s.pose, joint, d, cam.intrinsics.fx)
             vis = float(s.pose[POSE_NAMES.index(name), 2]) * (0.5 if how else 1.0)
             spread_px = np.nan if s.pose_spread is None else float(s.pose_spread[POSE_NAMES.index(name)])
-            spread_m = spread_px * d / cam.intrinsics.fx if np.isfinite(spread_px) else 0.0
-            per[v] = (surf, half, vis, how, 1.0 / (LANDMARK_SD_M**2 + spread_m**2))
+            per[v] = (surf, half, vis, how, view_weight(spread_px, d, cam.intrinsics.fx))
         if not per:
             continue
         notes = [f"{v}: {how}" for v, (_, _, _, how, _) in per.items() if how]

@@ -46,7 +46,7 @@ import re
 import sys
 import tempfile
 import threading
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
@@ -567,18 +567,32 @@ def _average_detections(a: tuple[np.ndarray, list, Any], b: tuple[np.ndarray, li
 
 
 def resolve_landmarks(det: Detection, from_other: dict[str, np.ndarray] | None = None,
+                      unrepeatable: Mapping[str, float] | None = None,
                       ) -> tuple[np.ndarray, dict[str, str], list[str], list[tuple[str, str]]]:
     """The required landmarks of one view made usable, in this order of sources: seen confidently
     (visibility >= ``min_visibility``); the other view's (``from_other``: name -> (x, y, visibility) already
     projected into this image through the calibration, :mod:`bsv.frontend.landmarks`); the hand model's
     wrist (MediaPipe Holistic's hand landmark 0, for a wrist); this view's own landmark if its visibility is
-    at least the documented lower threshold ``fallback_visibility``. Returns the pose with the substitutes,
-    {name: source}, one warning per substitute and the (name, why) still missing."""
+    at least the documented lower threshold ``fallback_visibility``. A landmark seen confidently but not
+    repeatably (``unrepeatable``: name -> the pixels between its image and mirror-image detections, while
+    the other view's agree: :func:`bsv.frontend.landmarks.unrepeatable_landmarks`) is taken from the other
+    view when ``from_other`` has it, and kept otherwise. Returns the pose with the substitutes, {name:
+    source}, one warning per substitute and the (name, why) still missing."""
     prm = det.params
     pose = det.pose.copy()
     sources: dict[str, str] = {}
     warnings: list[str] = []
     missing: list[tuple[str, str]] = []
+    for name, spread in (unrepeatable or {}).items():
+        other = (from_other or {}).get(name)
+        if other is None or _landmark_problem(other, det.shape, prm.min_visibility) is not None:
+            continue
+        if _landmark_problem(pose[POSE_NAMES.index(name)], det.shape, prm.min_visibility) is not None:
+            continue  # not confident either: the loop below takes it from the other view
+        pose[POSE_NAMES.index(name)] = other
+        sources[name] = "other view"
+        warnings.append(f"{det.view} image: {name} not repeatable (its image and mirror-image detections "
+                        f"{spread:.0f} px apart) taken from the other view through the calibration")
     for name, why in unconfident_landmarks(pose, det.shape, prm.min_visibility):
         i = POSE_NAMES.index(name)
         side = 0 if name.startswith("left_") else 1

@@ -22,6 +22,10 @@ from .reference import ordered_conditions
 
 #: Key of :attr:`Run.info` holding a run's joint errors ({joint: [lateral, up, forward] mm}).
 INFO_KEY = "joint_errors_mm"
+#: Key of :attr:`Run.info` holding the camera path's landmark warnings of the run's capture (one sentence per
+#: landmark taken from the other view, the hand model or accepted at the lower threshold, as ``bsv process``
+#: records them in its result).
+WARNINGS_KEY = "landmark_warnings"
 #: Joint kinds in table order.
 KINDS: tuple[str, ...] = ("shoulder", "elbow", "wrist", "hip", "knee", "ankle")
 #: The target of the landmarks issue: median 3-D error at most this (mm) over the six kinds.
@@ -124,6 +128,27 @@ def joint_figure(runs: Sequence[Run], path: str | Path) -> Path | None:
                         line=(TARGET_MEDIAN_MM, f"target median {TARGET_MEDIAN_MM:.0f} mm"))
 
 
+def degraded_captures(runs: Sequence[Run]) -> dict[str, dict[str, Any]]:
+    """{condition: {captures, degraded (captures with a landmark warning), warnings, by_source {source: n}}}
+    over the runs that recorded their landmark warnings (one entry per subject and condition)."""
+    out: dict[str, dict[str, Any]] = {}
+    seen = set()
+    for r in runs:
+        warns = (r.info or {}).get(WARNINGS_KEY)
+        if warns is None or (r.subject, r.condition) in seen:
+            continue
+        seen.add((r.subject, r.condition))
+        c = out.setdefault(r.condition, {"captures": 0, "degraded": 0, "warnings": 0, "by_source": {}})
+        c["captures"] += 1
+        c["degraded"] += bool(warns)
+        c["warnings"] += len(warns)
+        for w in warns:
+            source = ("other view" if "other view" in w else "hand model" if "hand model" in w
+                      else "lower threshold" if "lower threshold" in w else "other")
+            c["by_source"][source] = c["by_source"].get(source, 0) + 1
+    return {k: out[k] for k in ordered_conditions(set(out))}
+
+
 def joints_markdown(runs: Sequence[Run]) -> list[str]:
     """The report.md section of the joint-centre errors (empty when no run measured them)."""
     table = summarise(runs)
@@ -142,8 +167,13 @@ def joints_markdown(runs: Sequence[Run]) -> list[str]:
             md.append(f"| {kind} | {s['n']} | {s['median_mm']:.1f} | {s['p95_mm']:.1f} | "
                       f"{lat:+.1f} / {up:+.1f} / {fwd:+.1f} | {s['worst_mm']:.1f} ({s['worst']}) |")
         md.append("")
+    for cond, d in degraded_captures(runs).items():
+        sources = ", ".join(f"{n} {k}" for k, n in sorted(d["by_source"].items()))
+        md += [(f"Degraded landmarks, {cond}: {d['degraded']} of {d['captures']} captures kept with a landmark taken "
+               f"from elsewhere, {d['warnings']} warnings in their results ({sources or 'none'}); no capture is "
+               "thrown away for a landmark."), ""]
     return md
 
 
-__all__ = ["FIGURE", "INFO_KEY", "KINDS", "TARGET_MEDIAN_MM", "camera_segmentations", "joint_errors", "joint_figure", "joints_markdown",
-           "summarise"]
+__all__ = ["FIGURE", "INFO_KEY", "KINDS", "TARGET_MEDIAN_MM", "WARNINGS_KEY", "camera_segmentations", "degraded_captures",
+           "joint_errors", "joint_figure", "joints_markdown", "summarise"]

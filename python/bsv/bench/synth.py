@@ -152,6 +152,7 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
     need_files = condition in CALIBRATED or lab
     refined: Refined | None = None
     look: dict[str, str] | None = None
+    landmark_warnings: list[str] | None = None
     with tempfile.TemporaryDirectory(prefix="bsv-bench-") as tmp:
         raw = scan(mesh, condition, seed, images=tmp if need_files else None, overwrite=True, room=room)
         if need_files and room:
@@ -170,6 +171,7 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
                 from .joints import camera_segmentations, joint_errors
 
                 segs, joints = camera_segmentations(tmp)
+                landmark_warnings = [w for s in segs.values() for w in s.warnings]
                 views = capture_views(tmp, segmentation, labels={v: s.labels for v, s in segs.items()})
                 joint_errs = joint_errors(joints, truth_joints) if truth_joints else None
             else:
@@ -228,6 +230,10 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
             run.info = {"traceback": traceback.format_exc(limit=3)}
         if joint_errs:
             run.info["joint_errors_mm"] = joint_errs
+        if landmark_warnings is not None:
+            from .joints import WARNINGS_KEY
+
+            run.info[WARNINGS_KEY] = landmark_warnings
         if look is not None:
             from .looks import INFO_KEY as LOOK_KEY
 

@@ -16,8 +16,8 @@
 //!   (`appearance`: [`super::Appearance`]).
 
 use super::{
-    Appearance, CameraView, ExtrinsicError, ExtrinsicSigma, Scan, ScanError, SurfaceKind, SurfacePixel, COVARIANCE_FRAME,
-    COVARIANCE_PARAMETERS,
+    Appearance, CameraView, ExtrinsicError, ExtrinsicSigma, Scan, ScanError, SurfaceKind, SurfacePixel,
+    COVARIANCE_FRAME, COVARIANCE_PARAMETERS,
 };
 use crate::camera::{CameraCalibration, Extrinsics, Intrinsics};
 use image::{ImageBuffer, Luma, Rgb};

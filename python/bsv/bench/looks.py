@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from ..bodies.variants import LIMB_SEGMENTS
-from .common import Run
+from .common import Run, rve, signed_error
 from .reference import ordered_conditions
 
 #: Key of :attr:`Run.info` holding a run's look (:func:`read_look`).
@@ -56,7 +56,7 @@ def read_look(capture_dir: str | Path) -> dict[str, str] | None:
 
 def _limb_rve(run: Run) -> float:
     """Mean RVE (%) of the run's eight limb segments."""
-    return float(np.mean([abs(run.estimated_l[k] - run.truth_l[k]) / run.truth_l[k] * 100.0 for k in LIMB_SEGMENTS]))
+    return float(np.mean([rve(run.estimated_l[k], run.truth_l[k]) for k in LIMB_SEGMENTS]))
 
 
 def summarise(runs: Sequence[Run]) -> dict[str, dict[str, dict[str, dict[str, Any]]]]:
@@ -72,13 +72,12 @@ def summarise(runs: Sequence[Run]) -> dict[str, dict[str, dict[str, dict[str, An
             levels: dict[str, dict[str, Any]] = {}
             for level in sorted({str(r.info[INFO_KEY].get(factor)) for r in rows}):
                 sel = [r for r in rows if str(r.info[INFO_KEY].get(factor)) == level]
-                signed = [((r.estimated_l[k] - r.truth_l[k]) / r.truth_l[k] * 100.0, r.subject, k)
-                          for r in sel for k in LIMB_SEGMENTS]
+                signed = [(signed_error(r.estimated_l[k], r.truth_l[k]), r.subject, k) for r in sel for k in LIMB_SEGMENTS]
                 worst = max(signed, key=lambda t: abs(t[0]))
                 levels[level] = {
                     "n": len(sel), "limbs_rve": float(np.mean([_limb_rve(r) for r in sel])),
-                    "trunk_limbs_rve": float(np.mean([abs(r.estimated_l["trunk_limbs"] - r.truth_l["trunk_limbs"])
-                                                      / r.truth_l["trunk_limbs"] * 100.0 for r in sel])),
+                    "trunk_limbs_rve": float(np.mean([rve(r.estimated_l["trunk_limbs"], r.truth_l["trunk_limbs"])
+                                                      for r in sel])),
                     "worst": worst[0], "worst_subject": f"{worst[1]} {worst[2]}",
                 }
             out[cond][factor] = levels

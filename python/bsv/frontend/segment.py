@@ -836,7 +836,10 @@ def refine_mask_with_depth(mask: np.ndarray, depth_m: np.ndarray, band_m: float 
 
 #: The limb bones :func:`complete_limbs_with_depth` fills along, as pairs of :data:`POSE_NAMES` indices
 #: (subject-oriented): upper arms, forearms, thighs, shins.
-LIMB_BONES: tuple[tuple[int, int], ...] = ((11, 13), (13, 15), (12, 14), (14, 16), (23, 25), (25, 27), (24, 26), (26, 28))
+LIMB_BONES: tuple[tuple[int, int], ...] = tuple(
+    (POSE_NAMES.index(f"{side}_{a}"), POSE_NAMES.index(f"{side}_{b}"))
+    for side in ("left", "right")
+    for a, b in (("shoulder", "elbow"), ("elbow", "wrist"), ("hip", "knee"), ("knee", "ankle")))
 #: A limb with fewer masked pixels with depth than this along its bone is left as it is (nothing anchors
 #: its depth: a limb the mask lost entirely is not invented).
 LIMB_FILL_MIN_PX = 20

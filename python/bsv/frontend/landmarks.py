@@ -15,7 +15,12 @@ usable, in this order (:func:`bsv.frontend.segment.resolve_landmarks`):
 A landmark seen confidently but not repeatably in one view (its image and mirror-image detections lie
 centimetres apart while the other view's agree: :func:`unrepeatable_landmarks`, the same test that leaves
 a view out of a joint centre) is also taken from the other view, for the labels as for the joints: a dim
-back view lit from one side put both wrists 160 px from where its mirror image put them.
+back view lit from one side put both wrists 160 px from where its mirror image put them. So is a leg
+landmark (hip, knee, ankle) that the two views, lifted to 3-D, place at heights more than
+:data:`VIEWS_DISAGREE_M` apart, from the view whose height lies farther from where the body's proportions
+put that landmark (:func:`implausible_landmarks`): a back view whose dark lower legs merged with a dark
+floor put the ankles 10-30 cm up the shins and a knee at mid-thigh, repeatably, while the front view had
+them right.
 
 Every substitute is a warning naming the landmark (:attr:`Segmentation.warnings`, the volumes JSON's
 ``warnings``, the report). Only a landmark that none of these gives (in practice: a limb not seen in
@@ -86,6 +91,22 @@ LANDMARK_SD_M = 0.01
 #: A view whose weight (see :data:`LANDMARK_SD_M`) is this many times smaller than the other view's is left
 #: out of that joint (its landmark is about 3 cm from repeatable or worse): the other view places it alone.
 UNRELIABLE_WEIGHT_RATIO = 10.0
+#: Heights above the floor (y = 0) of the leg's landmarks as fractions of the stature: the greater
+#: trochanter 0.530, the knee 0.285, the ankle (malleolus) 0.039 (Drillis and Contini's segment proportions,
+#: as tabulated in Winter, Biomechanics and Motor Control of Human Movement, fig. 4.1). The synthetic cohort's
+#: rig joints: 0.524, 0.288, 0.043 (sd 0.008, 0.008, 0.002). Used only to tell which of two views that
+#: disagree is wrong (:func:`implausible_landmarks`), never to move a landmark.
+LEG_HEIGHT_FRACTIONS: dict[str, float] = {"hip": 0.530, "knee": 0.285, "ankle": 0.039}
+#: Two views' 3-D lifts (:func:`_lift_from`) of one leg landmark farther apart in height than this (metres)
+#: cannot both be right. Views that agree differ by at most 20 mm (hip, knee) and 40 mm (ankle) in nine
+#: cases of ten (cohort seeds 0-7, 80 subjects, clinic room, varied lights); in all 26 cases beyond it the
+#: view farther from the proportions' height was the wrong one (benchmarks/BENCH.md, round 2 session 18).
+VIEWS_DISAGREE_M = 0.04
+#: The stature is this percentile of the heights of the person's pixels with depth (the top of the head),
+#: the higher of the two views'.
+STATURE_PERCENTILE = 99.9
+#: ... of the pixels within this depth (metres) of the person's median depth in that view.
+STATURE_DEPTH_BAND_M = 0.5
 #: Trunk length (metres, mid-hip to mid-shoulder of the uncorrected estimates) at which the trunk term of
 #: :data:`JOINT_OFFSETS_M` is zero.
 TRUNK_REF_M = 0.48
@@ -323,6 +344,72 @@ def unrepeatable_landmarks(dets: Mapping[str, Detection], cameras: Mapping[str, 
     return out
 
 
+def person_stature(dets: Mapping[str, Detection], cameras: Mapping[str, Camera],
+                   depths: Mapping[str, np.ndarray]) -> float:
+    """The subject's stature (metres above the floor, the world's y = 0): the :data:`STATURE_PERCENTILE`-th
+    percentile of the world heights of the person's pixels with depth (within :data:`STATURE_DEPTH_BAND_M`
+    of the person's median depth), the higher of the views' (a view
+    whose mask lost the top of the head does not lower it); NaN when no view has a person mask with depth."""
+    best = float("nan")
+    for v, det in dets.items():
+        if det.mask_soft is None or v not in cameras or v not in depths:
+            continue
+        d = np.asarray(depths[v], dtype=np.float64)
+        if d.shape != det.mask_soft.shape:
+            continue
+        person = (det.mask_soft > det.params.mask_threshold) & (d > 0) & np.isfinite(d)
+        if np.count_nonzero(person) < 100:
+            continue
+        # The mask's spill onto the wall behind the head lies metres deeper: only the person's depth band.
+        person &= np.abs(d - float(np.median(d[person]))) < STATURE_DEPTH_BAND_M
+        ys, xs = np.nonzero(person)
+        pts = cameras[v].deproject(np.column_stack([xs, ys]).astype(np.float64), d[ys, xs])
+        top = float(np.percentile(pts[:, 1], STATURE_PERCENTILE))
+        best = top if not np.isfinite(best) else max(best, top)
+    return best
+
+
+def implausible_landmarks(dets: Mapping[str, Detection], cameras: Mapping[str, Camera],
+                          depths: Mapping[str, np.ndarray],
+                          skip: Mapping[str, Mapping[str, Any]] | None = None) -> dict[str, dict[str, str]]:
+    """Per view, the leg landmarks (:data:`LEG_HEIGHT_FRACTIONS`) that both views see (visibility at least
+    ``fallback_visibility``: a view may be the better one without being confident) but lift
+    to 3-D (:func:`_lift_from`) at heights more than :data:`VIEWS_DISAGREE_M` apart, in the view whose
+    height lies farther from the fraction of the stature (:func:`person_stature`): ``{view: {name: why}}``,
+    ``why`` a phrase for the warning. Landmarks in ``skip`` (``{view: names}``, e.g. the
+    :func:`unrepeatable_landmarks`) of either view are not judged. Needs both views."""
+    out: dict[str, dict[str, str]] = {v: {} for v in dets}
+    if set(dets) != set(VIEWS) or any(v not in cameras or v not in depths for v in VIEWS):
+        return out
+    stature = person_stature(dets, cameras, depths)
+    if not np.isfinite(stature) or stature <= 0:
+        return out
+    unsure = {n for v in VIEWS for n, _ in unconfident_landmarks(dets[v].pose, dets[v].shape,
+                                                                dets[v].params.fallback_visibility)}
+    unsure |= {n for names in (skip or {}).values() for n in names}
+    for kind, fraction in LEG_HEIGHT_FRACTIONS.items():
+        for side in ("left", "right"):
+            name = f"{side}_{kind}"
+            if name in unsure:
+                continue
+            lifts = {v: _lift_from(dets[v], cameras[v], np.asarray(depths[v], dtype=np.float64), name)
+                     for v in VIEWS}
+            if any(p is None or not np.all(np.isfinite(p)) for p in lifts.values()):
+                continue
+            height = {v: float(p[1]) for v, p in lifts.items() if p is not None}
+            gap = height["front"] - height["back"]
+            if abs(gap) <= VIEWS_DISAGREE_M:
+                continue
+            expected = fraction * stature
+            bad = max(VIEWS, key=lambda v: abs(height[v] - expected))
+            good = "back" if bad == "front" else "front"
+            out[bad][name] = (f"{1000 * abs(height[bad] - height[good]):.0f} mm "
+                              f"{'above' if height[bad] > height[good] else 'below'} the {good} view's, "
+                              f"farther from the {1000 * expected:.0f} mm the body's proportions give "
+                              f"({fraction:.3f} of the stature {stature:.2f} m),")
+    return out
+
+
 def _region(labels: np.ndarray, kind: str, side: str) -> np.ndarray:
     """Pixels of the side's two segments meeting at a joint of this kind (the torso has no side)."""
     sfx = "_l" if side == "left" else "_r"
@@ -361,21 +448,22 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
     dets = {v: detect(images[v]["colour"], v, **params) for v in views}
     depths = {v: np.asarray(images[v]["depth_m"], dtype=np.float64) for v in views}
     unrepeatable = unrepeatable_landmarks(dets, cameras, depths)
+    implausible = implausible_landmarks(dets, cameras, depths, skip=unrepeatable)
     resolved = {}
     for v in views:
         o = "back" if v == "front" else "front"
         own_bad = [n for n, _ in _unconfident(dets[v])]
-        own_bad += [n for n in unrepeatable[v] if n not in own_bad]
+        own_bad += [n for n in [*unrepeatable[v], *implausible[v]] if n not in own_bad]
         other_bad = {n for n, _ in _unconfident(dets[o])}
         from_other: dict[str, np.ndarray] = {}
         for name in own_bad:
-            if name in other_bad:
+            if name in other_bad and name not in implausible[v]:
                 continue  # neither view sees it confidently: the hand model or the lower threshold may
             p = _lift_from(dets[o], cameras[o], depths[o], name)
             if p is not None:
                 uv = cameras[v].project(p[None])[0]
                 from_other[name] = np.array([uv[0], uv[1], dets[o].pose[POSE_NAMES.index(name), 2]])
-        resolved[v] = resolve_landmarks(dets[v], from_other, unrepeatable[v])
+        resolved[v] = resolve_landmarks(dets[v], from_other, unrepeatable[v], implausible[v])
     missing = {v: dict(r[3]) for v, r in resolved.items()}
     if any(missing.values()):
         raise _limb_error(missing)

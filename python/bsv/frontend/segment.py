@@ -568,6 +568,7 @@ def _average_detections(a: tuple[np.ndarray, list, Any], b: tuple[np.ndarray, li
 
 def resolve_landmarks(det: Detection, from_other: dict[str, np.ndarray] | None = None,
                       unrepeatable: Mapping[str, float] | None = None,
+                      implausible: Mapping[str, str] | None = None,
                       ) -> tuple[np.ndarray, dict[str, str], list[str], list[tuple[str, str]]]:
     """The required landmarks of one view made usable, in this order of sources: seen confidently
     (visibility >= ``min_visibility``); the other view's (``from_other``: name -> (x, y, visibility) already
@@ -576,24 +577,33 @@ def resolve_landmarks(det: Detection, from_other: dict[str, np.ndarray] | None =
     at least the documented lower threshold ``fallback_visibility``. A landmark seen confidently but not
     repeatably (``unrepeatable``: name -> the pixels between its image and mirror-image detections, while
     the other view's agree: :func:`bsv.frontend.landmarks.unrepeatable_landmarks`) is taken from the other
-    view when ``from_other`` has it, and kept otherwise. Returns the pose with the substitutes, {name:
-    source}, one warning per substitute and the (name, why) still missing."""
+    view when ``from_other`` has it, and kept otherwise; so is one the two views place at heights that
+    cannot both be right (``implausible``: name -> why, :func:`bsv.frontend.landmarks.implausible_landmarks`),
+    the other view's then usable down to ``fallback_visibility`` as judged there.
+    Returns the pose with the substitutes, {name: source}, one warning per substitute and the (name, why)
+    still missing."""
     prm = det.params
     pose = det.pose.copy()
     sources: dict[str, str] = {}
     warnings: list[str] = []
     missing: list[tuple[str, str]] = []
-    for name, spread in (unrepeatable or {}).items():
+    distrusted = {name: f"not repeatable (its image and mirror-image detections {spread:.0f} px apart)"
+                  for name, spread in (unrepeatable or {}).items()}
+    distrusted.update({n: why for n, why in (implausible or {}).items() if n not in distrusted})
+    for name, why in distrusted.items():
         other = (from_other or {}).get(name)
-        if other is None or _landmark_problem(other, det.shape, prm.min_visibility) is not None:
+        judged = name in (implausible or {})  # the other view's was judged the better of two usable ones
+        if other is None or _landmark_problem(
+                other, det.shape, prm.fallback_visibility if judged else prm.min_visibility) is not None:
             continue
-        if _landmark_problem(pose[POSE_NAMES.index(name)], det.shape, prm.min_visibility) is not None:
+        if not judged and _landmark_problem(pose[POSE_NAMES.index(name)], det.shape, prm.min_visibility) is not None:
             continue  # not confident either: the loop below takes it from the other view
         pose[POSE_NAMES.index(name)] = other
         sources[name] = "other view"
-        warnings.append(f"{det.view} image: {name} not repeatable (its image and mirror-image detections "
-                        f"{spread:.0f} px apart) taken from the other view through the calibration")
+        warnings.append(f"{det.view} image: {name} {why} taken from the other view through the calibration")
     for name, why in unconfident_landmarks(pose, det.shape, prm.min_visibility):
+        if name in sources:
+            continue  # taken from the other view above (a judged one may be under min_visibility there)
         i = POSE_NAMES.index(name)
         side = 0 if name.startswith("left_") else 1
         hand = det.hands[side]

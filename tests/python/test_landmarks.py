@@ -223,7 +223,7 @@ def test_a_leg_landmark_the_views_place_at_different_heights_is_taken_from_the_p
     heights that cannot both be right, the back's is farther from the knee height the stature gives, so the
     back view's labels take the front's knees through the calibration, each a warning, and the joint
     centres take the knees from the front view alone."""
-    _, data, cams, s = capture
+    _, data, cams, _ = capture
     _lower(monkeypatch, data, {})
     clean = lm.segment_views(_images(data), cams)
     back = {hashlib.sha1(np.ascontiguousarray(im).tobytes()).hexdigest()

@@ -6,6 +6,7 @@ its result, as a real low-confidence detection would come."""
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 
@@ -248,6 +249,38 @@ def test_a_leg_landmark_the_views_place_at_different_heights_is_taken_from_the_p
     assert (segs["back"].labels == clean["back"].labels).mean() > 0.99
     joints = lm.joint_centres(segs, {v: data[v]["depth_m"] for v in seg.VIEWS}, cams)
     assert joints["knee_l"].source == "front" and joints["knee_r"].source == "front"
+
+
+def test_ankles_are_placed_at_the_height_the_stature_gives(capture, monkeypatch):
+    """Both views' ankles detected 20 px (about 7 cm) up the shins, in the image and its mirror image alike
+    (so the views agree and nothing flags them): place_ankles moves them back to the height the stature
+    gives, so the ankles and the labels come out as with the clean detection; with ankle_height 0 the
+    ankles stay where MediaPipe put them."""
+    _, data, cams, _ = capture
+    _lower(monkeypatch, data, {})
+    clean = lm.segment_views(_images(data), cams)
+    ankles = [seg.POSE_NAMES.index("left_ankle"), seg.POSE_NAMES.index("right_ankle")]
+
+    def fake(rgb, params=None):
+        r = _cached(rgb, params)
+        r["pose"][ankles, 1] -= 20.0
+        return r
+
+    monkeypatch.setattr(seg, "run_holistic", fake)
+    segs = lm.segment_views(_images(data), cams)
+    for v in seg.VIEWS:
+        assert segs[v].warnings == clean[v].warnings
+        for name in ("left_ankle", "right_ankle"):
+            got, own = segs[v].landmark(name), clean[v].landmark(name)
+            assert np.hypot(*(got[:2] - own[:2])) < 4.0, (v, name, got, own)
+        assert (segs[v].labels == clean[v].labels).mean() > 0.998
+    fixed = {v: dataclasses.replace(seg.DEFAULT_PARAMS[v], ankle_height=0.0) for v in seg.VIEWS}
+    monkeypatch.setattr(seg, "DEFAULT_PARAMS", fixed)
+    raw = lm.segment_views(_images(data), cams)
+    for v in seg.VIEWS:
+        for name in ("left_ankle", "right_ankle"):
+            got, own = raw[v].landmark(name), clean[v].landmark(name)
+            assert 12.0 < own[1] - got[1] < 30.0, (v, name, got, own)  # left 20 px up (and not placed)
 
 
 def test_the_stature_is_read_from_the_depth_of_the_person(capture, monkeypatch):

@@ -158,6 +158,17 @@ class SegmentParams:
     knee_shift: float = 0.11
     #: Shin / foot line through each ankle, moved down by this fraction of the shin length.
     ankle_shift: float = 0.03
+    #: Ankle landmark height, as a fraction of the stature (0: MediaPipe's own ankle). Both views together
+    #: (:func:`bsv.frontend.landmarks.segment_views`, which reads the stature from the depth) move each ankle
+    #: landmark along its view's image to where its 3-D lift lies at this height above the floor, keeping
+    #: where MediaPipe put it across: the shin/foot line (and the knee line, which is drawn at a fraction of
+    #: the knee-ankle length) then no longer follows the ankle's height error. MediaPipe's ankle height has
+    #: sd 12 mm against the rig's ankle joint and fails by 10-30 cm in dim back views; the ankle joint's own
+    #: height varies with sd 3.4 mm as a fraction of the stature (0.043) on the cohort and sits at 0.039 of
+    #: it in Drillis and Contini's proportions. The defaults are where each view's MediaPipe ankle lies on
+    #: average (its lift, training seeds 1, 3, 5, 7: front 0.056, back 0.062 of the stature), so the tuned
+    #: ``ankle_shift`` keeps its meaning.
+    ankle_height: float = 0.0
     #: Foot bones extend past the toe landmark by this fraction of their length.
     toe_extend: float = 0.3
     #: Depth refinement: keep pixels whose depth is within this many metres of the person's median depth.
@@ -187,6 +198,9 @@ class SegmentParams:
                                     f"{self.min_visibility}")
         if self.depth_band <= 0 or self.depth_grow_px < 0 or self.torso_weight <= 0:
             raise SegmentationError("depth_band and torso_weight must be positive and depth_grow_px >= 0")
+        if not (0.0 <= self.ankle_height <= 0.2):
+            raise SegmentationError(f"ankle_height must lie in [0, 0.2] (a fraction of the stature; 0 = MediaPipe's "
+                                    f"own ankle), got {self.ankle_height!r}")
         if not (0.0 <= self.limb_fill_width <= 1.0) or self.limb_fill_band_m <= 0:
             raise SegmentationError(f"limb_fill_width must lie in [0, 1] (got {self.limb_fill_width!r}) and "
                                     f"limb_fill_band_m must be positive (got {self.limb_fill_band_m!r})")
@@ -210,9 +224,11 @@ class SegmentParams:
 #: (+0.05, +0.1, +0.15), judged on 0, 2, 4, 6: the thighs' mean signed error -1.2 to -2.1 -> +0.2 to -0.6 %,
 #: their mean RVE 2.5-2.9 -> 2.3-2.5 %, the eight limbs' mean 2.55 / 2.61 -> 2.50 / 2.54 %.
 DEFAULT_PARAMS: dict[str, SegmentParams] = {
-    "front": SegmentParams(shoulder_inset=0.15, hip_widen=1.5, hip_raise=0.425, torso_weight=0.95, knee_shift=0.105),
+    "front": SegmentParams(shoulder_inset=0.15, hip_widen=1.5, hip_raise=0.425, torso_weight=0.95, knee_shift=0.105,
+                           ankle_height=0.056),
     "back": SegmentParams(neck_fraction=0.5, shoulder_inset=0.05, hip_widen=1.3, hip_raise=0.3, crotch_drop=0.2,
-                          torso_weight=0.95, elbow_shift=0.01, wrist_shift=0.06, knee_shift=0.06, ankle_shift=0.09),
+                          torso_weight=0.95, elbow_shift=0.01, wrist_shift=0.06, knee_shift=0.06, ankle_shift=0.09,
+                          ankle_height=0.062),
 }
 
 

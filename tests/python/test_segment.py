@@ -144,6 +144,15 @@ def test_depth_completes_a_limb_the_colour_mask_lost():
         seg.SegmentParams(limb_fill_width=1.5)
 
 
+def test_an_ankle_height_outside_its_range_is_refused():
+    """SegmentParams.ankle_height is a fraction of the stature: a value in millimetres or metres is refused
+    with the range and what 0 means."""
+    for bad in (75.0, -0.01, 0.5):
+        with pytest.raises(errors.SegmentationError, match=r"ankle_height must lie in \[0, 0.2\]"):
+            seg.SegmentParams(ankle_height=bad)
+    assert seg.SegmentParams(ankle_height=0.0).ankle_height == 0.0
+
+
 def test_blank_image_has_no_person():
     with pytest.raises(errors.PersonNotFoundError, match="no person"):
         seg.segment_image(np.full((1024, 768, 3), 128, np.uint8), "front")

@@ -158,6 +158,43 @@ def test_blank_image_has_no_person():
         seg.segment_image(np.full((1024, 768, 3), 128, np.uint8), "front")
 
 
+def test_a_dim_subject_on_black_is_found_with_its_contrast_stretched(tmp_path):
+    """A studio capture (no wall behind the subject, so a black background) whose back view is lit only by a
+    weak fill light: MediaPipe finds nobody in the image nor in its mirror image. Brightened, it does; the
+    capture is segmented as well as a lit one and the back view's segmentation says how it was found."""
+    from bsv.bench.synth import STUDIO, scan_seed
+
+    s = bsv.bodies.subject(5, 0)
+    folder = tmp_path / "studio"
+    bsv.scan(s.body.mesh(), "noer", scan_seed(0, 5), images=str(folder), room=dict(STUDIO))
+    back = read_capture(folder / "back")["colour"]
+    for img in (back, np.ascontiguousarray(back[:, ::-1])):  # the failure this guards against
+        assert seg.run_holistic(img, seg.DEFAULT_PARAMS["back"])["pose"] is None
+    det = seg.detect(back, "back")
+    assert len(det.notes) == 1 and "brightness scaled 2.2x" in det.notes[0], det.notes
+    assert det.spread is not None  # the mirror image of the brightened image is averaged in as usual
+    result = seg.segment_capture(folder, write=False)
+    assert result["back"].warnings[0] == det.notes[0]
+    assert not any("brightness" in w for w in result["front"].warnings)
+    truth = cv2.imread(str(folder / "back" / "labels.png"), cv2.IMREAD_UNCHANGED)
+    r = seg.label_accuracy(result["back"].labels, truth)
+    assert r["accuracy"] >= 0.90 and r["mask_iou"] >= 0.90, r
+
+
+def test_stretch_contrast_brightens_a_dim_image_only():
+    dim = np.zeros((40, 30, 3), np.uint8)
+    dim[10:30, 10:20] = (100, 60, 40)
+    out, gain = seg.stretch_contrast(dim)
+    assert gain == pytest.approx(2.55)
+    assert tuple(out[15, 15]) == (255, 153, 102) and out.dtype == np.uint8 and not out[0, 0].any()
+    bright = dim.copy()
+    bright[10:30, 10:20] = (255, 200, 10)
+    same, one = seg.stretch_contrast(bright)
+    assert one == 1.0 and same is bright
+    black = np.zeros((8, 8, 3), np.uint8)
+    assert seg.stretch_contrast(black)[1] == seg.STRETCH_MAX_GAIN  # capped: noise is not amplified without end
+
+
 def test_legs_cropped_names_the_ankles(scans):
     folder, _, truth = scans[("default", "front")]
     colour = read_capture(folder / "front")["colour"]

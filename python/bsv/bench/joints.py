@@ -144,7 +144,8 @@ def degraded_captures(runs: Sequence[Run]) -> dict[str, dict[str, Any]]:
         c["warnings"] += len(warns)
         for w in warns:
             source = ("other view" if "other view" in w else "hand model" if "hand model" in w
-                      else "lower threshold" if "lower threshold" in w else "other")
+                      else "lower threshold" if "lower threshold" in w
+                      else "image brightened" if "brightness scaled" in w else "other")
             c["by_source"][source] = c["by_source"].get(source, 0) + 1
     return {k: out[k] for k in ordered_conditions(set(out))}
 

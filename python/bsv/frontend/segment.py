@@ -522,6 +522,9 @@ class Detection:
     #: (``flip_average``; None without it): how far MediaPipe's own estimate of the landmark is from
     #: repeatable. :func:`bsv.frontend.landmarks.joint_centres` weighs the views by it.
     spread: np.ndarray | None = None
+    #: How the image had to be helped for MediaPipe to find the person (e.g. its contrast stretched), one
+    #: sentence each; they become the segmentation's first warnings. Empty for a plain detection.
+    notes: tuple[str, ...] = ()
 
 
 def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | None = None,
@@ -541,10 +544,28 @@ def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | 
         raise SegmentationError(f"colour image must be RGB uint8 (H, W, 3), got {img.dtype} {img.shape}")
     h, w = img.shape[:2]
     flip = view == "back" and prm.flip_back
+    notes: tuple[str, ...] = ()
     first = _detect_once(img, view, prm, flip)
+    if first is None and prm.flip_average:  # the mirror image is detected anyway: it may find the person
+        first = _detect_once(img, view, prm, not flip)
+        flip = not flip
+    if first is None:  # a dim subject against a dark background: MediaPipe's detector wants contrast
+        img, gain = stretch_contrast(img)
+        if gain > 1.0:
+            flips = (flip, not flip) if prm.flip_average else (flip,)
+            for f in flips:
+                first = _detect_once(img, view, prm, f)
+                if first is not None:
+                    flip = f
+                    note = (f"{view} image: the person was found only with the image's brightness scaled "
+                            f"{gain:.1f}x (the subject is dimly lit: more light on the subject from this side "
+                            "makes the segmentation more reliable)")
+                    notes = (note,)
+                    break
     if first is None:
-        raise PersonNotFoundError(f"no person found in the {view} image ({w} x {h}): the subject must stand in "
-                                  "full view of the camera, lit, against a plain background")
+        raise PersonNotFoundError(f"no person found in the {view} image ({w} x {h}), even with its contrast "
+                                  "stretched: the subject must stand in full view of the camera, lit, against a "
+                                  "plain background")
     pose, hands, mask_soft, swapped = first
     spread = None
     if prm.flip_average:
@@ -552,7 +573,26 @@ def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | 
         if other is not None:
             spread = np.hypot(*(pose[:, :2] - other[0][:, :2]).T)
             pose, hands, mask_soft = _average_detections((pose, hands, mask_soft), other[:3])
-    return Detection(view, (h, w), pose, hands, mask_soft, swapped, prm, spread)
+    return Detection(view, (h, w), pose, hands, mask_soft, swapped, prm, spread, notes)
+
+
+#: The brightness percentile :func:`stretch_contrast` maps to white, and the largest gain it applies.
+STRETCH_PERCENTILE = 99.5
+STRETCH_MAX_GAIN = 4.0
+
+
+def stretch_contrast(img: np.ndarray) -> tuple[np.ndarray, float]:
+    """``img`` (RGB uint8) with its brightness scaled so that the :data:`STRETCH_PERCENTILE` of its pixels'
+    brightest channel becomes white (gain at most :data:`STRETCH_MAX_GAIN`, never below 1), and the gain.
+    MediaPipe's person detector misses a dimly lit subject against a dark background that it finds once
+    the image is brightened; the hue is kept."""
+    top = float(np.percentile(img.max(axis=2), STRETCH_PERCENTILE))
+    gain = min(STRETCH_MAX_GAIN, 255.0 / max(top, 1.0))
+    if gain <= 1.0:
+        return img, 1.0
+    import cv2  # the front-end's own dependency (opencv-python-headless)
+
+    return cv2.convertScaleAbs(img, alpha=gain), gain
 
 
 #: One oriented detection: pose (33, 3), the subject's (left, right) hands, the soft mask and the swapped pairs.
@@ -667,7 +707,7 @@ def label_detection(det: Detection, depth: np.ndarray | None = None, pose: np.nd
     labels = label_pixels(mask, pose, hands, prm)
     return Segmentation(labels=labels, mask=mask, landmarks=_landmarks71(pose, hands), view=det.view,
                         hands_found=(hands[0] is not None, hands[1] is not None), swapped=det.swapped, pose=pose,
-                        sources=dict(sources or {}), warnings=tuple(warnings), pose_spread=det.spread)
+                        sources=dict(sources or {}), warnings=(*det.notes, *warnings), pose_spread=det.spread)
 
 
 def missing_error(view: str, missing: Sequence[tuple[str, str]]) -> LandmarkMissingError:

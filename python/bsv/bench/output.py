@@ -130,6 +130,9 @@ def write_outputs(out: str | Path, title: str, config: Mapping[str, Any], infos:
     from .looks import looks_markdown
 
     md += looks_markdown(runs)
+    from .classes import classes_markdown
+
+    md += classes_markdown(infos, runs)
     md += ["## Registration time per subject (s)", "", timing_table(runs), ""]
     far = cloud_table(runs)
     if far:

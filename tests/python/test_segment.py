@@ -176,6 +176,8 @@ def test_a_dim_subject_on_black_is_found_with_its_contrast_stretched(tmp_path):
     result = seg.segment_capture(folder, write=False)
     assert result["back"].warnings[0] == det.notes[0]
     assert not any("brightness" in w for w in result["front"].warnings)
+    darker = (back.astype(np.float64) * 0.2).astype(np.uint8)  # gain 11: still found
+    assert "brightness scaled 11." in seg.detect(darker, "back").notes[0]
     truth = cv2.imread(str(folder / "back" / "labels.png"), cv2.IMREAD_UNCHANGED)
     r = seg.label_accuracy(result["back"].labels, truth)
     assert r["accuracy"] >= 0.90 and r["mask_iou"] >= 0.90, r

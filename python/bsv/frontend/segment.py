@@ -576,9 +576,10 @@ def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | 
     return Detection(view, (h, w), pose, hands, mask_soft, swapped, prm, spread, notes)
 
 
-#: The brightness percentile :func:`stretch_contrast` maps to white, and the largest gain it applies.
+#: The brightness percentile :func:`stretch_contrast` maps to white, and the largest gain it applies: the
+#: studio capture of the tests, its back view darkened to 0.2 of its brightness (gain 11.6), is still found.
 STRETCH_PERCENTILE = 99.5
-STRETCH_MAX_GAIN = 4.0
+STRETCH_MAX_GAIN = 12.0
 
 
 def stretch_contrast(img: np.ndarray) -> tuple[np.ndarray, float]:

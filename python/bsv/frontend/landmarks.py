@@ -22,6 +22,12 @@ put that landmark (:func:`implausible_landmarks`): a back view whose dark lower 
 floor put the ankles 10-30 cm up the shins and a knee at mid-thigh, repeatably, while the front view had
 them right.
 
+**A view without a person.** When MediaPipe finds nobody in one image, not in its mirror image and not
+brightened either (:func:`bsv.frontend.segment.detect`), the other view stands in for it
+(:func:`detection_from_other_view`): its landmarks, lifted to the middle of the body between the two
+views' surfaces and projected through the calibration, and its person mask from its own depth, with a
+warning. Only a capture with no person in either view fails (:class:`bsv.errors.PersonNotFoundError`).
+
 **Ankles at the body's proportions.** The shin/foot line of each view is drawn at its ankle landmark, and
 the knee line a fraction of the knee-ankle length below the knees; MediaPipe's ankle height scatters by
 12 mm (sd) against the rig's ankle joint, which itself sits at 0.043 of the stature with sd 3.4 mm. So,
@@ -54,16 +60,18 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, LimbMissingError, SegmentationError
+from ..errors import InputError, LimbMissingError, PersonNotFoundError, SegmentationError
 from ..keypoints import JOINT_NAMES
 from .intrinsics import Intrinsics
 from .segment import (
+    DEFAULT_PARAMS,
     POSE_NAMES,
     REQUIRED_LANDMARKS,
     SEGMENT_IDS,
     VIEWS,
     Detection,
     Segmentation,
+    SegmentParams,
     detect,
     label_detection,
     resolve_landmarks,
@@ -89,6 +97,9 @@ _KINDS: dict[str, tuple[tuple[str, str], tuple[str, str], float]] = {
     "knee": (("thigh", "shin"), ("hip", "ankle"), 0.5),
     "ankle": (("shin", "foot"), ("knee", "ankle"), 1.0),
 }
+#: A view that stands in for another (:func:`detection_from_other_view`) leaves out of the person the pixels
+#: lower than this above the floor (metres): the floor around the feet lies within the person's depth.
+FLOOR_CLEARANCE_M = 0.01
 #: Pixels around a landmark whose depth gives the surface under it.
 DEPTH_RADIUS_PX = 7
 #: The repeatable part of a landmark's error (metres) in :func:`joint_centres`' weighting of the two views:
@@ -465,6 +476,70 @@ def _lift_from(det: Detection, cam: Camera, depth: np.ndarray, name: str) -> np.
     return np.asarray(cam.deproject(uv[None], d + (half if np.isfinite(half) else 0.0))[0])
 
 
+def detection_from_other_view(view: str, shape: tuple[int, int], other: Detection, other_camera: Camera,
+                              other_depth: np.ndarray, camera: Camera, depth: np.ndarray,
+                              params: SegmentParams) -> Detection:
+    """A stand-in :class:`Detection` of the ``view`` camera, whose (H, W) = ``shape`` image MediaPipe found no
+    person in (not even brightened), made from the ``other`` view's, with the other view's visibilities and
+    no hand model (the labels then draw the pose's coarse hands):
+
+    - the person mask: this view's pixels above the floor within ``params.depth_band`` of the torso's depth
+      (the median inside the other view's shoulders and hips projected here), the connected part holding the
+      mid-hip;
+    - each pose landmark: the surface point under it in the other view (its person's depth only: the mask's
+      spill onto a wall is left out), and the surface point this view's depth shows behind it; the landmark
+      is the midpoint of the two (the middle of the limb's cross-section), projected into this image.
+
+    Its note (the segmentation's first warning) says what was done and what to do."""
+    import cv2
+
+    mask_o = np.asarray(other.mask_soft > other.params.mask_threshold) if other.mask_soft is not None else None
+    od = np.asarray(other_depth, dtype=np.float64)
+    person_o = mask_o & (od > 0) & np.isfinite(od) if mask_o is not None else np.zeros(od.shape, dtype=bool)
+    if not person_o.any():
+        raise PersonNotFoundError(f"no person found in the {view} image, and the other view has no person with depth "
+                                  "to stand in for it: light both sides of the subject, check both depth streams")
+    median_o = float(np.median(od[person_o]))
+    person_o &= np.abs(od - median_o) < params.depth_band
+    uv_o = other.pose[:, :2]
+    front = np.array([other_camera.deproject(uv[None], _finite_or(_surface_depth(od, person_o, uv), median_o))[0]
+                      for uv in uv_o])
+    first = camera.project(front)  # the other view's surface points, seen from here
+
+    d = np.asarray(depth, dtype=np.float64)
+    h, w = d.shape
+    valid = (d > 0) & np.isfinite(d)
+    quad = np.zeros((h, w), np.uint8)
+    corners = [first[POSE_NAMES.index(n)] for n in ("left_shoulder", "right_shoulder", "right_hip", "left_hip")]
+    cv2.fillPoly(quad, [np.round(np.array(corners)).astype(np.int32)], 1)
+    torso = valid & (quad > 0)
+    if torso.sum() < 20:
+        raise PersonNotFoundError(f"no person found in the {view} image, and its depth image has no depth where the "
+                                  "other view puts the torso: check the calibration and the depth stream")
+    ys, xs = np.nonzero(valid)
+    above = np.zeros((h, w), dtype=bool)  # the floor (the world's y = 0) is not the person
+    above[ys, xs] = camera.deproject(np.column_stack([xs, ys]).astype(np.float64), d[ys, xs])[:, 1] > FLOOR_CLEARANCE_M
+    person = above & (np.abs(d - float(np.median(d[torso]))) < params.depth_band)
+    _, parts = cv2.connectedComponents(person.astype(np.uint8), connectivity=8)
+    hip = np.round((first[POSE_NAMES.index("left_hip")] + first[POSE_NAMES.index("right_hip")]) / 2).astype(int)
+    label = int(parts[np.clip(hip[1], 0, h - 1), np.clip(hip[0], 0, w - 1)])
+    if label > 0:
+        person = parts == label
+
+    back = np.array([camera.deproject(uv[None], dd)[0] if np.isfinite(dd := _surface_depth(d, person, uv)) else p
+                     for uv, p in zip(first, front, strict=True)])
+    pose = np.column_stack([camera.project((front + back) / 2), other.pose[:, 2]])
+    note = (f"{view} image: no person found in it (nor in its mirror image, nor brightened); its landmarks are the "
+            f"{other.view} view's through the calibration and its person mask is the depth's: light this side of "
+            "the subject and capture again for labels of its own")
+    return Detection(view, shape, pose, [None, None], person.astype(np.float32), (), params, None, (note,))
+
+
+def _finite_or(x: float, default: float) -> float:
+    """``x`` if finite, else ``default``."""
+    return x if np.isfinite(x) else default
+
+
 def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str, Camera],
                   use_depth: bool = True, **params: Any) -> dict[str, Segmentation]:
     """Segments the front and back images of one capture together: ``images[view]`` holds ``colour`` (RGB
@@ -477,8 +552,21 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
     if set(images) != set(views) or len(views) != 2 or any(v not in cameras for v in views):
         raise SegmentationError(f"segment_views needs the front and back images and cameras, got images "
                                 f"{sorted(images)} and cameras {sorted(cameras)}")
-    dets = {v: detect(images[v]["colour"], v, **params) for v in views}
     depths = {v: np.asarray(images[v]["depth_m"], dtype=np.float64) for v in views}
+    dets: dict[str, Detection] = {}
+    lost: dict[str, PersonNotFoundError] = {}
+    for v in views:
+        try:
+            dets[v] = detect(images[v]["colour"], v, **params)
+        except PersonNotFoundError as e:
+            lost[v] = e
+    if len(lost) == len(views):
+        raise PersonNotFoundError(f"no person found in either camera's image ({'; '.join(str(e) for e in lost.values())})")
+    for v in lost:  # the other view stands in for this one, through the calibration
+        o = "back" if v == "front" else "front"
+        shape = tuple(np.asarray(images[v]["colour"]).shape[:2])
+        dets[v] = detection_from_other_view(v, (int(shape[0]), int(shape[1])), dets[o], cameras[o], depths[o],
+                                            cameras[v], depths[v], dataclasses.replace(DEFAULT_PARAMS[v], **params))
     unrepeatable = unrepeatable_landmarks(dets, cameras, depths)
     stature = person_stature(dets, cameras, depths)
     implausible = implausible_landmarks(dets, cameras, depths, skip=unrepeatable, stature=stature)
@@ -694,6 +782,7 @@ def capture_joints(capture_dir: Any, calibration: Any = None, cameras: Sequence[
 
 __all__ = [
     "DEPTH_RADIUS_PX",
+    "FLOOR_CLEARANCE_M",
     "JOINTS",
     "JOINT_OFFSETS_M",
     "LIMBS",
@@ -706,6 +795,7 @@ __all__ = [
     "body_frame",
     "build_measurements",
     "capture_joints",
+    "detection_from_other_view",
     "joint_centres",
     "offset_predictors",
     "segment_views",

@@ -118,15 +118,18 @@ def test_degraded_captures_are_counted_once_per_scan_by_source() -> None:
               ("front image: right_ankle used with visibility 0.66 < 0.75 (accepted down to the lower threshold 0.50): "
               "check its segment boundaries")], [], [("front image: left_wrist (visibility 0.6 < 0.75) taken from the "
                                                     "hand model's wrist"), ("back image: the person was found only with the image's brightness "
-                                                    "scaled 2.2x (the subject is dimly lit: ...)")]]
+                                                    "scaled 2.2x (the subject is dimly lit: ...)"),
+                                                   ("front image: no person found in it (nor in its mirror image, nor "
+                                                    "brightened); its landmarks are the back view's ...")]]
     runs = []
     for i, w in enumerate(warns):
         info = {INFO_KEY: {"knee_l": [1.0, 0.0, 0.0]}, WARNINGS_KEY: w}
         runs.append(Run(f"subject_{i:03d}", "noer", "bsv", True, info=info))
         runs.append(Run(f"subject_{i:03d}", "noer", "trimesh", True, info=info))  # counted once per scan
     d = degraded_captures(runs)["noer"]
-    assert d == {"captures": 3, "degraded": 2, "warnings": 4,
-                 "by_source": {"other view": 1, "lower threshold": 1, "hand model": 1, "image brightened": 1}}
+    assert d == {"captures": 3, "degraded": 2, "warnings": 5,
+                 "by_source": {"other view": 1, "lower threshold": 1, "hand model": 1, "image brightened": 1,
+                               "view stood in": 1}}
     md = "\n".join(joints_markdown(runs))
     assert "Degraded landmarks, noer: 2 of 3 captures" in md and "1 hand model" in md
     assert degraded_captures([Run("s", "noer", "bsv", True)]) == {}

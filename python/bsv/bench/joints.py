@@ -143,7 +143,8 @@ def degraded_captures(runs: Sequence[Run]) -> dict[str, dict[str, Any]]:
         c["degraded"] += bool(warns)
         c["warnings"] += len(warns)
         for w in warns:
-            source = ("other view" if "other view" in w else "hand model" if "hand model" in w
+            source = ("view stood in" if "no person found in it" in w
+                      else "other view" if "other view" in w else "hand model" if "hand model" in w
                       else "lower threshold" if "lower threshold" in w
                       else "image brightened" if "brightness scaled" in w else "other")
             c["by_source"][source] = c["by_source"].get(source, 0) + 1

@@ -266,14 +266,20 @@ def test_marker_not_found_in_calibration_images(capture, tmp_path):
 
 @pytest.mark.skipif(not _has_mediapipe(), reason="mediapipe is not installed")
 def test_no_person_found_is_a_clear_error(capture, tmp_path):
+    """A colour image without a person in one view: the other view stands in for it, with a warning; in
+    both views: a typed error, and nothing written."""
     import cv2
 
     cap, _ = capture
     copy = tmp_path / "cap"
     shutil.copytree(cap, copy)
     cv2.imwrite(str(copy / "front" / "color.png"), np.full((1024, 768, 3), 128, np.uint8))
-    with pytest.raises(PersonNotFoundError, match="no person"):
+    res = pipeline.process(copy, copy / "calibration.json", tmp_path / "one", segmentation="camera", progress=False)
+    assert res.warnings[0].startswith("front image: no person found in it")
+    cv2.imwrite(str(copy / "back" / "color.png"), np.full((1024, 768, 3), 128, np.uint8))
+    with pytest.raises(PersonNotFoundError, match="no person found in either camera's image"):
         pipeline.process(copy, copy / "calibration.json", tmp_path / "out", segmentation="camera", progress=False)
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").rglob("*"))
 
 
 def test_existing_outputs_are_not_overwritten(capture, tmp_path):

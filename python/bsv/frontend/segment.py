@@ -591,7 +591,7 @@ def stretch_contrast(img: np.ndarray) -> tuple[np.ndarray, float]:
     gain = min(STRETCH_MAX_GAIN, 255.0 / max(top, 1.0))
     if gain <= 1.0:
         return img, 1.0
-    import cv2  # the front-end's own dependency (opencv-python-headless)
+    import cv2  # the front-end's own dependency (OpenCV)
 
     return cv2.convertScaleAbs(img, alpha=gain), gain
 

@@ -64,7 +64,6 @@ from ..errors import InputError, LimbMissingError, PersonNotFoundError, Segmenta
 from ..keypoints import JOINT_NAMES
 from .intrinsics import Intrinsics
 from .segment import (
-    DEFAULT_PARAMS,
     POSE_NAMES,
     REQUIRED_LANDMARKS,
     SEGMENT_IDS,
@@ -76,6 +75,7 @@ from .segment import (
     label_detection,
     resolve_landmarks,
     unconfident_landmarks,
+    view_params,
 )
 
 #: Joint centres estimated, named as :func:`bsv.bodies.joints.rig_joints` and :data:`bsv.biomech` name them.
@@ -516,10 +516,9 @@ def detection_from_other_view(view: str, shape: tuple[int, int], other: Detectio
     if torso.sum() < 20:
         raise PersonNotFoundError(f"no person found in the {view} image, and its depth image has no depth where the "
                                   "other view puts the torso: check the calibration and the depth stream")
-    ys, xs = np.nonzero(valid)
-    above = np.zeros((h, w), dtype=bool)  # the floor (the world's y = 0) is not the person
-    above[ys, xs] = camera.deproject(np.column_stack([xs, ys]).astype(np.float64), d[ys, xs])[:, 1] > FLOOR_CLEARANCE_M
-    person = above & (np.abs(d - float(np.median(d[torso]))) < params.depth_band)
+    person = valid & (np.abs(d - float(np.median(d[torso]))) < params.depth_band)
+    ys, xs = np.nonzero(person)  # the floor (the world's y = 0) is not the person
+    person[ys, xs] = camera.deproject(np.column_stack([xs, ys]).astype(np.float64), d[ys, xs])[:, 1] > FLOOR_CLEARANCE_M
     _, parts = cv2.connectedComponents(person.astype(np.uint8), connectivity=8)
     hip = np.round((first[POSE_NAMES.index("left_hip")] + first[POSE_NAMES.index("right_hip")]) / 2).astype(int)
     label = int(parts[np.clip(hip[1], 0, h - 1), np.clip(hip[0], 0, w - 1)])
@@ -564,9 +563,9 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
         raise PersonNotFoundError(f"no person found in either camera's image ({'; '.join(str(e) for e in lost.values())})")
     for v in lost:  # the other view stands in for this one, through the calibration
         o = "back" if v == "front" else "front"
-        shape = tuple(np.asarray(images[v]["colour"]).shape[:2])
-        dets[v] = detection_from_other_view(v, (int(shape[0]), int(shape[1])), dets[o], cameras[o], depths[o],
-                                            cameras[v], depths[v], dataclasses.replace(DEFAULT_PARAMS[v], **params))
+        h, w = np.asarray(images[v]["colour"]).shape[:2]
+        dets[v] = detection_from_other_view(v, (h, w), dets[o], cameras[o], depths[o], cameras[v], depths[v],
+                                            view_params(v, **params))
     unrepeatable = unrepeatable_landmarks(dets, cameras, depths)
     stature = person_stature(dets, cameras, depths)
     implausible = implausible_landmarks(dets, cameras, depths, skip=unrepeatable, stature=stature)

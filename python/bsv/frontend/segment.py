@@ -527,18 +527,23 @@ class Detection:
     notes: tuple[str, ...] = ()
 
 
+def view_params(view: str, params: SegmentParams | None = None, **overrides: Any) -> SegmentParams:
+    """The parameters the ``view`` camera is segmented with: ``params`` (default :data:`DEFAULT_PARAMS` of the
+    view) with the keyword ``overrides`` set; SegmentationError for an unknown view or parameter."""
+    if view not in VIEWS:
+        raise SegmentationError(f"view must be 'front' or 'back', got {view!r}")
+    try:
+        return dataclasses.replace(params if params is not None else DEFAULT_PARAMS[view], **overrides)
+    except TypeError as e:
+        raise SegmentationError(f"unknown segmentation parameter ({e}); see SegmentParams") from e
+
+
 def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | None = None,
            **overrides: Any) -> Detection:
     """MediaPipe Holistic on one RGB uint8 (H, W, 3) image of the ``view`` camera, oriented to the subject's
     left/right (the first half of :func:`segment_image`; no landmark check). PersonNotFoundError when
     no person is found."""
-    if view not in VIEWS:
-        raise SegmentationError(f"view must be 'front' or 'back', got {view!r}")
-    try:
-        base = params if params is not None else DEFAULT_PARAMS[view]
-        prm = dataclasses.replace(base, **overrides)
-    except TypeError as e:
-        raise SegmentationError(f"unknown segmentation parameter ({e}); see SegmentParams") from e
+    prm = view_params(view, params, **overrides)
     img = np.asarray(colour_rgb)
     if img.ndim != 3 or img.shape[2] != 3 or img.dtype != np.uint8:
         raise SegmentationError(f"colour image must be RGB uint8 (H, W, 3), got {img.dtype} {img.shape}")
@@ -1082,6 +1087,7 @@ __all__ = [
     "segment_capture",
     "segment_image",
     "unconfident_landmarks",
+    "view_params",
     "warming_up",
     "write_segmentation",
 ]

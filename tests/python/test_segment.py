@@ -4,6 +4,7 @@ image and for a subject whose legs are out of the frame."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -314,3 +315,69 @@ def test_bone_distances_are_the_exact_point_to_segment_distances():
     with pytest.raises(bsv.errors.InputError, match=r"segments must have shape \(N, 4\)") as e:
         bsv._bsv.nearest_segment_distances(p, np.zeros((3, 2, 2)))
     assert e.value.argument == "segments"
+
+
+def _drawn_arm(half: float, offset: float = 0.0, torso_from: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A mask with one upper arm drawn as a band of half-width ``half`` around the segment (100, 100) ->
+    (260, 220) (shoulder to elbow, pixels), the bone given ``offset`` pixels off the band's axis; with
+    ``torso_from``, a torso filling the image below the line y = x + torso_from (left of the arm)."""
+    h, w = 400, 400
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float64)
+    sh, el = np.array([100.0, 100.0]), np.array([260.0, 220.0])
+    axis = (el - sh) / np.hypot(*(el - sh))
+    normal = np.array([-axis[1], axis[0]])
+    rel_x, rel_y = xx - sh[0], yy - sh[1]
+    along = rel_x * axis[0] + rel_y * axis[1]
+    across = rel_x * normal[0] + rel_y * normal[1]
+    mask = (np.abs(across) <= half) & (along >= -40) & (along <= 240)
+    if torso_from is not None:
+        mask |= yy > xx + torso_from
+    return mask, sh + offset * normal, el + offset * normal
+
+
+def test_upper_arm_half_width_of_a_drawn_arm():
+    """The half-width across the shoulder-elbow bone (the upper arm's girth for the nearest-bone rule) is the
+    band's, wherever the bone lies inside it; cross-sections where the arm lies against the torso are left
+    out, and an arm against the torso all along has no girth."""
+    for half in (8.0, 14.0, 22.0):
+        for offset in (0.0, 5.0, -6.0):
+            mask, sh, el = _drawn_arm(half, offset)
+            got = seg.upper_arm_half_width(mask, sh, el)
+            assert got is not None and abs(got - half) <= 1.0, (half, offset, got)
+    # the torso touches the arm's lower side near the shoulder: the sections there are skipped
+    mask, sh, el = _drawn_arm(12.0, torso_from=60.0)
+    assert abs(seg.upper_arm_half_width(mask, sh, el) - 12.0) <= 1.0
+    mask, sh, el = _drawn_arm(12.0, torso_from=-20.0)  # the whole arm lies on the torso
+    assert seg.upper_arm_half_width(mask, sh, el) is None
+    assert seg.upper_arm_half_width(np.zeros((50, 50), bool), np.array([10.0, 10.0]), np.array([30.0, 30.0])) is None
+    assert seg.upper_arm_half_width(mask, np.array([5.0, 5.0]), np.array([5.5, 5.0])) is None  # no bone
+
+
+def test_the_upper_arms_reach_follows_their_girth(scans):
+    """With arm_girth_power an upper arm thicker than arm_girth_ref (for the body's height in the image)
+    takes more of the pixels between its bone and the torso, a thinner one fewer; at the reference girth,
+    or with the power 0, the plain nearest-bone rule. Forearms and every other segment are untouched."""
+    _, s, _ = scans[("default", "front")]
+    prm = dataclasses.replace(seg.DEFAULT_PARAMS["front"], arm_girth_power=0.0)
+    plain = seg.label_pixels(s.mask, s.pose, [None, None], prm)
+    P = {n: s.pose[i, :2] for i, n in enumerate(seg.POSE_NAMES)}
+    height = float(np.hypot(*(P["nose"] - (P["left_ankle"] + P["right_ankle"]) / 2)))
+    girth = {side: seg.upper_arm_half_width(s.mask, P[f"{side}_shoulder"], P[f"{side}_elbow"]) / height
+             for side in ("left", "right")}
+    assert all(0.02 < g < 0.05 for g in girth.values()), girth
+    ua = [seg.SEGMENT_IDS["upper_arm_l"], seg.SEGMENT_IDS["upper_arm_r"]]
+    counts = {}
+    for ref in (0.5, 1.0, 2.0):
+        # one reference for both arms: the mean of their girths, scaled
+        p = dataclasses.replace(prm, arm_girth_power=0.5, arm_girth_ref=ref * float(np.mean(list(girth.values()))))
+        lab = seg.label_pixels(s.mask, s.pose, [None, None], p)
+        counts[ref] = int(np.isin(lab, ua).sum())
+        others = ~np.isin(plain, [*ua, seg.SEGMENT_IDS["torso"], seg.SEGMENT_IDS["head"]])
+        assert (lab[others] == plain[others]).all()  # only the upper arms and the torso trade pixels
+    base = int(np.isin(plain, ua).sum())
+    assert counts[0.5] > base + 20 and counts[2.0] < base - 20, (counts, base)
+    assert abs(counts[1.0] - base) < 0.02 * base
+    assert seg.DEFAULT_PARAMS["front"].arm_girth_power == 0.5 and seg.DEFAULT_PARAMS["back"].arm_girth_power == 0.5
+    for bad in ({"arm_girth_power": -0.5}, {"arm_girth_power": 3.0}, {"arm_girth_ref": 0.0}, {"arm_girth_ref": 0.5}):
+        with pytest.raises(errors.SegmentationError, match="arm_girth"):
+            seg.SegmentParams(**bad)

@@ -6,9 +6,9 @@ labels are derived geometrically (all vectorised over the mask pixels):
 
 1. every mask pixel goes to the nearest limb "bone" (shoulder-elbow-wrist, the hand skeleton,
    hip-knee-ankle, ankle-heel-toe), unless the torso polygon is nearer (scaled by ``torso_weight``): the
-   shoulders, the outer hips and the crotch (the top of the gap between the legs in the mask); each
-   upper arm's distance is scaled by how thin that arm is for the body (``arm_girth_power``,
-   :func:`upper_arm_half_width`), so a thick arm keeps the pixels beside its bone that a thin one cedes;
+   shoulders, the outer hips and the crotch (the top of the gap between the legs in the mask); the upper
+   arms' distances are scaled by how thin the arms are for the body (``arm_girth_power``,
+   :func:`upper_arm_half_width`), so thick arms keep the pixels beside their bones that thin ones cede;
 2. the paper's correction: the medial line (through the mid-hips, along the body axis) decides left
    against right for every paired segment, and lines across the limbs decide the level: the transverse
    line through the knees (thigh/shin, never mixed), lines at each ankle (shin/foot), elbow and wrist;
@@ -152,9 +152,9 @@ class SegmentParams:
     crotch_offset: float = 0.0
     #: Torso distance multiplier against the limb bones (above 1 favours the limbs outside the polygon).
     torso_weight: float = 1.0
-    #: Upper arm / torso: each upper-arm bone's pixel distances are multiplied by ``(arm_girth_ref / g) **
-    #: arm_girth_power``, where ``g`` is that arm's half-width in the mask (:func:`upper_arm_half_width`) over
-    #: the body's height in the image (nose to the ankles' midpoint). The nearest-bone rule otherwise gives
+    #: Upper arm / torso: the upper-arm bones' pixel distances are multiplied by ``(arm_girth_ref / g) **
+    #: arm_girth_power``, where ``g`` is the arms' mean half-width in the mask (:func:`upper_arm_half_width`)
+    #: over the body's height in the image (nose to the ankles' midpoint). The nearest-bone rule otherwise gives
     #: every arm the same reach against the torso polygon: on the cohort a thin arm took the torso's pixels
     #: beside the shoulder in the back view (+12 to +16 % of its pixels) and came out 7-12 % too large, a thick
     #: one did not (the upper arms' error against the arm's measured girth: correlation -0.56 to -0.59). 0
@@ -240,11 +240,12 @@ class SegmentParams:
 #: the true torso/thigh line runs higher at the side of the hip than the cut did; tried on seeds 1 and 3
 #: (+0.05, +0.1, +0.15), judged on 0, 2, 4, 6: the thighs' mean signed error -1.2 to -2.1 -> +0.2 to -0.6 %,
 #: their mean RVE 2.5-2.9 -> 2.3-2.5 %, the eight limbs' mean 2.55 / 2.61 -> 2.50 / 2.54 %. The upper arms'
-#: reach follows their girth since round 2 session 20 (``arm_girth_power`` 0.5; ``arm_girth_ref`` the mean
-#: half-width of training seeds 1 and 3, per view): tried on seeds 1 and 3 (power 0.5 and 1; the girth over
-#: the shoulder width, then over the body's height, which follows the body's build more closely), judged
-#: on 0, 2, 4, 6, then 5 and 7: over the 80 subjects the upper arms' mean RVE 2.95-3.04 -> 2.66-2.81 %, their
-#: worst +12.1 -> +9.2 %, the eight limbs' mean 2.68 / 2.67 -> 2.63 / 2.60 %, every other segment within 0.03.
+#: reach follows the arms' girth since round 2 session 20 (``arm_girth_power`` 0.5; ``arm_girth_ref`` the
+#: mean half-width of training seeds 1 and 3, per view): tried on seeds 1 and 3 (power 0.5 and 1; the girth
+#: over the shoulder width, then over the body's height, which follows the body's build more closely; each
+#: arm's own girth, then the arms' mean), judged on 0, 2, 4, 6, then 5 and 7: over the 80 subjects the upper
+#: arms' mean RVE 2.95-3.04 -> 2.64-2.82 %, their worst +12.1 -> +9.8 %, the eight limbs' mean 2.68 / 2.67 ->
+#: 2.62 / 2.60 %, every other segment within 0.03 (wide A-poses, seeds 0 and 2: 2.73 / 2.71 -> 2.77 / 2.71).
 DEFAULT_PARAMS: dict[str, SegmentParams] = {
     "front": SegmentParams(shoulder_inset=0.15, hip_widen=1.5, hip_raise=0.425, torso_weight=0.95, knee_shift=0.105,
                            ankle_height=0.056, arm_girth_power=0.5, arm_girth_ref=0.0323),
@@ -937,17 +938,20 @@ def upper_arm_half_width(mask: np.ndarray, shoulder: np.ndarray, elbow: np.ndarr
 
 
 def _arm_dist_by_girth(mask: np.ndarray, p: np.ndarray, P: Mapping[str, np.ndarray], params: SegmentParams) -> np.ndarray:
-    """The arm group's distances of pixels ``p`` (:func:`label_pixels`): to the nearer arm, each upper-arm
-    bone's distance scaled by its girth (:attr:`SegmentParams.arm_girth_power`); an arm whose girth cannot
-    be measured keeps its plain distance."""
+    """The arm group's distances of pixels ``p`` (:func:`label_pixels`): to the nearer arm, the upper-arm
+    bones' distances scaled by the arms' girth (:attr:`SegmentParams.arm_girth_power`; the mean of the two
+    arms' half-widths, or the one measured; plain distances when neither is). One scale for both arms: the
+    body's build, not one arm's own, decides (an arm made fatter on its own by a local modifier was 2-3 %
+    too large with a scale of its own)."""
     height = float(np.hypot(*(P["nose"] - (P["left_ankle"] + P["right_ankle"]) / 2)))
+    halves = [upper_arm_half_width(mask, P[f"{side}_shoulder"], P[f"{side}_elbow"]) for side in ("left", "right")]
+    measured = [x for x in halves if x is not None]
+    scale = 1.0
+    if measured and height > 0:
+        scale = (params.arm_girth_ref / (float(np.mean(measured)) / height)) ** params.arm_girth_power
     out = np.full(len(p), np.inf)
     for side in ("left", "right"):
         sh, el, wr = P[f"{side}_shoulder"], P[f"{side}_elbow"], P[f"{side}_wrist"]
-        half = upper_arm_half_width(mask, sh, el)
-        scale = 1.0
-        if half is not None and height > 0:
-            scale = (params.arm_girth_ref / (half / height)) ** params.arm_girth_power
         out = np.minimum(out, np.minimum(scale * _bones_dist(p, [(sh, el)]), _bones_dist(p, [(el, wr)])))
     return out
 

@@ -351,6 +351,7 @@ def test_upper_arm_half_width_of_a_drawn_arm():
     assert seg.upper_arm_half_width(mask, sh, el) is None
     assert seg.upper_arm_half_width(np.zeros((50, 50), bool), np.array([10.0, 10.0]), np.array([30.0, 30.0])) is None
     assert seg.upper_arm_half_width(mask, np.array([5.0, 5.0]), np.array([5.5, 5.0])) is None  # no bone
+    assert seg.upper_arm_half_width(mask, np.array([np.nan, 5.0]), np.array([50.0, 50.0])) is None  # not placed
 
 
 def test_the_upper_arms_reach_follows_their_girth(scans):

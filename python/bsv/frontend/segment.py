@@ -915,9 +915,9 @@ def upper_arm_half_width(mask: np.ndarray, shoulder: np.ndarray, elbow: np.ndarr
     usable."""
     sh, el = np.asarray(shoulder, dtype=np.float64), np.asarray(elbow, dtype=np.float64)
     length = float(np.hypot(*(el - sh)))
-    reach = int(0.5 * length)
-    if reach < 2:
+    if not math.isfinite(length) or length < 4.0:  # a landmark not placed, or no bone
         return None
+    reach = int(0.5 * length)
     axis = (el - sh) / length
     normal = np.array([-axis[1], axis[0]])
     h, w = mask.shape

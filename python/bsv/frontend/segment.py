@@ -853,10 +853,9 @@ def label_pixels(mask: np.ndarray, pose: np.ndarray, hands: list, params: Segmen
         h_mid + params.hip_widen * half_hip + hip_level, crotch, h_mid - params.hip_widen * half_hip + hip_level,
     ])
     groups = ["torso", "arm", "hand", "leg", "foot"]
-    dist = np.stack([params.torso_weight * _polygon_dist(pix, poly, (h, w))]
-                    + [_bones_dist(p, bones[g]) for g in groups[1:]])
-    if params.arm_girth_power > 0:
-        dist[1] = _arm_dist_by_girth(mask, p, P, params)
+    arm = _arm_dist_by_girth(mask, p, P, params) if params.arm_girth_power > 0 else _bones_dist(p, bones["arm"])
+    dist = np.stack([params.torso_weight * _polygon_dist(pix, poly, (h, w)), arm]
+                    + [_bones_dist(p, bones[g]) for g in groups[2:]])
     group = np.argmin(dist, axis=0)  # index into groups
     out = np.full(len(p), SEGMENT_IDS["torso"], dtype=np.uint8)
 

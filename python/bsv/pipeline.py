@@ -35,6 +35,7 @@ from .argtypes import seed as seed_type
 from .errors import BsipError, InputError, OutputExistsError, PersonIsolationError
 from .extras import require
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
+from .frontend.sex import SEX_SCORES, template_gender
 from .interop import as_mesh
 from .keypoints import CAMERA_KEYPOINT_KINDS, camera_joints, confine_cloud_upper_arms
 from .posed_template import camera_template, template_record
@@ -491,16 +492,20 @@ def process(
         seg_files: dict[str, Any] = {}
         joints: dict[str, Any] = {}
         camera_segs: dict[str, Any] = {}
+        seg_params = dict(segment_params or {})
+        if sex is not None and segmentation == "camera":  # the cut lines of that sex (bsv.frontend.sex)
+            seg_params.setdefault("sex_score", SEX_SCORES[sex])
         if segmentation == "camera":
             camera_segs, joints = steps.run("segment", "segmenting both cameras (MediaPipe) and their joint centres",
-                                            lambda: _segment_cameras(data, extrinsics, cameras, segment_params or {}))
+                                            lambda: _segment_cameras(data, extrinsics, cameras, seg_params))
+        sex_estimate = next((s.sex for s in camera_segs.values() if getattr(s, "sex", None) is not None), None)
         refined: dict[str, dict[str, Any]] = {}
         views = []
         for cam in cameras:
             d = data[cam]
 
             def segment_camera(cam: str = cam, d: dict[str, Any] = d) -> tuple[np.ndarray, dict, Any]:
-                return _segment(cam, d, dirs[cam], segmentation, segment_params or {}, out / SEGMENTATION_DIR / cam,
+                return _segment(cam, d, dirs[cam], segmentation, seg_params, out / SEGMENTATION_DIR / cam,
                                 camera_segs.get(cam))
 
             labels, summary, seg_files[cam] = (segment_camera() if camera_segs else
@@ -543,7 +548,7 @@ def process(
         if segmentation == "camera" and label_source == "template" and pose_template:
             template, template_notes = steps.run(
                 "pose", "posing the template like the subject (measured joint angles)",
-                lambda: camera_template(template, sex, joints))
+                lambda: camera_template(template, sex, joints, gender=template_gender(sex_estimate)))
             if progress:
                 for w in template_notes:
                     print(f"[bsv]   warning: {w}", flush=True)
@@ -571,6 +576,8 @@ def process(
         vols["joints_m"] = {name: j.to_json() for name, j in joints.items()}
         vols["warnings"] = landmark_warnings + template_notes
         vols["template"] = template_record(template, sex)
+        if sex_estimate is not None:
+            vols["sex"] = sex_estimate.to_json()
         files = {"cloud": out / "cloud.ply", "fitted": out / "fitted.ply", "volumes": out / "volumes.json",
                  "report": out / "report.html"}
 

@@ -105,6 +105,9 @@ class PosedTemplate(Mesh):
 
     kind: str = "default"
     pose: Pose = field(default_factory=Pose)
+    #: MakeHuman's gender of the rest body when it was blended between the female and the male one
+    #: (:func:`posed_template`'s ``gender``); None for the kind's own body.
+    gender: float | None = None
     #: The joint rings; None (as for any other mesh) when they were not built.
     joint_rings: list[tuple[str, list[int], list[float]]] | None = None
 
@@ -166,9 +169,11 @@ def pose_from_joints(joints: Mapping[str, Any]) -> tuple[Pose, list[str]]:
     return Pose(**angles), notes
 
 
-def posed_template(kind: str, pose: Pose) -> PosedTemplate:
+def posed_template(kind: str, pose: Pose, gender: float | None = None) -> PosedTemplate:
     """The 9-segment embedded template of ``kind`` (:data:`POSABLE_KINDS`) in ``pose`` (a
-    :class:`bsv.bodies.pose.Pose`), with its joint rings; see the module notes."""
+    :class:`bsv.bodies.pose.Pose`), with its joint rings; see the module notes. ``gender`` (the average
+    template only; 0 female ... 1 male): its rest body and rest joints blended between the female and the male
+    ones, as MakeHuman's gender macro blends them (the average body is their exact midpoint, gender 0.5)."""
     from .bodies.joints import posed_rig_joints
     from .bodies.labels import vertex_labels_from_faces
     from .bodies.template import trunk_limbs_mesh
@@ -178,23 +183,34 @@ def posed_template(kind: str, pose: Pose) -> PosedTemplate:
         raise TemplateError(f"template kind {kind!r} cannot be posed; use one of {', '.join(POSABLE_KINDS)}")
     rig = load_template_rig()
     a = rig.assets[kind]
-    vertices, centres = posed_rig_joints(a.vertices, a.joints_rest, pose, a)
+    rest, joints = a.vertices, a.joints_rest
+    if gender is not None:
+        if kind != "default" or not (0.0 <= gender <= 1.0):
+            raise TemplateError(f"a template's gender blends the average template only and lies in [0, 1]; got "
+                                f"kind {kind!r}, gender {gender!r}")
+        f, m = rig.assets["female"], rig.assets["male"]
+        rest = f.vertices + gender * (m.vertices - f.vertices)
+        joints = f.joints_rest + gender * (m.joints_rest - f.joints_rest)
+    vertices, centres = posed_rig_joints(rest, joints, pose, a)
     full = Mesh(vertices, rig.faces, vertex_labels_from_faces(len(vertices), rig.faces, rig.face_labels), rig.face_labels)
     trunk = trunk_limbs_mesh(full)
     rings = [(name, list(r["vertices"]), list(r["weights"])) for name, r in sorted(template_joints(trunk, centres).items())]
     return PosedTemplate(trunk.vertices, trunk.faces, trunk.vertex_labels, trunk.face_labels,
-                         kind=kind, pose=pose, joint_rings=rings)
+                         kind=kind, pose=pose, joint_rings=rings, gender=gender)
 
 
-def camera_template(template: Mesh | None, sex: str | None, joints: Mapping[str, Any]) -> tuple[Mesh | None, list[str]]:
+def camera_template(template: Mesh | None, sex: str | None, joints: Mapping[str, Any],
+                    gender: float | None = None) -> tuple[Mesh | None, list[str]]:
     """The template the camera path registers, as ``bsv process`` and ``bsv bench synth --segmentation camera``
-    choose it: ``template`` (None: the embedded template of ``sex``, or the average one) posed like the
-    subject (:func:`pose_from_joints`, :func:`posed_template`), and the notes on what was not as measured
-    (a clipped angle; a joint missing, when the template stays in its own pose). A template that cannot be
-    posed (a user's mesh, the fine or full template) is returned as it is, without notes."""
+    choose it: ``template`` (None: the embedded template of ``sex``, or the average one, of MakeHuman's
+    ``gender`` when given: the sex read from the capture, :attr:`bsv.frontend.sex.SexEstimate.gender`) posed
+    like the subject (:func:`pose_from_joints`, :func:`posed_template`), and the notes on what was not as
+    measured (a clipped angle; a joint missing, when the template stays in its own pose). A template that
+    cannot be posed (a user's mesh, the fine or full template) is returned as it is, without notes."""
     from .keypoints import template_kind
 
     kind = (sex or "default") if template is None else template_kind(template)
+    blend = gender if kind == "default" else None
     if kind not in POSABLE_KINDS:
         return template, []
     if not joints:
@@ -207,7 +223,7 @@ def camera_template(template: Mesh | None, sex: str | None, joints: Mapping[str,
         return template, [f"the template kept its own A-pose: {which} not measured"]
     except ValueError as e:
         return template, [f"the template kept its own A-pose: {e}"]
-    return posed_template(kind, pose), notes
+    return posed_template(kind, pose, blend), notes
 
 
 def template_record(template: Mesh | None, sex: str | None) -> dict[str, Any]:
@@ -217,7 +233,10 @@ def template_record(template: Mesh | None, sex: str | None) -> dict[str, Any]:
     from .keypoints import template_kind
 
     if isinstance(template, PosedTemplate):
-        return {"kind": template.kind, "sex": sex, "pose": template.pose_json()}
+        out: dict[str, Any] = {"kind": template.kind, "sex": sex, "pose": template.pose_json()}
+        if template.gender is not None:
+            out["gender"] = round(template.gender, 4)
+        return out
     return {"kind": "default" if template is None else template_kind(template) or "custom", "sex": sex}
 
 

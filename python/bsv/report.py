@@ -660,7 +660,15 @@ def definitions_html(vols: dict[str, Any], target: _Target = "html") -> str:
     how = anatomy.LABEL_SOURCE_TEXT.get(source)
     kind = (vols.get("template") or {}).get("kind")
     lead = (f"Segment boundaries in this result: {html.escape(how)}. " if how else "")
-    lead += (f"Template: {html.escape(anatomy.TEMPLATE_TEXT.get(kind, str(kind)))}. " if kind else "")
+    gender = (vols.get("template") or {}).get("gender")
+    if gender is not None:
+        lead += f"Template: the MakeHuman body of gender {float(gender):.2f} (0 female, 1 male; the sex read from the capture). "
+    elif kind:
+        lead += f"Template: {html.escape(anatomy.TEMPLATE_TEXT.get(kind, str(kind)))}. "
+    if isinstance(vols.get("sex"), dict):
+        from .frontend.sex import describe
+
+        lead += html.escape(describe(vols["sex"])) + " "
     pose = (vols.get("template") or {}).get("pose")
     if isinstance(pose, dict) and pose:
         lead += ("Posed like the subject before the fit, from the measured joints: arms "

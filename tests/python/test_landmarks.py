@@ -23,6 +23,7 @@ from bsv.frontend import landmarks as lm  # noqa: E402
 from bsv.frontend import segment as seg  # noqa: E402
 from bsv.frontend.capture import read_capture  # noqa: E402
 from bsv.frontend.intrinsics import Intrinsics  # noqa: E402
+from bsv.frontend.sex import SEX_MEASUREMENTS  # noqa: E402
 
 SUBJECT, SEED = 1, 5  # a cohort subject the segmentation was not tuned on (seed 1)
 _REAL = seg.run_holistic
@@ -373,6 +374,28 @@ def test_process_keeps_the_capture_and_records_the_warning(capture, monkeypatch,
     assert vols["joints_m"]["wrist_r"]["source"] == "front"  # the back view's wrist came from the front
     assert "right_wrist" in (tmp_path / "out" / "report.html").read_text()
     assert vols["volumes_l"]["trunk_limbs"] > 0
+    # the sex was not given: read from the capture, recorded, and the template's build follows it
+    assert vols["sex"]["source"] == "inferred" and vols["template"]["gender"] == vols["sex"]["template_gender"]
+    assert "Sex: not given; read from the capture" in (tmp_path / "out" / "report.html").read_text()
+
+
+def test_the_sex_is_read_from_the_capture_or_taken_as_given(capture, monkeypatch):
+    """This man is read as a man (both views hold the same estimate); a sex given as a score is taken as it is
+    and moves the knee lines: a woman's lie lower, so her shins have fewer pixels."""
+    _, data, cams, s = capture
+    _lower(monkeypatch, data, {})
+    segs = lm.segment_views(_images(data), cams)
+    est = segs["front"].sex
+    assert s.sex == "male" and est is segs["back"].sex
+    assert est.source == "inferred" and est.p_female < 0.5 and est.score < 0
+    assert set(est.measurements) == set(SEX_MEASUREMENTS) and all(np.isfinite(list(est.measurements.values())))
+    woman = lm.segment_views(_images(data), cams, sex_score=1.0)
+    man = lm.segment_views(_images(data), cams, sex_score=-1.0)
+    assert woman["front"].sex.sex == "female" and man["back"].sex.source == "given"
+    for v in seg.VIEWS:
+        shins = [int(np.isin(x[v].labels, [seg.SEGMENT_IDS["shin_l"], seg.SEGMENT_IDS["shin_r"]]).sum())
+                 for x in (woman, segs, man)]
+        assert shins[0] < shins[2] and shins[0] <= shins[1] <= shins[2], (v, shins)  # the man read as one: ~ -1
 
 
 def test_bsv_process_names_the_missing_limb_and_writes_nothing(capture, monkeypatch, tmp_path, capsys):

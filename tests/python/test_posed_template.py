@@ -171,3 +171,20 @@ def test_a_posed_template_fits_a_subject_in_that_pose_better():
             assert max(k["distance_mm"] for k in reg.volumes["registration"]["keypoints"]) < 12.0
     assert max(abs(e) for e in errors["posed"].values()) < 1.5, errors
     assert min(abs(e) for e in errors["own"].values()) > 3.0, errors
+
+
+def test_a_templates_gender_blends_the_female_and_the_male_body():
+    """The average template blended to gender 0 is the female template, to 1 the male one, to 0.5 itself (in
+    any pose); a gender outside [0, 1] or on a sexed template is refused."""
+    pose = POSES[1]
+    for gender, kind in ((0.0, "female"), (1.0, "male"), (0.5, "default")):
+        blended = pt.posed_template("default", pose, gender)
+        ref = pt.posed_template(kind, pose)
+        np.testing.assert_allclose(blended.vertices, ref.vertices, rtol=0, atol=1e-12)
+        assert blended.gender == gender and pt.template_record(blended, None)["gender"] == gender
+    between = pt.posed_template("default", pose, 0.25).vertices
+    f, d = pt.posed_template("female", pose).vertices, pt.posed_template("default", pose).vertices
+    assert 0 < np.abs(between - f).max() < np.abs(d - f).max()
+    for kind, gender in (("default", 1.2), ("female", 0.3)):
+        with pytest.raises(TemplateError, match="gender"):
+            pt.posed_template(kind, pose, gender)

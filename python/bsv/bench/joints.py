@@ -32,10 +32,12 @@ KINDS: tuple[str, ...] = ("shoulder", "elbow", "wrist", "hip", "knee", "ankle")
 TARGET_MEDIAN_MM = 15.0
 
 
-def camera_segmentations(capture_dir: str | Path, correct: bool = True) -> tuple[dict[str, Any], dict[str, Any]]:
+def camera_segmentations(capture_dir: str | Path, correct: bool = True,
+                         sex: str | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
     """The camera path's segmentations of both views of a (virtual) capture folder, made together
     (:func:`bsv.frontend.landmarks.segment_views`, the cameras' calibrated ``camera_to_world`` of
-    camera.json), and their joint centres; ``correct``: with the learned joint offsets."""
+    camera.json), and their joint centres; ``correct``: with the learned joint offsets; ``sex``: the subject's
+    sex as a user gives it (None: read from the capture, :mod:`bsv.frontend.sex`)."""
     from ..frontend.capture import read_capture
     from ..frontend.landmarks import Camera, joint_centres, segment_views
     from ..frontend.segment import VIEWS
@@ -43,7 +45,10 @@ def camera_segmentations(capture_dir: str | Path, correct: bool = True) -> tuple
     d = Path(capture_dir)
     data = {v: read_capture(d / v) for v in VIEWS}
     cams = {v: Camera.from_json(data[v]["intrinsics"], data[v]["meta"]["camera_to_world"]) for v in VIEWS}
-    segs = segment_views({v: {"colour": data[v]["colour"], "depth_m": data[v]["depth_m"]} for v in VIEWS}, cams)
+    from ..frontend.sex import SEX_SCORES
+
+    params: dict[str, Any] = {} if sex is None else {"sex_score": SEX_SCORES[sex]}
+    segs = segment_views({v: {"colour": data[v]["colour"], "depth_m": data[v]["depth_m"]} for v in VIEWS}, cams, **params)
     return segs, joint_centres(segs, {v: data[v]["depth_m"] for v in VIEWS}, cams, correct=correct)
 
 

@@ -34,7 +34,7 @@ from typing import Any
 from ..bodies.cohort import ARM_DOWN_RANGE_DEG, check_arm_range
 from ..errors import BsvError, PoseError
 from ..types import Mesh, PointCloud
-from .common import BenchError, Run, keep_trunk_limbs, load_template, register_method
+from .common import SEX_TEMPLATE, BenchError, Run, keep_trunk_limbs, load_template, register_method
 from .outliers import inject, split_request
 from .reference import CALIBRATED, CONDITIONS
 
@@ -126,7 +126,8 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
                       params: dict[str, Any] | None = None, truth_mesh: Mesh | None = None,
                       cloud_mode: str = "raw", room: bool | dict[str, Any] = False,
                       cloud_params: dict[str, Any] | None = None,
-                      truth_joints: dict[str, Any] | None = None, refine_calibration: bool = False) -> list[Run]:
+                      truth_joints: dict[str, Any] | None = None, refine_calibration: bool = False,
+                      sex: str | None = None) -> list[Run]:
     """Scan ``mesh`` in one condition, compute the floor if calibrated, register with every method.
 
     ``cloud_mode``: ``raw`` registers the scanner's cloud; ``lab`` (forced by camera segmentation) rebuilds
@@ -137,6 +138,9 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
     joint-centre errors (:mod:`bsv.bench.joints`).
     ``refine_calibration`` (cali and l5ca): the bsv run's ``info["refined"]`` also holds the same capture
     with its calibration refined as a user would (:func:`refine_condition`), registered again.
+    ``sex`` (camera segmentation): the subject's sex as ``bsv process --sex`` takes it; None: read from the
+    capture (:mod:`bsv.frontend.sex`), as ``bsv process`` does without it. Each run's ``info["sex"]`` says
+    which.
     Never raises for a failed registration: the Run carries ``ok=False`` and the error text."""
     from .. import scan
     from .common import cloud_far_pct
@@ -153,6 +157,7 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
     refined: Refined | None = None
     look: dict[str, str] | None = None
     landmark_warnings: list[str] | None = None
+    sex_estimate: Any = None
     with tempfile.TemporaryDirectory(prefix="bsv-bench-") as tmp:
         raw = scan(mesh, condition, seed, images=tmp if need_files else None, overwrite=True, room=room)
         if need_files and room:
@@ -170,7 +175,8 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
             if segmentation == "camera":
                 from .joints import camera_segmentations, joint_errors
 
-                segs, joints = camera_segmentations(tmp)
+                segs, joints = camera_segmentations(tmp, sex=sex)
+                sex_estimate = segs["front"].sex
                 landmark_warnings = [w for s in segs.values() for w in s.warnings]
                 views = capture_views(tmp, segmentation, labels={v: s.labels for v, s in segs.items()})
                 joint_errs = joint_errors(joints, truth_joints) if truth_joints else None
@@ -200,7 +206,9 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
         from ..posed_template import camera_template, template_record
 
         try:  # as bsv process: the template posed like the subject
-            posed, notes = camera_template(template, None, joints or {})
+            from ..frontend.sex import template_gender
+
+            posed, notes = camera_template(template, None, joints or {}, gender=template_gender(sex_estimate))
             template = posed or template
             template_info = {"template": template_record(template, None), "template_notes": notes}
         except BsvError as exc:  # the template's own pose, said in each run
@@ -234,6 +242,8 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
             from .joints import WARNINGS_KEY
 
             run.info[WARNINGS_KEY] = landmark_warnings
+        if sex_estimate is not None:
+            run.info["sex"] = sex_estimate.to_json()
         if look is not None:
             from .looks import INFO_KEY as LOOK_KEY
 
@@ -391,7 +401,8 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] |
             runs += measure_condition(name, mesh, truth, cond, scan_seed(cfg.seed, index), template,
                                       cfg.methods, cfg.segmentation, cfg.params, cloud_mode=cfg.cloud,
                                       room=cfg.room_arg(), cloud_params=cfg.cloud_params, truth_joints=truth_joints,
-                                      refine_calibration=cfg.refine_calibration)
+                                      refine_calibration=cfg.refine_calibration,
+                                      sex=s.sex if cfg.template == SEX_TEMPLATE else None)
         except Exception as exc:  # a failed scan/floor is reported, the run goes on
             runs += [Run(name, cond, m, False, truth_l=truth, error=f"{type(exc).__name__}: {exc}")
                      for m in cfg.methods]

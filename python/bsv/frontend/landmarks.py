@@ -77,6 +77,9 @@ from .segment import (
     unconfident_landmarks,
     view_params,
 )
+from .sex import SexEstimate, sex_measurements
+from .sex import from_score as sex_from_score
+from .sex import inferred as sex_inferred
 
 #: Joint centres estimated, named as :func:`bsv.bodies.joints.rig_joints` and :data:`bsv.biomech` name them.
 JOINTS: tuple[str, ...] = JOINT_NAMES
@@ -587,9 +590,57 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
     missing = {v: dict(r[3]) for v, r in resolved.items()}
     if any(missing.values()):
         raise _limb_error(missing)
+    sex = sex_estimate(dets, {v: resolved[v][0] for v in views}, cameras, depths, stature)
     for v in views:
         place_ankles(dets[v], resolved[v][0], cameras[v], depths[v], stature)
-    return {v: label_detection(dets[v], depths[v] if use_depth else None, *resolved[v][:3]) for v in views}
+    return {v: label_detection(dets[v], depths[v] if use_depth else None, *resolved[v][:3], sex=sex) for v in views}
+
+
+#: The joints :func:`sex_estimate` lifts (:func:`bsv.frontend.sex.sex_measurements` takes them).
+SEX_JOINTS: tuple[str, ...] = tuple(f"{k}_{s}" for k in ("shoulder", "elbow", "wrist", "hip") for s in "lr")
+
+
+def _person_points(det: Detection, cam: Camera, depth: np.ndarray) -> np.ndarray:
+    """The world points of a view's person mask with depth, within :data:`STATURE_DEPTH_BAND_M` of its
+    median depth (the mask's spill onto the wall lies metres deeper); (0, 3) without a mask."""
+    d = np.asarray(depth, dtype=np.float64)
+    if det.mask_soft is None or d.shape != det.mask_soft.shape:
+        return np.zeros((0, 3))
+    person = (det.mask_soft > det.params.mask_threshold) & (d > 0) & np.isfinite(d)
+    if not person.any():
+        return np.zeros((0, 3))
+    person &= np.abs(d - float(np.median(d[person]))) < STATURE_DEPTH_BAND_M
+    ys, xs = np.nonzero(person)
+    return np.asarray(cam.deproject(np.column_stack([xs, ys]).astype(np.float64), d[ys, xs]))
+
+
+def sex_estimate(dets: Mapping[str, Detection], poses: Mapping[str, np.ndarray], cameras: Mapping[str, Camera],
+                 depths: Mapping[str, np.ndarray], stature: float) -> SexEstimate:
+    """The sex the labels are drawn for (:mod:`bsv.frontend.sex`): the detections' ``sex_score`` when the
+    caller fixed it, else read from the capture: the resolved ``poses``' shoulders, elbows, wrists and hips
+    lifted to 3-D in each view (the surface depth under the landmark pushed inward by the limb's
+    half-thickness; the views' mean), the person's points of both views and the ``stature``."""
+    fixed = next((d.params.sex_score for d in dets.values() if d.params.sex_score is not None), None)
+    if fixed is not None:
+        return sex_from_score(fixed)
+    joints: dict[str, np.ndarray] = {}
+    for joint in SEX_JOINTS:
+        kind, side = _kind(joint)
+        lifted = []
+        for v, det in dets.items():
+            if det.mask_soft is None or v not in poses:
+                continue
+            mask = np.asarray(det.mask_soft > det.params.mask_threshold)
+            uv = _xy(poses[v], f"{side}_{kind}")
+            d = _surface_depth(np.asarray(depths[v], dtype=np.float64), mask, uv)
+            if not np.isfinite(d):
+                continue
+            half = _half_thickness(mask, poses[v], joint, d, cameras[v].intrinsics.fx)
+            lifted.append(np.asarray(cameras[v].deproject(uv[None], d + (half if np.isfinite(half) else 0.0))[0]))
+        if lifted:
+            joints[joint] = np.mean(lifted, axis=0)
+    points = {v: _person_points(dets[v], cameras[v], depths[v]) if v in dets else np.zeros((0, 3)) for v in VIEWS}
+    return sex_inferred(sex_measurements(joints, _body_frame(joints), points["front"], points["back"], stature))
 
 
 def _unconfident(det: Detection) -> list[tuple[str, str]]:
@@ -798,5 +849,6 @@ __all__ = [
     "joint_centres",
     "offset_predictors",
     "segment_views",
+    "sex_estimate",
     "trunk_length",
 ]

@@ -61,6 +61,7 @@ from ..extras import require
 from ..types import SEGMENT_IDS as _SEGMENT_IDS
 from ..types import SEGMENT_NAMES as _SEGMENT_NAMES
 from .errors import LandmarkMissingError, PersonNotFoundError, SegmentationError
+from .sex import SexEstimate
 
 PathLike = str | Path
 
@@ -169,6 +170,15 @@ class SegmentParams:
     wrist_shift: float = 0.03
     #: Transverse (thigh/shin) line through the knees, moved down by this fraction of the shin length.
     knee_shift: float = 0.11
+    #: The subject's sex as a score (:mod:`bsv.frontend.sex`): +1 female, -1 male, 0 the average body; None
+    #: (the default): :func:`bsv.frontend.landmarks.segment_views` reads it from the capture. A single image
+    #: segmented alone (:func:`segment_image`) takes None as 0.
+    sex_score: float | None = None
+    #: The knee line moves down by ``sex_score`` times this fraction of the shin length more (a woman's
+    #: knee boundary lies further below the knee's landmark than a man's).
+    knee_shift_sex: float = 0.0
+    #: The outer hip corners move down by ``sex_score`` times this fraction of the hip-knee length.
+    hip_raise_sex: float = 0.0
     #: Shin / foot line through each ankle, moved down by this fraction of the shin length.
     ankle_shift: float = 0.03
     #: Ankle landmark height, as a fraction of the stature (0: MediaPipe's own ankle). Both views together
@@ -218,6 +228,12 @@ class SegmentParams:
             raise SegmentationError(f"arm_girth_power must lie in [0, 2] (0: off; got {self.arm_girth_power!r}) and "
                                     f"arm_girth_ref in (0, 0.2) (a fraction of the body's height in the image; "
                                     f"got {self.arm_girth_ref!r})")
+        if self.sex_score is not None and not (-1.0 <= self.sex_score <= 1.0):
+            raise SegmentationError(f"sex_score must lie in [-1, 1] (+1 female, -1 male, 0 the average body) or be "
+                                    f"None (read from the capture), got {self.sex_score!r}")
+        if not (0.0 <= self.knee_shift_sex <= 0.1) or not (0.0 <= self.hip_raise_sex <= 0.1):
+            raise SegmentationError(f"knee_shift_sex and hip_raise_sex must lie in [0, 0.1] (fractions of the shin "
+                                    f"and hip-knee lengths), got {self.knee_shift_sex!r} and {self.hip_raise_sex!r}")
         if not (0.0 <= self.limb_fill_width <= 1.0) or self.limb_fill_band_m <= 0:
             raise SegmentationError(f"limb_fill_width must lie in [0, 1] (got {self.limb_fill_width!r}) and "
                                     f"limb_fill_band_m must be positive (got {self.limb_fill_band_m!r})")
@@ -248,10 +264,12 @@ class SegmentParams:
 #: 2.62 / 2.60 %, every other segment within 0.03 (wide A-poses, seeds 0 and 2: 2.73 / 2.71 -> 2.77 / 2.71).
 DEFAULT_PARAMS: dict[str, SegmentParams] = {
     "front": SegmentParams(shoulder_inset=0.15, hip_widen=1.5, hip_raise=0.425, torso_weight=0.95, knee_shift=0.105,
-                           ankle_height=0.056, arm_girth_power=0.5, arm_girth_ref=0.0323),
+                           ankle_height=0.056, arm_girth_power=0.5, arm_girth_ref=0.0323, knee_shift_sex=0.012,
+                           hip_raise_sex=0.025),
     "back": SegmentParams(neck_fraction=0.5, shoulder_inset=0.05, hip_widen=1.3, hip_raise=0.3, crotch_drop=0.2,
                           torso_weight=0.95, elbow_shift=0.01, wrist_shift=0.06, knee_shift=0.06, ankle_shift=0.09,
-                          ankle_height=0.062, arm_girth_power=0.5, arm_girth_ref=0.0312),
+                          ankle_height=0.062, arm_girth_power=0.5, arm_girth_ref=0.0312, knee_shift_sex=0.012,
+                          hip_raise_sex=0.025),
 }
 
 
@@ -283,6 +301,9 @@ class Segmentation:
     #: (33,) pixels between the image's and the mirror image's detection of each pose landmark
     #: (:attr:`Detection.spread`), or None.
     pose_spread: np.ndarray | None = None
+    #: The sex the labels were drawn for (:mod:`bsv.frontend.sex`; both views of a capture hold the same), or
+    #: None for an image segmented alone.
+    sex: SexEstimate | None = None
 
     def landmark(self, name: str) -> np.ndarray:
         """(x, y, visibility) of one landmark by name (KeyError naming it if unknown)."""
@@ -718,10 +739,12 @@ def resolve_landmarks(det: Detection, from_other: dict[str, np.ndarray] | None =
 
 
 def label_detection(det: Detection, depth: np.ndarray | None = None, pose: np.ndarray | None = None,
-                    sources: dict[str, str] | None = None, warnings: Sequence[str] = ()) -> Segmentation:
+                    sources: dict[str, str] | None = None, warnings: Sequence[str] = (),
+                    sex: SexEstimate | None = None) -> Segmentation:
     """The second half of :func:`segment_image`: the person mask (refined by ``depth``, metres, if given)
-    and its per-pixel labels from the resolved ``pose`` (default: the detection's own)."""
-    prm = det.params
+    and its per-pixel labels from the resolved ``pose`` (default: the detection's own), drawn for ``sex``
+    (default: the detection's ``sex_score``)."""
+    prm = det.params if sex is None else dataclasses.replace(det.params, sex_score=sex.score)
     pose = det.pose if pose is None else pose
     if det.mask_soft is None:
         raise PersonNotFoundError(f"MediaPipe returned no person mask for the {det.view} image")
@@ -736,7 +759,8 @@ def label_detection(det: Detection, depth: np.ndarray | None = None, pose: np.nd
     labels = label_pixels(mask, pose, hands, prm)
     return Segmentation(labels=labels, mask=mask, landmarks=_landmarks71(pose, hands), view=det.view,
                         hands_found=(hands[0] is not None, hands[1] is not None), swapped=det.swapped, pose=pose,
-                        sources=dict(sources or {}), warnings=(*det.notes, *warnings), pose_spread=det.spread)
+                        sources=dict(sources or {}), warnings=(*det.notes, *warnings), pose_spread=det.spread,
+                        sex=sex)
 
 
 def missing_error(view: str, missing: Sequence[tuple[str, str]]) -> LandmarkMissingError:
@@ -846,7 +870,9 @@ def label_pixels(mask: np.ndarray, pose: np.ndarray, hands: list, params: Segmen
     crotch = _crotch(mask, h_mid, k_mid) if params.crotch_from_mask else None
     crotch = (h_mid + down * params.crotch_drop * thigh_len if crotch is None
               else crotch + down * params.crotch_offset * thigh_len)
-    hip_level = crotch - down * params.hip_raise * thigh_len - h_mid  # the outer hips, relative to the mid-hip
+    sex = params.sex_score or 0.0  # bsv.frontend.sex: +1 female ... -1 male
+    hip_raise = params.hip_raise - sex * params.hip_raise_sex
+    hip_level = crotch - down * hip_raise * thigh_len - h_mid  # the outer hips, relative to the mid-hip
     hip_level = down * float(hip_level @ down)
     poly = np.array([
         P["right_shoulder"] + lat * inset, P["left_shoulder"] - lat * inset,
@@ -875,7 +901,7 @@ def label_pixels(mask: np.ndarray, pose: np.ndarray, hands: list, params: Segmen
         arm = on & ((group == 1) | (group == 2))
         out[arm] = np.where(past_wr[arm], SEGMENT_IDS["hand" + sfx],
                             np.where(past_el[arm], SEGMENT_IDS["forearm" + sfx], SEGMENT_IDS["upper_arm" + sfx]))
-        knee_c = k_mid + down * params.knee_shift * shin_len
+        knee_c = k_mid + down * (params.knee_shift + sex * params.knee_shift_sex) * shin_len
         ank_c = P[f"{side}_ankle"] + down * params.ankle_shift * shin_len
         below_knee = (p - knee_c) @ down > 0
         below_ankle = (p - ank_c) @ down > 0
@@ -1120,6 +1146,8 @@ def write_segmentation(seg: Segmentation, folder: PathLike, overwrite: bool = Fa
     meta = {"view": seg.view, "segments": dict(SEGMENT_IDS), "hands_found": list(seg.hands_found),
             "swapped_pairs": list(seg.swapped), "counts": seg.counts(), "landmarks_px": lm,
             "landmark_sources": dict(seg.sources), "warnings": list(seg.warnings)}
+    if seg.sex is not None:
+        meta["sex"] = seg.sex.to_json()
     (d / "landmarks.json").write_text(json.dumps(meta, indent=1))
 
 

@@ -1,0 +1,129 @@
+"""Learns bsv.frontend.sex.SEX_MODEL (the probability that a subject is a woman from four measurements of the
+capture) on synthetic cohorts and evaluates it on others.
+
+For every subject of the training cohorts (``--train-seeds``) and the evaluation cohorts (``--eval-seeds``) the
+virtual rig captures the body in a room (noer) and the camera path segments both views
+(bsv.frontend.landmarks.segment_views), which takes the measurements of bsv.frontend.sex.sex_measurements.
+A ridge-regularised logistic regression (``--ridge`` on the standardised measurements, Newton's method) is
+fitted to the training subjects' sexes; the script prints the SEX_MODEL table and, on the evaluation
+cohorts, the accuracy, the mean distance of the score 2p - 1 from the true +-1 (in units of a given sex's
+shift: 0 is a known sex, 0.5 the average body) and the subjects named confidently but wrongly.
+
+    .venv/bin/python benchmarks/learn_sex_model.py --train-seeds 11,12,13,14,15,16,17,18 --eval-seeds 0,1,2,3,4,5,6,7
+
+``--cache FILE`` keeps the measurements (JSON) so that a second run re-learns without MediaPipe; ``--only-measure``
+fills the cache and stops (two such runs on disjoint seeds can share the two cores).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+import bsv
+from bsv.bench.joints import camera_segmentations
+from bsv.frontend.sex import NAMED_AT, SEX_MEASUREMENTS
+
+
+def measure(n: int, seed: int, cache: dict) -> list[tuple[dict[str, float], float]]:
+    """(measurements, 1 for a woman else 0) of the first ``n`` subjects of a cohort seed (read from and added to
+    ``cache``: key "seed/index" -> {"m": ..., "female": ...})."""
+    out = []
+    for i in tqdm(range(n), desc=f"seed {seed}", unit="subject"):
+        key = f"{seed}/{i}"
+        if key not in cache:
+            s = bsv.bodies.subject(i, seed)
+            with tempfile.TemporaryDirectory(prefix="bsv-sex-") as tmp:
+                bsv.scan(s.body.mesh(), "noer", seed * 1000 + i, images=tmp, overwrite=True, room=True)
+                segs, _ = camera_segmentations(tmp)
+            est = segs["front"].sex
+            cache[key] = {"m": dict(est.measurements) if est is not None else {}, "female": s.sex == "female"}
+        c = cache[key]
+        out.append(({k: float(c["m"].get(k, np.nan)) for k in SEX_MEASUREMENTS}, 1.0 if c["female"] else 0.0))
+    return out
+
+
+def fit(rows: list[tuple[dict[str, float], float]], ridge: float) -> dict:
+    """SEX_MODEL fitted to ``rows`` (subjects with a missing measurement left out)."""
+    ok = [(m, y) for m, y in rows if all(np.isfinite(m[k]) for k in SEX_MEASUREMENTS)]
+    X = np.array([[m[k] for k in SEX_MEASUREMENTS] for m, _ in ok])
+    y = np.array([y for _, y in ok])
+    mean, scale = X.mean(axis=0), X.std(axis=0)
+    Z = np.column_stack([np.ones(len(X)), (X - mean) / scale])
+    w = np.zeros(Z.shape[1])
+    penalty = ridge * np.diag(np.r_[0.0, np.ones(Z.shape[1] - 1)])
+    for _ in range(100):
+        p = 1.0 / (1.0 + np.exp(-Z @ w))
+        step = np.linalg.solve(Z.T @ (Z * (p * (1 - p))[:, None]) + penalty, Z.T @ (p - y) + penalty @ w)
+        w -= step
+        if np.abs(step).max() < 1e-10:
+            break
+    return {"intercept": float(w[0]),
+            "mean": {k: float(v) for k, v in zip(SEX_MEASUREMENTS, mean, strict=True)},
+            "scale": {k: float(v) for k, v in zip(SEX_MEASUREMENTS, scale, strict=True)},
+            "coef": {k: float(v) for k, v in zip(SEX_MEASUREMENTS, w[1:], strict=True)}}
+
+
+def probability(model: dict, m: dict[str, float]) -> float:
+    """The model's p(female) of one subject's measurements (NaN when one is missing)."""
+    z = model["intercept"] + sum(model["coef"][k] * (m[k] - model["mean"][k]) / model["scale"][k] for k in SEX_MEASUREMENTS)
+    return float(1.0 / (1.0 + np.exp(-z)))
+
+
+def report(name: str, model: dict, rows: list[tuple[dict[str, float], float]]) -> None:
+    """Accuracy, mean score distance and confident mistakes of ``model`` on ``rows``."""
+    p = np.array([probability(model, m) for m, _ in rows])
+    y = np.array([y for _, y in rows])
+    ok = np.isfinite(p)
+    p, y = p[ok], y[ok]
+    score_gap = np.abs((2 * p - 1) - (2 * y - 1)) / 2
+    named = (p >= NAMED_AT) | (p <= 1 - NAMED_AT)
+    wrong = named & ((p >= 0.5) != (y == 1))
+    print(f"{name}: n {len(p)} (not measurable {int((~ok).sum())}), accuracy {np.mean((p >= 0.5) == (y == 1)):.3f}, "
+          f"mean |score - truth| / 2 {score_gap.mean():.3f} (worst {score_gap.max():.2f}), named {named.mean():.2f}, "
+          f"named wrongly {int(wrong.sum())}")
+
+
+def main() -> None:
+    """Command line: measure, learn on the training seeds, evaluate on the others, print the table."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, default=10)
+    ap.add_argument("--train-seeds", default="11,12,13,14,15,16,17,18")
+    ap.add_argument("--eval-seeds", default="0,1,2,3,4,5,6,7")
+    ap.add_argument("--ridge", type=float, default=1.0)
+    ap.add_argument("--cache", action="append", default=[],
+                    help="JSON file of measurements (repeatable: all are read; the first is written)")
+    ap.add_argument("--only-measure", action="store_true", help="fill the cache for the seeds given and stop")
+    a = ap.parse_args()
+    cache: dict = {}
+    for f in a.cache:
+        if Path(f).is_file():
+            cache.update(json.loads(Path(f).read_text()))
+    seeds = lambda text: [int(s) for s in text.split(",") if s]  # noqa: E731
+    try:
+        train = [r for s in seeds(a.train_seeds) for r in measure(a.n, s, cache)]
+        evaluation = [r for s in seeds(a.eval_seeds) for r in measure(a.n, s, cache)]
+    finally:
+        if a.cache:
+            Path(a.cache[0]).write_text(json.dumps(cache))
+    if a.only_measure:
+        return
+    model = fit(train, a.ridge)
+    print("SEX_MODEL = {")
+    print(f'    "intercept": {model["intercept"]:.4f},')
+    for part in ("mean", "scale", "coef"):
+        cells = ", ".join(f'"{k}": {v:.4g}' for k, v in model[part].items())
+        print(f'    "{part}": {{{cells}}},')
+    print("}")
+    report("train", model, train)
+    if evaluation:
+        report("eval", model, evaluation)
+
+
+if __name__ == "__main__":
+    main()

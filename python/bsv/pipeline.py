@@ -410,10 +410,13 @@ def process(
     ``bsip_density``, de Leva's values for ``bsip_sex``, default ``sex``, else male): bsip.json, bsip.csv
     and model.osim (OpenSim).
 
-    ``sex`` ("female" or "male", ``--sex``): when the result keeps the template's segments (the camera path)
-    the embedded template of that sex (:func:`bsv.default_template`; the torso and thighs fit better,
+    ``sex`` ("female" or "male", ``--sex``): with camera segmentation the knee and hip cut lines of that sex
+    (:mod:`bsv.frontend.sex`) and, when the result keeps the template's segments (the camera path), the
+    embedded template of that sex (:func:`bsv.default_template`; the torso and thighs fit better,
     ``docs/DESIGN.md``); with the cloud's labels the average template still (it fits the limbs better
-    there); None: the average template. volumes.json's ``template`` says which was fitted.
+    there). None: the camera path reads the sex from the capture (a probability; the cut lines and the
+    template's MakeHuman gender move by its score), other paths take the average template. volumes.json's
+    ``sex`` and ``template`` say which was taken.
 
     ``refine_floor`` (``--refine-floor``): correct each camera's pitch, roll and height with the floor it
     sees (:func:`bsv.frontend.floorplane.refine_extrinsics`; the camera must see the floor) before building
@@ -749,9 +752,9 @@ def main_process(argv: Sequence[str] | None = None) -> int:
     which = ap.add_mutually_exclusive_group()
     which.add_argument("--template", help="template mesh (PLY/OBJ with segment labels); default: the embedded one")
     which.add_argument("--sex", choices=SEXES,
-                       help="the subject's sex: with camera segmentation the embedded template of that sex "
-                            "(MakeHuman's female or male body; the torso and thighs fit better) and, with --bsip, "
-                            "de Leva's column; default: the average template")
+                       help="the subject's sex: with camera segmentation the knee and hip lines and the embedded "
+                            "template of that sex (MakeHuman's female or male body) and, with --bsip, de Leva's "
+                            "column; default: read from the capture (volumes.json's 'sex' says how sure)")
     ap.add_argument("--keep-extremities", action="store_true", help="keep head, hand and foot points in the cloud")
     ap.add_argument("--sor", action="store_true",
                     help="the paper's statistical outlier removal before merging (off by default: it erodes the "

@@ -5,7 +5,8 @@ For every subject of the training cohorts (``--train-seeds``) and the evaluation
 virtual rig captures the body in a room (noer) and the camera path segments both views
 (bsv.frontend.landmarks.segment_views), which takes the measurements of bsv.frontend.sex.sex_measurements.
 A ridge-regularised logistic regression (``--ridge`` on the standardised measurements, Newton's method) is
-fitted to the training subjects' sexes; the script prints the SEX_MODEL table and, on the evaluation
+fitted to the training subjects' sexes (each measurement clipped to the training range widened by a quarter of
+its span, as the model applies it); the script prints the SEX_MODEL table and, on the evaluation
 cohorts, the accuracy, the mean distance of the score 2p - 1 from the true +-1 (in units of a given sex's
 shift: 0 is a known sex, 0.5 the average body) and the subjects named confidently but wrongly.
 
@@ -63,7 +64,10 @@ def fit(rows: list[tuple[dict[str, float], float]], ridge: float) -> dict:
         w -= step
         if np.abs(step).max() < 1e-10:
             break
+    lo, hi = X.min(axis=0), X.max(axis=0)
+    widened = np.column_stack([lo - (hi - lo) / 4, hi + (hi - lo) / 4])
     return {"intercept": float(w[0]),
+            "range": {k: (float(a), float(b)) for k, (a, b) in zip(SEX_MEASUREMENTS, widened, strict=True)},
             "mean": {k: float(v) for k, v in zip(SEX_MEASUREMENTS, mean, strict=True)},
             "scale": {k: float(v) for k, v in zip(SEX_MEASUREMENTS, scale, strict=True)},
             "coef": {k: float(v) for k, v in zip(SEX_MEASUREMENTS, w[1:], strict=True)}}
@@ -71,7 +75,8 @@ def fit(rows: list[tuple[dict[str, float], float]], ridge: float) -> dict:
 
 def probability(model: dict, m: dict[str, float]) -> float:
     """The model's p(female) of one subject's measurements (NaN when one is missing)."""
-    z = model["intercept"] + sum(model["coef"][k] * (m[k] - model["mean"][k]) / model["scale"][k] for k in SEX_MEASUREMENTS)
+    z = model["intercept"] + sum(model["coef"][k] * (float(np.clip(m[k], *model["range"][k])) - model["mean"][k])
+                                 / model["scale"][k] for k in SEX_MEASUREMENTS)
     return float(1.0 / (1.0 + np.exp(-z)))
 
 
@@ -119,6 +124,8 @@ def main() -> None:
     for part in ("mean", "scale", "coef"):
         cells = ", ".join(f'"{k}": {v:.4g}' for k, v in model[part].items())
         print(f'    "{part}": {{{cells}}},')
+    cells = ", ".join(f'"{k}": ({a:.4g}, {b:.4g})' for k, (a, b) in model["range"].items())
+    print(f'    "range": {{{cells}}},')
     print("}")
     report("train", model, train)
     if evaluation:

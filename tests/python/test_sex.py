@@ -139,3 +139,12 @@ def test_the_sex_moves_the_knee_line_and_the_hip_corners():
     changed[:330] = False  # the drawn hands hang at the hips: the torso polygon's corners trade with them
     kinds = {SEGMENT_IDS[k] for k in ("thigh_l", "thigh_r", "shin_l", "shin_r", "torso")}
     assert set(np.unique(lab[1.0][changed])) <= kinds and set(np.unique(lab[-1.0][changed])) <= kinds
+
+
+def test_a_measurement_far_outside_the_cohort_counts_as_its_edge():
+    """A shoulder width three times the hips' (a hip landmark centimetres off) weighs no more than the edge of
+    the training range does."""
+    base = dict(sx.SEX_MODEL["mean"])
+    edge = sx.SEX_MODEL["range"]["shoulder_to_hip"][1]
+    assert sx.female_probability({**base, "shoulder_to_hip": 3.0}) == sx.female_probability(
+        {**base, "shoulder_to_hip": edge})

@@ -36,7 +36,9 @@ from .errors import SegmentationError
 SEX_SCORES: dict[str, float] = {s: 1.0 if s == "female" else -1.0 for s in SEXES}
 #: The measurements of :func:`sex_measurements`, in the order of :data:`SEX_MODEL`'s coefficients.
 SEX_MEASUREMENTS: tuple[str, ...] = ("chest_relief", "arm_to_stature", "shoulder_to_hip", "depth_to_trunk")
-#: The logistic model of ``p(female)``: ``1 / (1 + exp(-(intercept + sum coef_k (m_k - mean_k) / scale_k)))``.
+#: The logistic model of ``p(female)``: ``1 / (1 + exp(-(intercept + sum coef_k (m_k - mean_k) / scale_k)))``,
+#: each measurement ``m_k`` first clipped to ``range`` (the training cohort's range widened by a quarter of its
+#: span on each side: a landmark misplaced by centimetres cannot make one measurement decide alone).
 #: Ridge-regularised (lambda 1 on the standardised measurements) on cohort seeds 11-18 by
 #: ``benchmarks/learn_sex_model.py`` (78 of 80 on the right side of 1/2; one subject named the wrong sex). Held out, seeds 0-7 (80 subjects,
 #: clinic room, noer): all 80 on the right side of 1/2, 71 % named (p beyond :data:`NAMED_AT`), none wrongly;
@@ -47,6 +49,8 @@ SEX_MODEL: dict[str, Any] = {
     "mean": {"chest_relief": 0.01767, "arm_to_stature": 0.312, "shoulder_to_hip": 1.852, "depth_to_trunk": 0.4566},
     "scale": {"chest_relief": 0.007383, "arm_to_stature": 0.009499, "shoulder_to_hip": 0.1463, "depth_to_trunk": 0.05665},
     "coef": {"chest_relief": 1.752, "arm_to_stature": -1.171, "shoulder_to_hip": -1.301, "depth_to_trunk": -0.895},
+    "range": {"chest_relief": (-0.009042, 0.03698), "arm_to_stature": (0.2829, 0.3493), "shoulder_to_hip": (1.347, 2.284),
+              "depth_to_trunk": (0.2568, 0.6801)},
 }
 #: A probability at least this far from 1/2 names the sex in the result (``sex``); the score uses ``p`` itself.
 NAMED_AT = 0.9
@@ -141,7 +145,8 @@ def female_probability(measurements: Mapping[str, float]) -> float | None:
         v = measurements.get(k, float("nan"))
         if not math.isfinite(v):
             return None
-        z += SEX_MODEL["coef"][k] * (v - SEX_MODEL["mean"][k]) / SEX_MODEL["scale"][k]
+        lo, hi = SEX_MODEL["range"][k]
+        z += SEX_MODEL["coef"][k] * (min(max(v, lo), hi) - SEX_MODEL["mean"][k]) / SEX_MODEL["scale"][k]
     z += SEX_MODEL["intercept"]
     return 1.0 / (1.0 + math.exp(-max(-50.0, min(50.0, z))))
 

@@ -614,17 +614,13 @@ def _person_points(det: Detection, cam: Camera, depth: np.ndarray) -> np.ndarray
     return np.asarray(cam.deproject(np.column_stack([xs, ys]).astype(np.float64), d[ys, xs]))
 
 
-def sex_estimate(dets: Mapping[str, Detection], poses: Mapping[str, np.ndarray], cameras: Mapping[str, Camera],
-                 depths: Mapping[str, np.ndarray], stature: float) -> SexEstimate:
-    """The sex the labels are drawn for (:mod:`bsv.frontend.sex`): the detections' ``sex_score`` when the
-    caller fixed it, else read from the capture: the resolved ``poses``' shoulders, elbows, wrists and hips
-    lifted to 3-D in each view (the surface depth under the landmark pushed inward by the limb's
-    half-thickness; the views' mean), the person's points of both views and the ``stature``."""
-    fixed = next((d.params.sex_score for d in dets.values() if d.params.sex_score is not None), None)
-    if fixed is not None:
-        return sex_from_score(fixed)
+def lifted_joints(dets: Mapping[str, Detection], poses: Mapping[str, np.ndarray], cameras: Mapping[str, Camera],
+                  depths: Mapping[str, np.ndarray], names: Sequence[str] = JOINTS) -> dict[str, np.ndarray]:
+    """The joints ``names`` of the resolved ``poses`` lifted to 3-D before the labels: in each view the
+    surface depth under the landmark (the person mask's) pushed inward by the limb's half-thickness, the
+    views' mean; a joint no view has depth under is left out."""
     joints: dict[str, np.ndarray] = {}
-    for joint in SEX_JOINTS:
+    for joint in names:
         kind, side = _kind(joint)
         lifted = []
         for v, det in dets.items():
@@ -639,6 +635,21 @@ def sex_estimate(dets: Mapping[str, Detection], poses: Mapping[str, np.ndarray],
             lifted.append(np.asarray(cameras[v].deproject(uv[None], d + (half if np.isfinite(half) else 0.0))[0]))
         if lifted:
             joints[joint] = np.mean(lifted, axis=0)
+    return joints
+
+
+def sex_estimate(dets: Mapping[str, Detection], poses: Mapping[str, np.ndarray], cameras: Mapping[str, Camera],
+                 depths: Mapping[str, np.ndarray], stature: float,
+                 joints: Mapping[str, np.ndarray] | None = None) -> SexEstimate:
+    """The sex the labels are drawn for (:mod:`bsv.frontend.sex`): the detections' ``sex_score`` when the
+    caller fixed it, else read from the capture: the resolved ``poses``' shoulders, elbows, wrists and hips
+    lifted to 3-D (``joints``, default :func:`lifted_joints`), the person's points of both views and the
+    ``stature``."""
+    fixed = next((d.params.sex_score for d in dets.values() if d.params.sex_score is not None), None)
+    if fixed is not None:
+        return sex_from_score(fixed)
+    if joints is None:
+        joints = lifted_joints(dets, poses, cameras, depths, SEX_JOINTS)
     points = {v: _person_points(dets[v], cameras[v], depths[v]) if v in dets else np.zeros((0, 3)) for v in VIEWS}
     return sex_inferred(sex_measurements(joints, _body_frame(joints), points["front"], points["back"], stature))
 
@@ -847,6 +858,7 @@ __all__ = [
     "capture_joints",
     "detection_from_other_view",
     "joint_centres",
+    "lifted_joints",
     "offset_predictors",
     "segment_views",
     "sex_estimate",

@@ -529,6 +529,8 @@ def process(
                           "colors": np.ascontiguousarray(d["colour"], dtype=np.uint8)})
         pdf_renderer.check()  # a worker that could not load WeasyPrint (pango missing) says so before the fit
         landmark_warnings = [w for seg in camera_segs.values() for w in seg.warnings]
+        if progress and sex_estimate is not None:
+            print(f"[bsv]   {sex_estimate.sentence()}", flush=True)
         if progress:
             for w in landmark_warnings:
                 print(f"[bsv]   warning: {w}", flush=True)

@@ -668,7 +668,7 @@ def definitions_html(vols: dict[str, Any], target: _Target = "html") -> str:
     if isinstance(vols.get("sex"), dict):
         from .frontend.sex import describe
 
-        lead += html.escape(describe(vols["sex"])) + " "
+        lead += html.escape(describe(vols["sex"]), quote=False) + " "
     pose = (vols.get("template") or {}).get("pose")
     if isinstance(pose, dict) and pose:
         lead += ("Posed like the subject before the fit, from the measured joints: arms "

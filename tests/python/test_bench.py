@@ -454,6 +454,11 @@ def test_reduced_camera_path_regression_guard(tmp_path: Path) -> None:
     assert max(s[k]["rve_mean"] for k in segs) < BOUND_CAMERA_SEGMENT_NOER
     runs = [Run(**{k: v for k, v in r.items() if k in Run.__dataclass_fields__}) for r in doc["runs"]]
     assert summarise(runs)["noer"]["all"]["median_mm"] < BOUND_CAMERA_JOINT_MEDIAN_MM
+    # the sex was read from each capture (bsv.frontend.sex) and on the right side: subject 0 a woman, 1 a man
+    truth = {s["subject"]: s["sex"] for s in doc["subjects"]}
+    for r in doc["runs"]:
+        read = r["info"]["sex"]
+        assert read["source"] == "inferred" and (read["p_female"] > 0.5) == (truth[r["subject"]] == "female"), read
 
 
 def test_the_bench_measures_what_bsv_process_measures(tmp_path: Path) -> None:

@@ -600,16 +600,22 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
 SEX_JOINTS: tuple[str, ...] = tuple(f"{k}_{s}" for k in ("shoulder", "elbow", "wrist", "hip") for s in "lr")
 
 
-def _person_points(det: Detection, cam: Camera, depth: np.ndarray) -> np.ndarray:
-    """The world points of a view's person mask with depth, within :data:`STATURE_DEPTH_BAND_M` of its
-    median depth (the mask's spill onto the wall lies metres deeper); (0, 3) without a mask."""
+def _torso_points(det: Detection, pose: np.ndarray, cam: Camera, depth: np.ndarray) -> np.ndarray:
+    """The world points of a view's person mask with depth between its shoulder and hip landmarks (the
+    image's box around them, 10 px wider), within :data:`STATURE_DEPTH_BAND_M` of the person's median
+    depth (the mask's spill onto the wall lies metres deeper); (0, 3) without a mask."""
     d = np.asarray(depth, dtype=np.float64)
     if det.mask_soft is None or d.shape != det.mask_soft.shape:
         return np.zeros((0, 3))
     person = (det.mask_soft > det.params.mask_threshold) & (d > 0) & np.isfinite(d)
-    if not person.any():
+    corners = np.array([_xy(pose, f"{s}_{k}") for s in ("left", "right") for k in ("shoulder", "hip")])
+    if not person.any() or not np.all(np.isfinite(corners)):
         return np.zeros((0, 3))
-    person &= np.abs(d - float(np.median(d[person]))) < STATURE_DEPTH_BAND_M
+    h, w = d.shape
+    (x0, y0), (x1, y1) = np.floor(corners.min(axis=0)) - 10, np.ceil(corners.max(axis=0)) + 10
+    box = np.zeros_like(person)
+    box[int(np.clip(y0, 0, h)):int(np.clip(y1, 0, h)), int(np.clip(x0, 0, w)):int(np.clip(x1, 0, w))] = True
+    person &= box & (np.abs(d - float(np.median(d[person]))) < STATURE_DEPTH_BAND_M)
     ys, xs = np.nonzero(person)
     return np.asarray(cam.deproject(np.column_stack([xs, ys]).astype(np.float64), d[ys, xs]))
 
@@ -643,14 +649,15 @@ def sex_estimate(dets: Mapping[str, Detection], poses: Mapping[str, np.ndarray],
                  joints: Mapping[str, np.ndarray] | None = None) -> SexEstimate:
     """The sex the labels are drawn for (:mod:`bsv.frontend.sex`): the detections' ``sex_score`` when the
     caller fixed it, else read from the capture: the resolved ``poses``' shoulders, elbows, wrists and hips
-    lifted to 3-D (``joints``, default :func:`lifted_joints`), the person's points of both views and the
-    ``stature``."""
+    lifted to 3-D (``joints``, default :func:`lifted_joints`), the person's points of both views between the
+    shoulders and the hips and the ``stature``."""
     fixed = next((d.params.sex_score for d in dets.values() if d.params.sex_score is not None), None)
     if fixed is not None:
         return sex_from_score(fixed)
     if joints is None:
         joints = lifted_joints(dets, poses, cameras, depths, SEX_JOINTS)
-    points = {v: _person_points(dets[v], cameras[v], depths[v]) if v in dets else np.zeros((0, 3)) for v in VIEWS}
+    points = {v: _torso_points(dets[v], poses[v], cameras[v], depths[v]) if v in dets and v in poses else np.zeros((0, 3))
+              for v in VIEWS}
     return sex_inferred(sex_measurements(joints, _body_frame(joints), points["front"], points["back"], stature))
 
 

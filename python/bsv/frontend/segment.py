@@ -264,11 +264,11 @@ class SegmentParams:
 #: 2.62 / 2.60 %, every other segment within 0.03 (wide A-poses, seeds 0 and 2: 2.73 / 2.71 -> 2.77 / 2.71).
 DEFAULT_PARAMS: dict[str, SegmentParams] = {
     "front": SegmentParams(shoulder_inset=0.15, hip_widen=1.5, hip_raise=0.425, torso_weight=0.95, knee_shift=0.105,
-                           ankle_height=0.056, arm_girth_power=0.5, arm_girth_ref=0.0323, knee_shift_sex=0.012,
+                           ankle_height=0.056, arm_girth_power=0.5, arm_girth_ref=0.0323, knee_shift_sex=0.018,
                            hip_raise_sex=0.025),
     "back": SegmentParams(neck_fraction=0.5, shoulder_inset=0.05, hip_widen=1.3, hip_raise=0.3, crotch_drop=0.2,
                           torso_weight=0.95, elbow_shift=0.01, wrist_shift=0.06, knee_shift=0.06, ankle_shift=0.09,
-                          ankle_height=0.062, arm_girth_power=0.5, arm_girth_ref=0.0312, knee_shift_sex=0.012,
+                          ankle_height=0.062, arm_girth_power=0.5, arm_girth_ref=0.0312, knee_shift_sex=0.018,
                           hip_raise_sex=0.025),
 }
 

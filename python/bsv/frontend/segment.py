@@ -262,6 +262,11 @@ class SegmentParams:
 #: arm's own girth, then the arms' mean), judged on 0, 2, 4, 6, then 5 and 7: over the 80 subjects the upper
 #: arms' mean RVE 2.95-3.04 -> 2.64-2.82 %, their worst +12.1 -> +9.8 %, the eight limbs' mean 2.68 / 2.67 ->
 #: 2.62 / 2.60 %, every other segment within 0.03 (wide A-poses, seeds 0 and 2: 2.73 / 2.71 -> 2.77 / 2.71).
+#: The knee line and the outer hip corners follow the subject's sex since round 2 session 21
+#: (``knee_shift_sex`` 0.018, ``hip_raise_sex`` 0.025 per unit of ``sex_score``, :mod:`bsv.frontend.sex`): tried
+#: with the true sex on seeds 1, 3, 5, 7 (knee 0.0075 / 0.012, hip 0.0125 / 0.025 / 0.05; then the knee 0.018 /
+#: 0.024 with the sex read), judged on 0, 2, 4, 6: over the 80 subjects, with the template's gender following
+#: the sex too, the eight limbs' mean 2.62 / 2.60 -> 2.23 / 2.28 %, the torso 1.61 -> 1.16 %.
 DEFAULT_PARAMS: dict[str, SegmentParams] = {
     "front": SegmentParams(shoulder_inset=0.15, hip_widen=1.5, hip_raise=0.425, torso_weight=0.95, knee_shift=0.105,
                            ankle_height=0.056, arm_girth_power=0.5, arm_girth_ref=0.0323, knee_shift_sex=0.018,

@@ -21,14 +21,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import tempfile
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
 import bsv
-from bsv.bench.joints import KINDS, camera_segmentations, joint_errors
+from bsv.bench.joints import KINDS, joint_errors, subject_segmentations
 from bsv.bodies.joints import rig_joints
 from bsv.frontend.landmarks import (
     JOINT_OFFSETS_M,
@@ -47,9 +46,7 @@ def raw_joints(n: int, seed: int, condition: str, cache: dict) -> list[tuple[dic
         key = f"{seed}/{i}/{condition}"
         if key not in cache:
             s = bsv.bodies.subject(i, seed)
-            with tempfile.TemporaryDirectory(prefix="bsv-joints-") as tmp:
-                bsv.scan(s.body.mesh(), condition, seed * 1000 + i, images=tmp, overwrite=True, room=True)
-                _, joints = camera_segmentations(tmp, correct=False)
+            _, joints = subject_segmentations(s, condition, seed * 1000 + i, correct=False)
             cache[key] = {"est": {k: j.xyz.tolist() for k, j in joints.items()},
                           "truth": {k: v.tolist() for k, v in rig_joints(s.phenotype, s.pose).items()}}
         c = cache[key]

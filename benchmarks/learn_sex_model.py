@@ -20,14 +20,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import tempfile
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
 import bsv
-from bsv.bench.joints import camera_segmentations
+from bsv.bench.joints import subject_segmentations
 from bsv.frontend.sex import NAMED_AT, SEX_MEASUREMENTS
 
 
@@ -39,9 +38,7 @@ def measure(n: int, seed: int, cache: dict) -> list[tuple[dict[str, float], floa
         key = f"{seed}/{i}"
         if key not in cache:
             s = bsv.bodies.subject(i, seed)
-            with tempfile.TemporaryDirectory(prefix="bsv-sex-") as tmp:
-                bsv.scan(s.body.mesh(), "noer", seed * 1000 + i, images=tmp, overwrite=True, room=True)
-                segs, _ = camera_segmentations(tmp)
+            segs, _ = subject_segmentations(s, "noer", seed * 1000 + i)
             est = segs["front"].sex
             cache[key] = {"m": dict(est.measurements) if est is not None else {}, "female": s.sex == "female"}
         c = cache[key]

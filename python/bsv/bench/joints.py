@@ -52,6 +52,19 @@ def camera_segmentations(capture_dir: str | Path, correct: bool = True,
     return segs, joint_centres(segs, {v: data[v]["depth_m"] for v in VIEWS}, cams, correct=correct)
 
 
+def subject_segmentations(subject: Any, condition: str, scan_seed: int, correct: bool = True,
+                          sex: str | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
+    """:func:`camera_segmentations` of a cohort ``subject`` (:func:`bsv.bodies.subject`) captured by the virtual
+    rig in a clinic room (``condition``, ``scan_seed``) into a temporary folder, removed afterwards."""
+    import tempfile
+
+    from .. import scan
+
+    with tempfile.TemporaryDirectory(prefix="bsv-capture-") as tmp:
+        scan(subject.body.mesh(), condition, scan_seed, images=tmp, overwrite=True, room=True)
+        return camera_segmentations(tmp, correct=correct, sex=sex)
+
+
 def joint_errors(estimated: Mapping[str, Any], truth: Mapping[str, np.ndarray]) -> dict[str, list[float]]:
     """{joint: [lateral, up, forward] mm} of the estimated joint centres (JointCentre or arrays, metres)
     against the true ones, in the true body frame; joints missing from either side are left out."""

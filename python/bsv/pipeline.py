@@ -501,7 +501,7 @@ def process(
         if segmentation == "camera":
             camera_segs, joints = steps.run("segment", "segmenting both cameras (MediaPipe) and their joint centres",
                                             lambda: _segment_cameras(data, extrinsics, cameras, seg_params))
-        sex_estimate = next((s.sex for s in camera_segs.values() if getattr(s, "sex", None) is not None), None)
+        sex_estimate = next((s.sex for s in camera_segs.values() if s.sex is not None), None)
         refined: dict[str, dict[str, Any]] = {}
         views = []
         for cam in cameras:

@@ -645,17 +645,15 @@ def lifted_joints(dets: Mapping[str, Detection], poses: Mapping[str, np.ndarray]
 
 
 def sex_estimate(dets: Mapping[str, Detection], poses: Mapping[str, np.ndarray], cameras: Mapping[str, Camera],
-                 depths: Mapping[str, np.ndarray], stature: float,
-                 joints: Mapping[str, np.ndarray] | None = None) -> SexEstimate:
+                 depths: Mapping[str, np.ndarray], stature: float) -> SexEstimate:
     """The sex the labels are drawn for (:mod:`bsv.frontend.sex`): the detections' ``sex_score`` when the
     caller fixed it, else read from the capture: the resolved ``poses``' shoulders, elbows, wrists and hips
-    lifted to 3-D (``joints``, default :func:`lifted_joints`), the person's points of both views between the
-    shoulders and the hips and the ``stature``."""
+    lifted to 3-D (:func:`lifted_joints`), the person's points of both views between the shoulders and the
+    hips and the ``stature``."""
     fixed = next((d.params.sex_score for d in dets.values() if d.params.sex_score is not None), None)
     if fixed is not None:
         return sex_from_score(fixed)
-    if joints is None:
-        joints = lifted_joints(dets, poses, cameras, depths, SEX_JOINTS)
+    joints = lifted_joints(dets, poses, cameras, depths, SEX_JOINTS)
     points = {v: _torso_points(dets[v], poses[v], cameras[v], depths[v]) if v in dets and v in poses else np.zeros((0, 3))
               for v in VIEWS}
     return sex_inferred(sex_measurements(joints, _body_frame(joints), points["front"], points["back"], stature))

@@ -14,6 +14,8 @@ from bsv.bench.boundaries import (
     boundaries_markdown,
     boundary_errors,
     distance_to_segments,
+    explained,
+    limb_boundaries,
     loop_edges,
     summarise,
 )
@@ -102,3 +104,42 @@ def test_the_table_pools_sides_and_names_the_worst() -> None:
     md = "\n".join(boundaries_markdown(runs))
     assert "| knee | 4 | +0.0 |" in md and "subject_001" in md
     assert boundaries_markdown([]) == []
+
+
+def test_each_limb_is_bounded_by_the_joints_the_table_names() -> None:
+    assert limb_boundaries("upper_arm") == ("shoulder", "elbow")
+    assert limb_boundaries("thigh") == ("hip", "knee")
+    assert limb_boundaries("forearm") == ("elbow", None)  # the wrist loop is not measured
+    assert limb_boundaries("shin") == ("knee", None)
+
+
+def _limb_runs(n: int, shoulder_cost: float, elbow_cost: float, at_zero: float, noise: float = 0.0) -> list[Run]:
+    rng = np.random.default_rng(3)
+    runs = []
+    for i in range(n):
+        sh, el = rng.normal(0.0, 3.0, 2)
+        err = at_zero + shoulder_cost * sh + elbow_cost * el + noise * rng.normal()
+        runs.append(Run(f"subject_{i:03d}", "noer", "bsv", True, truth_l={"upper_arm_l": 2.0},
+                        estimated_l={"upper_arm_l": 2.0 * (1 + err / 100)},
+                        info={INFO_KEY: {"shoulder_l": float(sh), "elbow_l": float(el)}}))
+    return runs
+
+
+def test_a_volume_error_made_of_boundary_errors_is_explained_whole() -> None:
+    split = explained(_limb_runs(12, -0.9, 0.3, 0.5))["noer"]["upper_arm"]
+    assert split["n"] == 12
+    assert split["at_zero"] == pytest.approx(0.5, abs=1e-9)
+    assert split["per_mm"] == pytest.approx({"shoulder": -0.9, "elbow": 0.3}, abs=1e-9)
+    assert split["rve_left"] == pytest.approx(0.0, abs=1e-9) and split["rve"] > 1.0
+
+
+def test_what_the_boundaries_do_not_explain_is_left() -> None:
+    split = explained(_limb_runs(200, -0.9, 0.3, 0.0, noise=1.0))["noer"]["upper_arm"]
+    assert split["rve_left"] == pytest.approx(np.sqrt(2 / np.pi), rel=0.15)  # the noise's mean |x|
+    assert split["per_mm"]["shoulder"] == pytest.approx(-0.9, abs=0.05)
+
+
+def test_too_few_runs_are_not_fitted_and_the_report_says_what_is() -> None:
+    assert explained(_limb_runs(5, -0.9, 0.3, 0.5)) == {}
+    md = "\n".join(boundaries_markdown(_limb_runs(12, -0.9, 0.3, 0.5)))
+    assert "What the boundaries cost each limb" in md and "| noer | upper_arm | 12 |" in md

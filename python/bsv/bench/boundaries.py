@@ -167,6 +167,65 @@ def summarise(runs: Sequence[Run]) -> dict[str, dict[str, dict[str, Any]]]:
     return table
 
 
+#: The limb segment kinds whose volume error :func:`explained` splits, in table order.
+LIMBS: tuple[str, ...] = ("upper_arm", "forearm", "thigh", "shin")
+#: Fewest runs (subject sides) of a condition and limb for :func:`explained` to fit its line.
+MIN_EXPLAINED = 8
+
+
+def limb_boundaries(limb: str) -> tuple[str | None, str | None]:
+    """The joint kinds of :data:`KINDS` whose loops bound a limb segment kind: (proximal, distal), None where
+    no measured loop bounds it (the wrist and the ankle: hands and feet are not fitted). From
+    :data:`bsv.biomech.tables.JOINTS`, the one table of which two segments each joint separates."""
+    prox = next((k for k in KINDS if JOINTS[f"{k}_l"][1] == f"{limb}_l"), None)
+    dist = next((k for k in KINDS if JOINTS[f"{k}_l"][0] == f"{limb}_l"), None)
+    return prox, dist
+
+
+def explained(runs: Sequence[Run]) -> dict[str, dict[str, dict[str, Any]]]:
+    """How much of each limb's volume error is where its boundaries lie: {condition: {limb: {n, rve, signed,
+    at_zero, per_mm: {joint kind: % per mm}, rve_left}}}.
+
+    Per condition and limb kind (both sides pooled, the bsv runs whose boundaries were measured), the signed
+    volume error (%) is fitted by least squares as a line in the errors (mm, + distal) of the loops that bound
+    it (:func:`limb_boundaries`): ``at_zero`` is the error with both loops in place, ``per_mm`` what 1 mm of
+    each loop costs, ``rve_left`` the mean absolute error the line leaves (in-sample, so slightly optimistic).
+    Left out with fewer than :data:`MIN_EXPLAINED` runs. What a better boundary could gain at most is
+    ``rve`` - ``rve_left``; the rest is the surface."""
+    table: dict[str, dict[str, dict[str, Any]]] = {}
+    rows: dict[tuple[str, str], list[tuple[float, list[float]]]] = {}
+    for r in runs:
+        errs = (r.info or {}).get(INFO_KEY)
+        if not errs or r.method != "bsv" or not r.ok:
+            continue
+        for limb in LIMBS:
+            kinds = [k for k in limb_boundaries(limb) if k is not None]
+            for side in ("l", "r"):
+                seg = f"{limb}_{side}"
+                t, e = r.truth_l.get(seg), r.estimated_l.get(seg)
+                mm = [errs.get(f"{k}_{side}") for k in kinds]
+                if t is None or e is None or not t > 0 or any(x is None for x in mm):
+                    continue
+                rows.setdefault((r.condition, limb), []).append((100.0 * (e - t) / t, [float(x) for x in mm if x is not None]))
+    for cond in ordered_conditions({c for c, _ in rows}):
+        out: dict[str, dict[str, Any]] = {}
+        for limb in LIMBS:
+            items = rows.get((cond, limb), [])
+            if len(items) < MIN_EXPLAINED:
+                continue
+            y = np.array([v for v, _ in items])
+            x = np.array([m for _, m in items], dtype=np.float64).reshape(len(items), -1)
+            design = np.column_stack([np.ones(len(y)), x])
+            coef, *_ = np.linalg.lstsq(design, y, rcond=None)
+            kinds = [k for k in limb_boundaries(limb) if k is not None]
+            out[limb] = {"n": len(y), "rve": float(np.abs(y).mean()), "signed": float(y.mean()), "at_zero": float(coef[0]),
+                         "per_mm": {k: float(c) for k, c in zip(kinds, coef[1:], strict=True)},
+                         "rve_left": float(np.abs(y - design @ coef).mean())}
+        if out:
+            table[cond] = out
+    return table
+
+
 def boundary_figure(runs: Sequence[Run], path: str | Path) -> Path | None:
     """Box plot of the signed boundary errors (mm) per joint kind, one box per condition; None (nothing
     written) when no run measured them."""
@@ -198,6 +257,21 @@ def boundaries_markdown(runs: Sequence[Run]) -> list[str]:
             md.append(f"| {kind} | {s['n']} | {s['mean_mm']:+.1f} | {s['sd_mm']:.1f} | {s['median_abs_mm']:.1f} | "
                       f"{s['p95_abs_mm']:.1f} | {s['worst_mm']:+.1f} ({s['worst']}) |")
         md.append("")
+    split = explained(runs)
+    if split:
+        md += ["### What the boundaries cost each limb", "",
+               ("Each limb's signed volume error (%, both sides) fitted as a line in the errors of the loops that "
+                "bound it (bsv.bench.boundaries.explained; the wrist and ankle loops are not measured): the error "
+                "with the loops in place, what 1 mm costs, and the mean RVE the line leaves (in-sample). "
+                "RVE minus that is what a better boundary could gain at most."), "",
+               "| condition | limb | n | mean RVE | signed | with the loops in place | % per mm (proximal, distal) | RVE left |",
+               "|---|---|---|---|---|---|---|---|"]
+        for cond, limbs in split.items():
+            for limb, s in limbs.items():
+                per = ", ".join(f"{k} {v:+.2f}" for k, v in s["per_mm"].items())
+                md.append(f"| {cond} | {limb} | {s['n']} | {s['rve']:.2f} | {s['signed']:+.2f} | {s['at_zero']:+.2f} | "
+                          f"{per} | {s['rve_left']:.2f} |")
+        md.append("")
     return md
 
 
@@ -206,6 +280,8 @@ __all__ = [
     "FIGURE",
     "INFO_KEY",
     "KINDS",
+    "LIMBS",
+    "MIN_EXPLAINED",
     "MIN_POINTS",
     "NEAR_M",
     "SAMPLES",
@@ -215,6 +291,8 @@ __all__ = [
     "boundary_errors",
     "boundary_figure",
     "distance_to_segments",
+    "explained",
+    "limb_boundaries",
     "loop_edges",
     "summarise",
 ]

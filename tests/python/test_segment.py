@@ -360,7 +360,8 @@ def test_the_upper_arms_reach_follows_their_girth(scans):
     arms' mean), or with the power 0, the plain nearest-bone rule. Forearms and every other segment are
     untouched."""
     _, s, _ = scans[("default", "front")]
-    prm = dataclasses.replace(seg.DEFAULT_PARAMS["front"], arm_girth_power=0.0)
+    # the nearest-bone rule alone (no shoulder line from the armpit, which decides above the armpit)
+    prm = dataclasses.replace(seg.DEFAULT_PARAMS["front"], arm_girth_power=0.0, armpit_angle=None)
     plain = seg.label_pixels(s.mask, s.pose, [None, None], prm)
     P = {n: s.pose[i, :2] for i, n in enumerate(seg.POSE_NAMES)}
     height = float(np.hypot(*(P["nose"] - (P["left_ankle"] + P["right_ankle"]) / 2)))
@@ -382,4 +383,69 @@ def test_the_upper_arms_reach_follows_their_girth(scans):
     assert seg.DEFAULT_PARAMS["front"].arm_girth_power == 0.5 and seg.DEFAULT_PARAMS["back"].arm_girth_power == 0.5
     for bad in ({"arm_girth_power": -0.5}, {"arm_girth_power": 3.0}, {"arm_girth_ref": 0.0}, {"arm_girth_ref": 0.5}):
         with pytest.raises(errors.SegmentationError, match="arm_girth"):
+            seg.SegmentParams(**bad)
+
+
+def _drawn_body(gap: bool = True, hole: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """A mask with a torso (columns 150-250 from row 100 down) and a right arm from the shoulder (245, 110)
+    down and out to the elbow (365, 230), 15 px half-width (the armpit where its lower edge leaves the torso's
+    side); without ``gap`` the arm hangs against the torso (its band widened to the hip); with ``hole`` a
+    depth drop-out inside the torso. Returns the mask and the elbow."""
+    h, w = 400, 420
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float64)
+    mask = (xx >= 150) & (xx <= 250) & (yy >= 100)
+    sh, el = np.array([245.0, 110.0]), np.array([365.0, 230.0])
+    axis = (el - sh) / np.hypot(*(el - sh))
+    normal = np.array([-axis[1], axis[0]])
+    along = (xx - sh[0]) * axis[0] + (yy - sh[1]) * axis[1]
+    across = (xx - sh[0]) * normal[0] + (yy - sh[1]) * normal[1]
+    mask |= (np.abs(across) <= 15.0) & (along >= -10) & (along <= 200)
+    if not gap:
+        mask |= (xx >= 150) & (xx <= 370) & (yy >= 100)
+    if hole:
+        mask[150:170, 230:245] = False
+    return mask, el
+
+
+def test_the_armpit_is_the_top_of_the_gap_under_the_arm():
+    """The armpit is where the arm's lower edge leaves the torso's side (the arm's lower edge, y = x - 135 +
+    15 * sqrt(2), meets x = 250 at y = 136.2); a hole inside the torso does not move it; an arm hanging
+    against the torso has none."""
+    mask, el = _drawn_body()
+    a = seg.armpit_point(mask, el, centre_x=200.0, top_y=110.0, bottom_y=390.0)
+    assert a is not None and abs(a[1] - 136.2) <= 2.0 and 250.0 <= a[0] <= 255.0, a
+    holed, _ = _drawn_body(hole=True)
+    assert np.allclose(seg.armpit_point(holed, el, 200.0, 110.0, 390.0), a)
+    closed, _ = _drawn_body(gap=False)
+    assert seg.armpit_point(closed, el, 200.0, 110.0, 390.0) is None
+    assert seg.armpit_point(mask, np.array([np.nan, 200.0]), 200.0, 110.0, 390.0) is None  # no elbow
+
+
+def test_the_shoulder_line_from_the_armpit_labels_the_shoulders_closer_to_the_truth(scans):
+    """On the rig's renders (the default body and two cohort subjects, both views) the shoulder line from
+    the armpit (the defaults) mislabels fewer of the true torso's and upper arms' pixels than the
+    nearest-bone rule alone; leaning it further towards the midline gives the arms more pixels; only the
+    torso and the upper arms trade pixels."""
+    ua = [seg.SEGMENT_IDS["upper_arm_l"], seg.SEGMENT_IDS["upper_arm_r"]]
+    torso = seg.SEGMENT_IDS["torso"]
+    wrong = {"rule": 0, "line": 0}
+    for (_, view), (_, s, truth) in scans.items():
+        prm = seg.DEFAULT_PARAMS[view]
+        assert prm.armpit_angle is not None
+        labels = {"rule": seg.label_pixels(s.mask, s.pose, [None, None], dataclasses.replace(prm, armpit_angle=None)),
+                  "line": seg.label_pixels(s.mask, s.pose, [None, None], prm)}
+        both = np.isin(truth, [torso, *ua])
+        for k, lab in labels.items():
+            wrong[k] += int((both & np.isin(lab, [torso, *ua]) & (lab != truth)).sum())
+        others = ~np.isin(labels["rule"], [*ua, torso])
+        assert (labels["line"][others] == labels["rule"][others]).all()
+        leaning = seg.label_pixels(s.mask, s.pose, [None, None],
+                                   dataclasses.replace(prm, armpit_angle=prm.armpit_angle + 10.0))
+        assert np.isin(leaning, ua).sum() > np.isin(labels["line"], ua).sum()
+    assert wrong["line"] < 0.8 * wrong["rule"], wrong
+
+
+def test_shoulder_line_parameters_outside_their_ranges_are_refused():
+    for bad in ({"armpit_angle": 75.0}, {"armpit_arm_slope": 3.0}, {"armpit_sex_slope": -25.0}, {"armpit_reach": 0.0}):
+        with pytest.raises(errors.SegmentationError, match="armpit"):
             seg.SegmentParams(**bad)

@@ -30,26 +30,25 @@ from tqdm import tqdm
 import bsv
 from bsv.bench.joints import camera_segmentations
 from bsv.bench.synth import scan_seed
-from bsv.frontend.segment import ARMPIT_REF_ARM_DEG, POSE_NAMES, SEGMENT_IDS, VIEWS, armpit_point
+from bsv.frontend.segment import (
+    ARMPIT_REF_ARM_DEG,
+    POSE_NAMES,
+    SEGMENT_IDS,
+    VIEWS,
+    arm_angle_deg,
+    armpit_point,
+    body_axes,
+)
 
 #: The true boundary pixels used: up to this many pixels above the armpit, and within this many across it.
 HEIGHT_PX, ACROSS_PX = 90.0, 70.0
-
-
-def _unit(v: np.ndarray) -> np.ndarray:
-    return np.asarray(v / np.hypot(*v))
 
 
 def true_leans(mask: np.ndarray, pose: np.ndarray, truth: np.ndarray) -> list[tuple[float, float]]:
     """(lean of the true boundary in degrees, the arm's angle below the horizontal) per side of one view
     whose armpit is found."""
     P = {n: pose[i, :2].astype(np.float64) for i, n in enumerate(POSE_NAMES)}
-    s_mid = (P["left_shoulder"] + P["right_shoulder"]) / 2
-    h_mid = (P["left_hip"] + P["right_hip"]) / 2
-    down = _unit(h_mid - s_mid)
-    lat = np.array([-down[1], down[0]])
-    if (P["left_hip"] - P["right_hip"]) @ lat < 0:
-        lat = -lat
+    s_mid, h_mid, down, lat = body_axes(P)
     torso = truth == SEGMENT_IDS["torso"]
     beside = np.zeros_like(torso)
     for dy, dx in ((0, 1), (0, -1), (1, 0), (-1, 0)):
@@ -66,9 +65,7 @@ def true_leans(mask: np.ndarray, pose: np.ndarray, truth: np.ndarray) -> list[tu
         if sel.sum() < 10:
             continue
         lean = math.degrees(math.atan(-float(np.sum(across[sel] * height[sel])) / float(np.sum(height[sel] ** 2))))
-        bone = P[f"{side}_elbow"] - P[f"{side}_shoulder"]
-        arm = math.degrees(math.atan2(float(bone @ down), abs(float(bone @ outward))))
-        out.append((lean, arm))
+        out.append((lean, arm_angle_deg(P[f"{side}_shoulder"], P[f"{side}_elbow"], down, outward)))
     return out
 
 

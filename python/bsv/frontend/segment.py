@@ -876,13 +876,8 @@ def label_pixels(mask: np.ndarray, pose: np.ndarray, hands: list, params: Segmen
     p = pix.astype(np.float64)
     P = {n: pose[i, :2].astype(np.float64) for i, n in enumerate(POSE_NAMES)}
 
-    s_mid = (P["left_shoulder"] + P["right_shoulder"]) / 2
-    h_mid = (P["left_hip"] + P["right_hip"]) / 2
+    s_mid, h_mid, down, lat = body_axes(P)
     k_mid = (P["left_knee"] + P["right_knee"]) / 2
-    down = _unit(h_mid - s_mid)  # body axis, head to feet
-    lat = np.array([-down[1], down[0]])  # perpendicular
-    if (P["left_hip"] - P["right_hip"]) @ lat < 0:
-        lat = -lat  # lat points to the subject's left (in the image)
     sw = float(np.hypot(*(P["left_shoulder"] - P["right_shoulder"])))
     thigh_len = 0.5 * sum(float(np.hypot(*(P[f"{s}_knee"] - P[f"{s}_hip"]))) for s in ("left", "right"))
     shin_len = 0.5 * sum(float(np.hypot(*(P[f"{s}_ankle"] - P[f"{s}_knee"]))) for s in ("left", "right"))
@@ -974,6 +969,27 @@ ARM_SECTIONS = np.linspace(0.45, 0.75, 7)
 ARM_MAX_WIDTH = 0.8
 
 
+def body_axes(P: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The body's axes in an image from the (subject-oriented) pose landmarks ``P`` (name -> x, y): the
+    shoulders' and the hips' midpoints, ``down`` (unit, the shoulders' midpoint to the hips') and ``lat``
+    (unit, perpendicular, pointing to the subject's left in the image)."""
+    s_mid = (P["left_shoulder"] + P["right_shoulder"]) / 2
+    h_mid = (P["left_hip"] + P["right_hip"]) / 2
+    down = _unit(h_mid - s_mid)
+    lat = np.array([-down[1], down[0]])
+    if (P["left_hip"] - P["right_hip"]) @ lat < 0:
+        lat = -lat
+    return s_mid, h_mid, down, lat
+
+
+def arm_angle_deg(shoulder: np.ndarray, elbow: np.ndarray, down: np.ndarray, outward: np.ndarray) -> float:
+    """An arm's angle below the horizontal in an image (degrees; the shoulder-elbow bone against the body's
+    ``down`` and ``outward`` axes of :func:`body_axes`): the angle :attr:`SegmentParams.armpit_arm_slope`
+    is per degree of, and benchmarks/learn_armpit_line.py fits it against."""
+    bone = np.asarray(elbow, dtype=np.float64) - np.asarray(shoulder, dtype=np.float64)
+    return math.degrees(math.atan2(float(bone @ down), abs(float(bone @ outward))))
+
+
 #: The arm angle (degrees below the horizontal) at which :attr:`SegmentParams.armpit_angle` applies as it is.
 ARMPIT_REF_ARM_DEG = 40.0
 
@@ -1026,7 +1042,7 @@ def _shoulder_line(out: np.ndarray, p: np.ndarray, on: np.ndarray, mask: np.ndar
     a = armpit_point(mask, el, float(h_mid[0]), float(s_mid[1]), float(h_mid[1]))
     if a is None:  # the arm against the torso: the nearest-bone rule stands
         return
-    arm_deg = math.degrees(math.atan2(float(bone @ down), abs(float(bone @ outward))))
+    arm_deg = arm_angle_deg(sh, el, down, outward)
     theta = (params.armpit_angle + params.armpit_arm_slope * (arm_deg - ARMPIT_REF_ARM_DEG)
              + params.armpit_sex_slope * sex)
     rel = p - a
@@ -1281,6 +1297,7 @@ def label_accuracy(pred: np.ndarray, truth: np.ndarray) -> dict[str, Any]:
 
 
 __all__ = [
+    "ARMPIT_REF_ARM_DEG",
     "ARM_MAX_WIDTH",
     "ARM_SECTIONS",
     "DEFAULT_PARAMS",
@@ -1294,6 +1311,9 @@ __all__ = [
     "Detection",
     "SegmentParams",
     "Segmentation",
+    "arm_angle_deg",
+    "armpit_point",
+    "body_axes",
     "detect",
     "label_accuracy",
     "label_detection",

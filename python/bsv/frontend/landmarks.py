@@ -71,8 +71,10 @@ from .segment import (
     Detection,
     Segmentation,
     SegmentParams,
+    agreeing_crotches,
     detect,
     label_detection,
+    person_mask,
     resolve_landmarks,
     unconfident_landmarks,
     view_params,
@@ -593,7 +595,10 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
     sex = sex_estimate(dets, {v: resolved[v][0] for v in views}, cameras, depths, stature)
     for v in views:
         place_ankles(dets[v], resolved[v][0], cameras[v], depths[v], stature)
-    return {v: label_detection(dets[v], depths[v] if use_depth else None, *resolved[v][:3], sex=sex) for v in views}
+    masks = {v: person_mask(dets[v], depths[v] if use_depth else None, resolved[v][0]) for v in views}
+    crotches = agreeing_crotches(masks, {v: resolved[v][0] for v in views})
+    return {v: label_detection(dets[v], depths[v] if use_depth else None, *resolved[v][:3], sex=sex, mask=masks[v],
+                               crotch=crotches[v]) for v in views}
 
 
 #: The joints :func:`sex_estimate` lifts (:func:`bsv.frontend.sex.sex_measurements` takes them).

@@ -194,6 +194,18 @@ class SegmentParams:
     armpit_sex_slope: float = 0.0
     #: How far above the armpit the shoulder line decides, as a fraction of the shoulder-elbow length.
     armpit_reach: float = 1.0
+    #: Groin line from the crotch (None: the torso polygon alone draws the torso / thigh boundary). The crotch
+    #: is found in the mask (:func:`crotch_point`: the top of the background gap between the legs; both views
+    #: together: :func:`agreeing_crotches`); on each side of it, within ``groin_reach`` of the hip-knee length
+    #: above and below it, a torso or thigh pixel above the line through the crotch is torso and one below it
+    #: thigh. The line rises outward (away from the midline) by this many degrees. (Unlike the shoulder's, the
+    #: true line's lean does not follow the pose or the sex usefully: fitted on them, benchmarks/learn_cut_lines.py
+    #: leaves a larger residual left out than the lean's own scatter.)
+    groin_angle: float | None = None
+    #: The groin line moved up (towards the torso, a parallel shift) by this fraction of the hip-knee length.
+    groin_offset: float = 0.0
+    #: How far above and below the crotch the groin line decides, as a fraction of the hip-knee length.
+    groin_reach: float = 0.8
     #: Shin / foot line through each ankle, moved down by this fraction of the shin length.
     ankle_shift: float = 0.03
     #: Ankle landmark height, as a fraction of the stature (0: MediaPipe's own ankle). Both views together
@@ -259,6 +271,15 @@ class SegmentParams:
         if not (0.0 < self.armpit_reach <= 2.0):
             raise SegmentationError(f"armpit_reach must lie in (0, 2] (a fraction of the shoulder-elbow length), got "
                                     f"{self.armpit_reach!r}")
+        if self.groin_angle is not None and not (-10.0 <= self.groin_angle <= 80.0):
+            raise SegmentationError(f"groin_angle must lie in [-10, 80] degrees or be None (the torso polygon "
+                                    f"alone), got {self.groin_angle!r}")
+        if not (-0.2 <= self.groin_offset <= 0.2):
+            raise SegmentationError(f"groin_offset must lie in [-0.2, 0.2] (a fraction of the hip-knee length), got "
+                                    f"{self.groin_offset!r}")
+        if not (0.0 < self.groin_reach <= 2.0):
+            raise SegmentationError(f"groin_reach must lie in (0, 2] (a fraction of the hip-knee length), got "
+                                    f"{self.groin_reach!r}")
         if not (0.0 <= self.limb_fill_width <= 1.0) or self.limb_fill_band_m <= 0:
             raise SegmentationError(f"limb_fill_width must lie in [0, 1] (got {self.limb_fill_width!r}) and "
                                     f"limb_fill_band_m must be positive (got {self.limb_fill_band_m!r})")
@@ -294,19 +315,21 @@ class SegmentParams:
 #: the sex too, the eight limbs' mean 2.62 / 2.60 -> 2.23 / 2.28 %, the torso 1.61 -> 1.16 %.
 #: The shoulder line is drawn from the armpit since round 2 session 22 (``armpit_angle``, ``armpit_arm_slope``,
 #: ``armpit_sex_slope``: the true boundary's lean through the armpit fitted on the rig's true labels of seeds 1,
-#: 3, 5, 7 by benchmarks/learn_armpit_line.py, the angle then raised by 2.5 deg, where the upper arms of seeds 1
+#: 3, 5, 7 by benchmarks/learn_cut_lines.py, the angle then raised by 2.5 deg, where the upper arms of seeds 1
 #: and 3 came out unbiased), and the elbow lines moved 0.012 of the forearm's length further out (front 0 ->
 #: 0.012, back 0.01 -> 0.022: with the shoulder right the forearms came out 1.5 % large; one step, sized on
 #: seeds 1 and 3): judged on seeds 0, 2, 4, 6, the upper arms' mean RVE 2.28 -> 1.91 %, the eight limbs' mean
 #: 2.13 / 2.22 -> 2.04 / 2.13 % (benchmarks/BENCH.md, round 2 session 22).
 DEFAULT_PARAMS: dict[str, SegmentParams] = {
     "front": SegmentParams(shoulder_inset=0.15, hip_widen=1.5, hip_raise=0.425, torso_weight=0.95, elbow_shift=0.012,
-                           knee_shift=0.105, ankle_height=0.056, arm_girth_power=0.5, arm_girth_ref=0.0323, knee_shift_sex=0.018,
-                           hip_raise_sex=0.025, armpit_angle=14.3, armpit_arm_slope=-0.585, armpit_sex_slope=-2.0),
+                           knee_shift=0.095, ankle_height=0.056, arm_girth_power=0.5, arm_girth_ref=0.0323, knee_shift_sex=0.018,
+                           hip_raise_sex=0.025, armpit_angle=14.3, armpit_arm_slope=-0.585, armpit_sex_slope=-2.0,
+                           groin_angle=32.8, groin_offset=0.04),
     "back": SegmentParams(neck_fraction=0.5, shoulder_inset=0.05, hip_widen=1.3, hip_raise=0.3, crotch_drop=0.2,
-                          torso_weight=0.95, elbow_shift=0.022, wrist_shift=0.06, knee_shift=0.06, ankle_shift=0.09,
+                          torso_weight=0.95, elbow_shift=0.022, wrist_shift=0.06, knee_shift=0.05, ankle_shift=0.09,
                           ankle_height=0.062, arm_girth_power=0.5, arm_girth_ref=0.0312, knee_shift_sex=0.018,
-                          hip_raise_sex=0.025, armpit_angle=5.8, armpit_arm_slope=-0.66, armpit_sex_slope=-4.4),
+                          hip_raise_sex=0.025, armpit_angle=5.8, armpit_arm_slope=-0.66, armpit_sex_slope=-4.4,
+                          groin_angle=16.1, groin_offset=0.04),
 }
 
 
@@ -775,13 +798,10 @@ def resolve_landmarks(det: Detection, from_other: dict[str, np.ndarray] | None =
     return pose, sources, warnings, missing
 
 
-def label_detection(det: Detection, depth: np.ndarray | None = None, pose: np.ndarray | None = None,
-                    sources: dict[str, str] | None = None, warnings: Sequence[str] = (),
-                    sex: SexEstimate | None = None) -> Segmentation:
-    """The second half of :func:`segment_image`: the person mask (refined by ``depth``, metres, if given)
-    and its per-pixel labels from the resolved ``pose`` (default: the detection's own), drawn for ``sex``
-    (default: the detection's ``sex_score``)."""
-    prm = det.params if sex is None else dataclasses.replace(det.params, sex_score=sex.score)
+def person_mask(det: Detection, depth: np.ndarray | None = None, pose: np.ndarray | None = None) -> np.ndarray:
+    """The person mask of a detection: MediaPipe's soft mask thresholded, refined by ``depth`` (metres) if given
+    and its limbs completed from it along the bones of ``pose`` (default: the detection's own)."""
+    prm = det.params
     pose = det.pose if pose is None else pose
     if det.mask_soft is None:
         raise PersonNotFoundError(f"MediaPipe returned no person mask for the {det.view} image")
@@ -792,8 +812,28 @@ def label_detection(det: Detection, depth: np.ndarray | None = None, pose: np.nd
             mask = complete_limbs_with_depth(mask, depth, pose, prm.limb_fill_width, prm.limb_fill_band_m)
     if mask.sum() < 100:
         raise PersonNotFoundError(f"the person mask of the {det.view} image is (nearly) empty ({int(mask.sum())} px)")
+    return mask
+
+
+def label_detection(det: Detection, depth: np.ndarray | None = None, pose: np.ndarray | None = None,
+                    sources: dict[str, str] | None = None, warnings: Sequence[str] = (),
+                    sex: SexEstimate | None = None, mask: np.ndarray | None = None,
+                    crotch: np.ndarray | None = None) -> Segmentation:
+    """The second half of :func:`segment_image`: the person mask (:func:`person_mask`, unless given as ``mask``)
+    and its per-pixel labels from the resolved ``pose`` (default: the detection's own), drawn for ``sex``
+    (default: the detection's ``sex_score``) and the ``crotch`` (default: found in the mask).
+
+    Without ``depth`` the groin line is not drawn (the torso polygon stands): MediaPipe's own mask closes
+    the top of the gap between the legs, and puts the crotch 19-45 px low on the rig's renders, where the
+    depth-refined mask has it to the pixel."""
+    prm = det.params if sex is None else dataclasses.replace(det.params, sex_score=sex.score)
+    if depth is None and prm.groin_angle is not None:
+        prm = dataclasses.replace(prm, groin_angle=None)
+    pose = det.pose if pose is None else pose
+    if mask is None:
+        mask = person_mask(det, depth, pose)
     hands = det.hands
-    labels = label_pixels(mask, pose, hands, prm)
+    labels = label_pixels(mask, pose, hands, prm, crotch=crotch)
     return Segmentation(labels=labels, mask=mask, landmarks=_landmarks71(pose, hands), view=det.view,
                         hands_found=(hands[0] is not None, hands[1] is not None), swapped=det.swapped, pose=pose,
                         sources=dict(sources or {}), warnings=(*det.notes, *warnings), pose_spread=det.spread,
@@ -864,9 +904,12 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / n if n > 1e-9 else np.array([0.0, 1.0])
 
 
-def label_pixels(mask: np.ndarray, pose: np.ndarray, hands: list, params: SegmentParams = SegmentParams()) -> np.ndarray:
+def label_pixels(mask: np.ndarray, pose: np.ndarray, hands: list, params: SegmentParams = SegmentParams(),
+                 crotch: np.ndarray | None = None) -> np.ndarray:
     """(H, W) uint8 segment ids of the mask pixels from subject-oriented pose landmarks (33, >=2 pixels)
-    and hands (left, right: (21, 2) or None). See the module notes for the rules."""
+    and hands (left, right: (21, 2) or None). ``crotch`` (pixels, x y) places the groin line (default:
+    :func:`crotch_point` in the mask; :func:`agreeing_crotches` gives it from both views). See the module
+    notes for the rules."""
     h, w = mask.shape
     ys, xs = np.nonzero(mask)
     labels = np.zeros((h, w), dtype=np.uint8)
@@ -899,16 +942,16 @@ def label_pixels(mask: np.ndarray, pose: np.ndarray, hands: list, params: Segmen
         bones["foot"] += [(ank, heel), (heel, toe_x), (ank, toe_x)]
     inset = params.shoulder_inset * sw
     half_hip = (P["left_hip"] - P["right_hip"]) / 2
-    crotch = _crotch(mask, h_mid, k_mid) if params.crotch_from_mask else None
-    crotch = (h_mid + down * params.crotch_drop * thigh_len if crotch is None
-              else crotch + down * params.crotch_offset * thigh_len)
+    fork = _crotch(mask, h_mid, k_mid) if params.crotch_from_mask else None  # the polygon's bottom corner
+    fork = (h_mid + down * params.crotch_drop * thigh_len if fork is None
+            else fork + down * params.crotch_offset * thigh_len)
     sex = params.sex_score or 0.0  # bsv.frontend.sex: +1 female ... -1 male
     hip_raise = params.hip_raise - sex * params.hip_raise_sex
-    hip_level = crotch - down * hip_raise * thigh_len - h_mid  # the outer hips, relative to the mid-hip
+    hip_level = fork - down * hip_raise * thigh_len - h_mid  # the outer hips, relative to the mid-hip
     hip_level = down * float(hip_level @ down)
     poly = np.array([
         P["right_shoulder"] + lat * inset, P["left_shoulder"] - lat * inset,
-        h_mid + params.hip_widen * half_hip + hip_level, crotch, h_mid - params.hip_widen * half_hip + hip_level,
+        h_mid + params.hip_widen * half_hip + hip_level, fork, h_mid - params.hip_widen * half_hip + hip_level,
     ])
     groups = ["torso", "arm", "hand", "leg", "foot"]
     arm = _arm_dist_by_girth(mask, p, P, params) if params.arm_girth_power > 0 else _bones_dist(p, bones["arm"])
@@ -946,6 +989,10 @@ def label_pixels(mask: np.ndarray, pose: np.ndarray, hands: list, params: Segmen
         for k, side, sfx in ((0, "left", "_l"), (1, "right", "_r")):
             _shoulder_line(out, p, left if k == 0 else ~left, mask, P, side, sfx, h_mid, s_mid, down,
                            lat if k == 0 else -lat, sex, params)
+
+    # --- 3c. the groin: a line from the crotch out to each hip (``groin_angle``; the torso polygon where none)
+    if params.groin_angle is not None:
+        _groin_line(out, p, left, mask, P, h_mid, down, lat, thigh_len, params, crotch)
 
     # --- 4. head: beyond the neck line and near the head axis
     ears = (P["left_ear"] + P["right_ear"]) / 2
@@ -985,7 +1032,7 @@ def body_axes(P: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.n
 def arm_angle_deg(shoulder: np.ndarray, elbow: np.ndarray, down: np.ndarray, outward: np.ndarray) -> float:
     """An arm's angle below the horizontal in an image (degrees; the shoulder-elbow bone against the body's
     ``down`` and ``outward`` axes of :func:`body_axes`): the angle :attr:`SegmentParams.armpit_arm_slope`
-    is per degree of, and benchmarks/learn_armpit_line.py fits it against."""
+    is per degree of, and benchmarks/learn_cut_lines.py fits it against."""
     bone = np.asarray(elbow, dtype=np.float64) - np.asarray(shoulder, dtype=np.float64)
     return math.degrees(math.atan2(float(bone @ down), abs(float(bone @ outward))))
 
@@ -994,24 +1041,18 @@ def arm_angle_deg(shoulder: np.ndarray, elbow: np.ndarray, down: np.ndarray, out
 ARMPIT_REF_ARM_DEG = 40.0
 
 
-def armpit_point(mask: np.ndarray, elbow: np.ndarray, centre_x: float, top_y: float, bottom_y: float) -> np.ndarray | None:
-    """One side's armpit in a person mask (pixels, x y), or None when the arm hangs against the torso.
-
-    The box from ``centre_x`` (the body's midline) to the elbow's column, between the image rows ``top_y``
-    (the shoulders) and ``bottom_y`` (the hips), holds the background between the torso and the arm; of its
-    background regions (4-connected), those that open downward (touch the box's bottom row) are the gap
-    under the arm, and the armpit is the middle of the highest such region's top row. A hole in the mask
-    (a depth drop-out inside the torso) does not open downward and is not taken; a region that reaches the
-    box's top row (no arm over it) gives None. Only the mask decides: a shoulder landmark placed off the body
-    does not move the armpit."""
+def _gap_top(mask: np.ndarray, x0: float, x1: float, top_y: float, bottom_y: float) -> np.ndarray | None:
+    """The top of the background gap that opens downward in the box of a person mask between the columns
+    ``x0``, ``x1`` and the rows ``top_y``, ``bottom_y`` (pixels, x y), or None: of the box's background regions
+    (4-connected), those that touch its bottom row, the highest one's top row's middle. A hole in the mask
+    does not open downward and is not taken; a region reaching the box's top row gives None."""
     import cv2
 
-    el = np.asarray(elbow, dtype=np.float64)
-    if not (np.all(np.isfinite(el)) and math.isfinite(centre_x) and math.isfinite(top_y) and math.isfinite(bottom_y)):
+    if not all(math.isfinite(v) for v in (x0, x1, top_y, bottom_y)):
         return None
     h, w = mask.shape
     y0, y1 = int(max(0, math.floor(top_y))), int(min(h - 1, math.ceil(bottom_y)))
-    xa, xb = sorted((int(np.clip(round(centre_x), 0, w - 1)), int(np.clip(round(float(el[0])), 0, w - 1))))
+    xa, xb = sorted((int(np.clip(round(x0), 0, w - 1)), int(np.clip(round(x1), 0, w - 1))))
     if y1 - y0 < 3 or xb - xa < 3:
         return None
     background = np.ascontiguousarray(~np.asarray(mask[y0:y1 + 1, xa:xb + 1], dtype=bool), dtype=np.uint8)
@@ -1027,6 +1068,91 @@ def armpit_point(mask: np.ndarray, elbow: np.ndarray, centre_x: float, top_y: fl
     if best is None or best[0] == 0:
         return None
     return np.array([xa + best[1], y0 + best[0]], dtype=np.float64)
+
+
+def armpit_point(mask: np.ndarray, elbow: np.ndarray, centre_x: float, top_y: float, bottom_y: float) -> np.ndarray | None:
+    """One side's armpit in a person mask (pixels, x y), or None when the arm hangs against the torso.
+
+    The box from ``centre_x`` (the body's midline) to the elbow's column, between the image rows ``top_y``
+    (the shoulders) and ``bottom_y`` (the hips), holds the background between the torso and the arm; of its
+    background regions (4-connected), those that open downward (touch the box's bottom row) are the gap
+    under the arm, and the armpit is the middle of the highest such region's top row. A hole in the mask
+    (a depth drop-out inside the torso) does not open downward and is not taken; a region that reaches the
+    box's top row (no arm over it) gives None. Only the mask decides: a shoulder landmark placed off the body
+    does not move the armpit."""
+    el = np.asarray(elbow, dtype=np.float64)
+    if not np.all(np.isfinite(el)):
+        return None
+    return _gap_top(mask, centre_x, float(el[0]), top_y, bottom_y)
+
+
+def crotch_point(mask: np.ndarray, left_knee: np.ndarray, right_knee: np.ndarray, top_y: float) -> np.ndarray | None:
+    """The crotch in a person mask (pixels, x y), or None when the legs touch down to the knees.
+
+    Like :func:`armpit_point`, in the box between the knees' columns from the row ``top_y`` (the hips) down to
+    the lower knee: the top of the background gap between the legs that opens downward. A hole in the mask
+    between the thighs does not open downward and is not taken."""
+    lk, rk = np.asarray(left_knee, dtype=np.float64), np.asarray(right_knee, dtype=np.float64)
+    if not (np.all(np.isfinite(lk)) and np.all(np.isfinite(rk))):
+        return None
+    return _gap_top(mask, float(lk[0]), float(rk[0]), top_y, max(float(lk[1]), float(rk[1])))
+
+
+#: :func:`agreeing_crotches`: the two views' crotches disagree when their depths below the hips, as fractions
+#: of the hip-knee distance in each image, differ by more than this (on the rig's true silhouettes the two
+#: views differ by sd 0.03 of it, at most 0.058, with the landmarks' noise) ...
+CROTCH_VIEWS_DISAGREE = 0.07
+#: ... and a gap whose top lies further below the hips than this fraction of the hip-knee distance is not the
+#: crotch (the thighs touch above it; the deepest true crotch of the cohort lies at 0.41).
+CROTCH_MAX_DEPTH = 0.55
+
+
+def _crotch_depth(pose: np.ndarray, c: np.ndarray) -> tuple[float, np.ndarray, np.ndarray, float]:
+    """A crotch's depth below the hips' midpoint as a fraction of the hip-knee distance along the body axis,
+    with the hips' midpoint, the axis and that distance (pixels)."""
+    P = {n: pose[i, :2].astype(np.float64) for i, n in enumerate(POSE_NAMES)}
+    _, h_mid, down, _ = body_axes(P)
+    span = float(((P["left_knee"] + P["right_knee"]) / 2 - h_mid) @ down)
+    return (float((c - h_mid) @ down) / span if span > 1.0 else math.nan), h_mid, down, span
+
+
+def agreeing_crotches(masks: Mapping[str, np.ndarray], poses: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | None]:
+    """Each view's crotch (:func:`crotch_point` in its person mask; ``poses``: the subject-oriented pose
+    landmarks), made to agree across the views.
+
+    A gap between the legs can only show lower than the crotch, never higher: where the thighs nearly touch,
+    a noisy depth camera fills the narrow top of the gap (an L515 front view put one woman's crotch 25 px,
+    0.17 of the hip-knee distance, low; the back view had it right). So when the two views' depths below the
+    hips (fractions of each view's hip-knee distance) differ by more than :data:`CROTCH_VIEWS_DISAGREE`, the
+    lower crotch moves up its own body axis to the higher one's depth. A gap deeper than
+    :data:`CROTCH_MAX_DEPTH` in both views is none (None: the torso polygon stands); one view's such gap, or
+    no gap at all in one view (the legs touching), takes the other view's depth, on its own body axis."""
+    found: dict[str, tuple[float, np.ndarray, np.ndarray, np.ndarray, float]] = {}
+    out: dict[str, np.ndarray | None] = {}
+    for v, mask in masks.items():
+        pose = poses[v]
+        P = {n: pose[i, :2].astype(np.float64) for i, n in enumerate(POSE_NAMES)}
+        _, h_mid, _, _ = body_axes(P)
+        c = crotch_point(mask, P["left_knee"], P["right_knee"], float(h_mid[1]))
+        out[v] = c
+        if c is not None:
+            t, h_mid, down, span = _crotch_depth(pose, c)
+            if math.isfinite(t):
+                found[v] = (t, c, h_mid, down, span)
+    if not found:
+        return out
+    best = min(t for t, *_ in found.values())
+    if best > CROTCH_MAX_DEPTH:
+        return dict.fromkeys(out)
+    for v in out:
+        if v in found:
+            t, c, _, down, span = found[v]
+            if t - best > CROTCH_VIEWS_DISAGREE or t > CROTCH_MAX_DEPTH:
+                out[v] = c - down * (t - best) * span
+        else:
+            _, h_mid, down, span = _crotch_depth(poses[v], np.zeros(2))
+            out[v] = h_mid + down * best * span if span > 1.0 else None
+    return out
 
 
 def _shoulder_line(out: np.ndarray, p: np.ndarray, on: np.ndarray, mask: np.ndarray, P: Mapping[str, np.ndarray],
@@ -1052,6 +1178,29 @@ def _shoulder_line(out: np.ndarray, p: np.ndarray, on: np.ndarray, mask: np.ndar
     sel = on & (height > 0) & (height < params.armpit_reach * length) & ((out == torso) | (out == upper))
     arm_side = across > -height * math.tan(math.radians(theta))
     out[sel] = np.where(arm_side[sel], upper, torso)
+
+
+def _groin_line(out: np.ndarray, p: np.ndarray, left: np.ndarray, mask: np.ndarray, P: Mapping[str, np.ndarray],
+                h_mid: np.ndarray, down: np.ndarray, lat: np.ndarray, thigh_len: float, params: SegmentParams,
+                crotch: np.ndarray | None) -> None:
+    """:func:`label_pixels`' step 3c (in place on ``out``): on each side of the crotch (``crotch``, or found in
+    the mask), the torso and that side's thigh pixels take the side of the line through it
+    (:attr:`SegmentParams.groin_angle`)."""
+    if params.groin_angle is None or not math.isfinite(thigh_len) or thigh_len < 4.0:
+        return
+    c = crotch_point(mask, P["left_knee"], P["right_knee"], float(h_mid[1])) if crotch is None else crotch
+    if c is None:  # the legs together: the torso polygon stands
+        return
+    rel = p - c
+    height = -(rel @ down) - params.groin_offset * thigh_len
+    reach = np.abs(height) < params.groin_reach * thigh_len
+    rise = math.tan(math.radians(params.groin_angle))
+    for sfx, outward, on in (("_l", lat, left), ("_r", -lat, ~left)):
+        across = rel @ outward
+        torso, thigh = SEGMENT_IDS["torso"], SEGMENT_IDS["thigh" + sfx]
+        sel = on & reach & (across >= 0) & ((out == torso) | (out == thigh))
+        above = height > across * rise
+        out[sel] = np.where(above[sel], torso, thigh)
 
 
 def upper_arm_half_width(mask: np.ndarray, shoulder: np.ndarray, elbow: np.ndarray) -> float | None:
@@ -1300,6 +1449,8 @@ __all__ = [
     "ARMPIT_REF_ARM_DEG",
     "ARM_MAX_WIDTH",
     "ARM_SECTIONS",
+    "CROTCH_MAX_DEPTH",
+    "CROTCH_VIEWS_DISAGREE",
     "DEFAULT_PARAMS",
     "HAND_NAMES",
     "LANDMARK_NAMES",
@@ -1311,14 +1462,17 @@ __all__ = [
     "Detection",
     "SegmentParams",
     "Segmentation",
+    "agreeing_crotches",
     "arm_angle_deg",
     "armpit_point",
     "body_axes",
+    "crotch_point",
     "detect",
     "label_accuracy",
     "label_detection",
     "label_pixels",
     "missing_error",
+    "person_mask",
     "refine_mask_with_depth",
     "resolve_landmarks",
     "run_holistic",

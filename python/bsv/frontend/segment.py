@@ -6,7 +6,7 @@ labels are derived geometrically (all vectorised over the mask pixels):
 
 1. every mask pixel goes to the nearest limb "bone" (shoulder-elbow-wrist, the hand skeleton,
    hip-knee-ankle, ankle-heel-toe), unless the torso polygon is nearer (scaled by ``torso_weight``): the
-   shoulders, the outer hips and the crotch (the top of the gap between the legs in the mask); the upper
+   shoulders, the outer hips and a point below the mid-hip; the upper
    arms' distances are scaled by how thin the arms are for the body (``arm_girth_power``,
    :func:`upper_arm_half_width`), so thick arms keep the pixels beside their bones that thin ones cede;
 2. the paper's correction: the medial line (through the mid-hips, along the body axis) decides left
@@ -14,6 +14,9 @@ labels are derived geometrically (all vectorised over the mask pixels):
    line through the knees (thigh/shin, never mixed), lines at each ankle (shin/foot), elbow and wrist;
    above each armpit (:func:`armpit_point`, found in the mask) a line through it, leaning towards the midline
    by an angle that follows the arm's angle and the sex (``armpit_angle``), decides torso against upper arm;
+   on each side of the crotch (:func:`crotch_point`, the top of the gap between the legs in the depth-refined
+   mask; both views made to agree by :func:`agreeing_crotches`) a line through it rising outward
+   (``groin_angle``) decides torso against thigh;
 3. torso pixels beyond the neck line (between the shoulders' midpoint and the ears) and near the head
    axis are the head.
 
@@ -320,6 +323,15 @@ class SegmentParams:
 #: 0.012, back 0.01 -> 0.022: with the shoulder right the forearms came out 1.5 % large; one step, sized on
 #: seeds 1 and 3): judged on seeds 0, 2, 4, 6, the upper arms' mean RVE 2.28 -> 1.91 %, the eight limbs' mean
 #: 2.13 / 2.22 -> 2.04 / 2.13 % (benchmarks/BENCH.md, round 2 session 22).
+#: The torso / thigh boundary is drawn from the crotch since round 2 session 23 (``groin_angle``: the true
+#: boundary's rise outward of the crotch on the rig's true labels, 32.8 +- 2.6 deg front, 16.1 +- 4.2 deg back,
+#: seeds 1, 3, 5, 7, benchmarks/learn_cut_lines.py; neither the thigh's angle nor the sex predicts it left
+#: out): drawn there, the thighs' mislabelled pixels fell by 60-67 % but the thighs came out 1.3 % small (seeds 1
+#: and 3), as exact labels had; ``groin_offset`` 0.04 (tried 0.008, 0.016, 0.04, and raising the angle by 5 and
+#: 10 deg instead) removes that, and the knee lines moved 0.01 of the shin length up (front 0.105 -> 0.095, back
+#: 0.06 -> 0.05: the shins had gone 0.4 % smaller with the groin line). Judged on seeds 0, 2, 4, 6: the thighs'
+#: mean RVE 2.28-2.41 -> 2.03-2.06 %, the torso's 1.15 -> 0.93-1.02 %, the eight limbs' mean 2.04 / 2.13 ->
+#: 1.95 / 1.96 % (benchmarks/BENCH.md, round 2 session 23).
 DEFAULT_PARAMS: dict[str, SegmentParams] = {
     "front": SegmentParams(shoulder_inset=0.15, hip_widen=1.5, hip_raise=0.425, torso_weight=0.95, elbow_shift=0.012,
                            knee_shift=0.095, ankle_height=0.056, arm_girth_power=0.5, arm_girth_ref=0.0323, knee_shift_sex=0.018,

@@ -512,9 +512,9 @@ def test_the_two_views_crotches_agree():
     c = seg.agreeing_crotches({"front": open_, "back": together}, {"front": pose, "back": pose})
     assert c["back"] is not None and abs(c["back"][1] - 201.0) <= 1.5 and abs(c["back"][0] - 200.0) <= 1.0, c
     deep = _drawn_legs()
-    deep[200:320, 185:215] = True  # both views' gaps start at depth 0.69: not a crotch
-    assert seg.agreeing_crotches({"front": deep, "back": deep}, {"front": pose, "back": pose}) == {
-        "front": None, "back": None}
+    deep[200:320, 185:215] = True  # both views' gaps start at depth 0.69: not a crotch, and no groin line
+    none = seg.agreeing_crotches({"front": deep, "back": deep}, {"front": pose, "back": pose})
+    assert all(np.isnan(c).all() for c in none.values()), none
 
 
 def test_the_groin_line_from_the_crotch_labels_the_hips_closer_to_the_truth(scans):
@@ -545,6 +545,8 @@ def test_the_groin_line_from_the_crotch_labels_the_hips_closer_to_the_truth(scan
             wrong[k] += int((both & np.isin(lab, [torso, *thighs]) & (lab != truth)).sum())
         others = ~np.isin(labels["polygon"], [*thighs, torso])
         assert (labels["line"][others] == labels["polygon"][others]).all()
+        no_crotch = seg.label_pixels(s.mask, s.pose, [None, None], prm, crotch=np.full(2, np.nan))
+        assert (no_crotch == labels["polygon"]).all()  # agreeing_crotches' "no crotch": no groin line
         higher = seg.label_pixels(s.mask, s.pose, [None, None],
                                   dataclasses.replace(prm, groin_offset=prm.groin_offset + 0.05))
         assert np.isin(higher, thighs).sum() > np.isin(labels["line"], thighs).sum()

@@ -920,8 +920,8 @@ def label_pixels(mask: np.ndarray, pose: np.ndarray, hands: list, params: Segmen
                  crotch: np.ndarray | None = None) -> np.ndarray:
     """(H, W) uint8 segment ids of the mask pixels from subject-oriented pose landmarks (33, >=2 pixels)
     and hands (left, right: (21, 2) or None). ``crotch`` (pixels, x y) places the groin line (default:
-    :func:`crotch_point` in the mask; :func:`agreeing_crotches` gives it from both views). See the module
-    notes for the rules."""
+    :func:`crotch_point` in the mask; :func:`agreeing_crotches` gives it from both views; NaN: none, the torso
+    polygon stands). See the module notes for the rules."""
     h, w = mask.shape
     ys, xs = np.nonzero(mask)
     labels = np.zeros((h, w), dtype=np.uint8)
@@ -1137,8 +1137,10 @@ def agreeing_crotches(masks: Mapping[str, np.ndarray], poses: Mapping[str, np.nd
     0.17 of the hip-knee distance, low; the back view had it right). So when the two views' depths below the
     hips (fractions of each view's hip-knee distance) differ by more than :data:`CROTCH_VIEWS_DISAGREE`, the
     lower crotch moves up its own body axis to the higher one's depth. A gap deeper than
-    :data:`CROTCH_MAX_DEPTH` in both views is none (None: the torso polygon stands); one view's such gap, or
-    no gap at all in one view (the legs touching), takes the other view's depth, on its own body axis."""
+    :data:`CROTCH_MAX_DEPTH` in both views is none ((NaN, NaN) for both: no groin line is drawn, the torso
+    polygon stands); one view's such gap, or no gap at all in one view (the legs touching), takes the other
+    view's depth, on its own body axis. None: neither view shows a gap (:func:`label_pixels` then finds none
+    either)."""
     found: dict[str, tuple[float, np.ndarray, np.ndarray, np.ndarray, float]] = {}
     out: dict[str, np.ndarray | None] = {}
     for v, mask in masks.items():
@@ -1155,7 +1157,7 @@ def agreeing_crotches(masks: Mapping[str, np.ndarray], poses: Mapping[str, np.nd
         return out
     best = min(t for t, *_ in found.values())
     if best > CROTCH_MAX_DEPTH:
-        return dict.fromkeys(out)
+        return {v: np.full(2, np.nan) for v in out}
     for v in out:
         if v in found:
             t, c, _, down, span = found[v]
@@ -1201,7 +1203,7 @@ def _groin_line(out: np.ndarray, p: np.ndarray, left: np.ndarray, mask: np.ndarr
     if params.groin_angle is None or not math.isfinite(thigh_len) or thigh_len < 4.0:
         return
     c = crotch_point(mask, P["left_knee"], P["right_knee"], float(h_mid[1])) if crotch is None else crotch
-    if c is None:  # the legs together: the torso polygon stands
+    if c is None or not np.all(np.isfinite(c)):  # the legs together: the torso polygon stands
         return
     rel = p - c
     height = -(rel @ down) - params.groin_offset * thigh_len

@@ -324,8 +324,9 @@ class SegmentParams:
 #: seeds 1 and 3): judged on seeds 0, 2, 4, 6, the upper arms' mean RVE 2.28 -> 1.91 %, the eight limbs' mean
 #: 2.13 / 2.22 -> 2.04 / 2.13 % (benchmarks/BENCH.md, round 2 session 22).
 #: The torso / thigh boundary is drawn from the crotch since round 2 session 23 (``groin_angle``: the true
-#: boundary's rise outward of the crotch on the rig's true labels, 32.8 +- 2.6 deg front, 16.1 +- 4.2 deg back,
-#: seeds 1, 3, 5, 7, benchmarks/learn_cut_lines.py; neither the thigh's angle nor the sex predicts it left
+#: boundary's rise outward of the crotch on the rig's true labels, 32.8 +- 2.6 deg front, 16.1 +- 4.2 deg back
+#: on 29 captures of seeds 1, 3, 5, 7; benchmarks/learn_cut_lines.py on all 40 gives 33.0 +- 3.0 and 16.8 +- 5.1,
+#: a line 1 px away at most; neither the thigh's angle nor the sex predicts it left
 #: out): drawn there, the thighs' mislabelled pixels fell by 60-67 % but the thighs came out 1.3 % small (seeds 1
 #: and 3), as exact labels had; ``groin_offset`` 0.04 (tried 0.008, 0.016, 0.04, and raising the angle by 5 and
 #: 10 deg instead) removes that, and the knee lines moved 0.01 of the shin length up (front 0.105 -> 0.095, back

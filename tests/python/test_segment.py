@@ -421,6 +421,20 @@ def test_the_armpit_is_the_top_of_the_gap_under_the_arm():
     assert seg.armpit_point(mask, np.array([np.nan, 200.0]), 200.0, 110.0, 390.0) is None  # no elbow
 
 
+def _cut_against_rule(s, truth: np.ndarray, prm, off: dict, ids: list[int], wrong: dict[str, int]) -> tuple[np.ndarray, np.ndarray]:
+    """A segmentation's mask and pose labelled with ``prm`` (its cut line) and with the fields ``off`` set (the rule
+    alone): adds to ``wrong`` ("rule", "line") how many pixels of the true ``ids`` each labels as another of
+    ``ids``, checks that only ``ids`` trade pixels, and returns both label images (rule, line)."""
+    rule = seg.label_pixels(s.mask, s.pose, [None, None], dataclasses.replace(prm, **off))
+    line = seg.label_pixels(s.mask, s.pose, [None, None], prm)
+    both = np.isin(truth, ids)
+    for k, lab in (("rule", rule), ("line", line)):
+        wrong[k] += int((both & np.isin(lab, ids) & (lab != truth)).sum())
+    others = ~np.isin(rule, ids)
+    assert (line[others] == rule[others]).all()
+    return rule, line
+
+
 def test_the_shoulder_line_from_the_armpit_labels_the_shoulders_closer_to_the_truth(scans):
     """On the rig's renders (the default body and two cohort subjects, both views) the shoulder line from
     the armpit (the defaults) mislabels fewer of the true torso's and upper arms' pixels than the
@@ -432,16 +446,10 @@ def test_the_shoulder_line_from_the_armpit_labels_the_shoulders_closer_to_the_tr
     for (_, view), (_, s, truth) in scans.items():
         prm = seg.DEFAULT_PARAMS[view]
         assert prm.armpit_angle is not None
-        labels = {"rule": seg.label_pixels(s.mask, s.pose, [None, None], dataclasses.replace(prm, armpit_angle=None)),
-                  "line": seg.label_pixels(s.mask, s.pose, [None, None], prm)}
-        both = np.isin(truth, [torso, *ua])
-        for k, lab in labels.items():
-            wrong[k] += int((both & np.isin(lab, [torso, *ua]) & (lab != truth)).sum())
-        others = ~np.isin(labels["rule"], [*ua, torso])
-        assert (labels["line"][others] == labels["rule"][others]).all()
+        _, line = _cut_against_rule(s, truth, prm, {"armpit_angle": None}, [torso, *ua], wrong)
         leaning = seg.label_pixels(s.mask, s.pose, [None, None],
                                    dataclasses.replace(prm, armpit_angle=prm.armpit_angle + 10.0))
-        assert np.isin(leaning, ua).sum() > np.isin(labels["line"], ua).sum()
+        assert np.isin(leaning, ua).sum() > np.isin(line, ua).sum()
     assert wrong["line"] < 0.8 * wrong["rule"], wrong
 
 
@@ -525,7 +533,7 @@ def test_the_groin_line_from_the_crotch_labels_the_hips_closer_to_the_truth(scan
     the thighs more pixels. Segmented without depth, the torso polygon stands."""
     thighs = [seg.SEGMENT_IDS["thigh_l"], seg.SEGMENT_IDS["thigh_r"]]
     torso = seg.SEGMENT_IDS["torso"]
-    wrong = {"polygon": 0, "line": 0}
+    wrong = {"rule": 0, "line": 0}
     for (_, view), (folder, colour_only, truth) in scans.items():
         if view == "front":
             with_depth = seg.segment_capture(folder, write=False)  # the crotch is found in the depth's mask
@@ -538,16 +546,10 @@ def test_the_groin_line_from_the_crotch_labels_the_hips_closer_to_the_truth(scan
         assert (colour_only.labels == polygon).all()
         prm = dataclasses.replace(seg.DEFAULT_PARAMS[view], groin_offset=0.0)
         assert prm.groin_angle is not None
-        labels = {"polygon": seg.label_pixels(s.mask, s.pose, [None, None], dataclasses.replace(prm, groin_angle=None)),
-                  "line": seg.label_pixels(s.mask, s.pose, [None, None], prm)}
-        both = np.isin(truth, [torso, *thighs])
-        for k, lab in labels.items():
-            wrong[k] += int((both & np.isin(lab, [torso, *thighs]) & (lab != truth)).sum())
-        others = ~np.isin(labels["polygon"], [*thighs, torso])
-        assert (labels["line"][others] == labels["polygon"][others]).all()
+        rule, line = _cut_against_rule(s, truth, prm, {"groin_angle": None}, [torso, *thighs], wrong)
         no_crotch = seg.label_pixels(s.mask, s.pose, [None, None], prm, crotch=np.full(2, np.nan))
-        assert (no_crotch == labels["polygon"]).all()  # agreeing_crotches' "no crotch": no groin line
+        assert (no_crotch == rule).all()  # agreeing_crotches' "no crotch": no groin line
         higher = seg.label_pixels(s.mask, s.pose, [None, None],
                                   dataclasses.replace(prm, groin_offset=prm.groin_offset + 0.05))
-        assert np.isin(higher, thighs).sum() > np.isin(labels["line"], thighs).sum()
-    assert wrong["line"] < 0.6 * wrong["polygon"], wrong
+        assert np.isin(higher, thighs).sum() > np.isin(line, thighs).sum()
+    assert wrong["line"] < 0.6 * wrong["rule"], wrong

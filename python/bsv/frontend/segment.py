@@ -1120,15 +1120,6 @@ CROTCH_VIEWS_DISAGREE = 0.07
 CROTCH_MAX_DEPTH = 0.55
 
 
-def _crotch_depth(pose: np.ndarray, c: np.ndarray) -> tuple[float, np.ndarray, np.ndarray, float]:
-    """A crotch's depth below the hips' midpoint as a fraction of the hip-knee distance along the body axis,
-    with the hips' midpoint, the axis and that distance (pixels)."""
-    P = {n: pose[i, :2].astype(np.float64) for i, n in enumerate(POSE_NAMES)}
-    _, h_mid, down, _ = body_axes(P)
-    span = float(((P["left_knee"] + P["right_knee"]) / 2 - h_mid) @ down)
-    return (float((c - h_mid) @ down) / span if span > 1.0 else math.nan), h_mid, down, span
-
-
 def agreeing_crotches(masks: Mapping[str, np.ndarray], poses: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | None]:
     """Each view's crotch (:func:`crotch_point` in its person mask; ``poses``: the subject-oriented pose
     landmarks), made to agree across the views.
@@ -1142,30 +1133,28 @@ def agreeing_crotches(masks: Mapping[str, np.ndarray], poses: Mapping[str, np.nd
     polygon stands); one view's such gap, or no gap at all in one view (the legs touching), takes the other
     view's depth, on its own body axis. None: neither view shows a gap (:func:`label_pixels` then finds none
     either)."""
-    found: dict[str, tuple[float, np.ndarray, np.ndarray, np.ndarray, float]] = {}
+    axes: dict[str, tuple[np.ndarray, np.ndarray, float]] = {}  # per view: mid-hip, body axis, hip-knee span
+    depth: dict[str, float] = {}  # per view with a gap: its top's depth below the hips, a fraction of the span
     out: dict[str, np.ndarray | None] = {}
     for v, mask in masks.items():
-        pose = poses[v]
-        P = {n: pose[i, :2].astype(np.float64) for i, n in enumerate(POSE_NAMES)}
-        _, h_mid, _, _ = body_axes(P)
-        c = crotch_point(mask, P["left_knee"], P["right_knee"], float(h_mid[1]))
-        out[v] = c
-        if c is not None:
-            t, h_mid, down, span = _crotch_depth(pose, c)
-            if math.isfinite(t):
-                found[v] = (t, c, h_mid, down, span)
-    if not found:
+        P = {n: poses[v][i, :2].astype(np.float64) for i, n in enumerate(POSE_NAMES)}
+        _, h_mid, down, _ = body_axes(P)
+        span = float(((P["left_knee"] + P["right_knee"]) / 2 - h_mid) @ down)
+        axes[v] = (h_mid, down, span)
+        out[v] = c = crotch_point(mask, P["left_knee"], P["right_knee"], float(h_mid[1]))
+        if c is not None and span > 1.0:
+            depth[v] = float((c - h_mid) @ down) / span
+    if not depth:
         return out
-    best = min(t for t, *_ in found.values())
+    best = min(depth.values())
     if best > CROTCH_MAX_DEPTH:
         return {v: np.full(2, np.nan) for v in out}
-    for v in out:
-        if v in found:
-            t, c, _, down, span = found[v]
-            if t - best > CROTCH_VIEWS_DISAGREE or t > CROTCH_MAX_DEPTH:
-                out[v] = c - down * (t - best) * span
+    for v, (h_mid, down, span) in axes.items():
+        c = out[v]
+        if v in depth and c is not None:
+            if depth[v] - best > CROTCH_VIEWS_DISAGREE or depth[v] > CROTCH_MAX_DEPTH:
+                out[v] = c - down * (depth[v] - best) * span
         else:
-            _, h_mid, down, span = _crotch_depth(poses[v], np.zeros(2))
             out[v] = h_mid + down * best * span if span > 1.0 else None
     return out
 

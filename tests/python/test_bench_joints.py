@@ -10,12 +10,15 @@ from bsv.bench.joints import INFO_KEY, joint_errors, joints_markdown, summarise
 from bsv.bodies.joints import rig_joints
 from bsv.errors import InputError
 from bsv.frontend.landmarks import (
+    ELBOW_FRACTION,
+    ELBOW_LANDMARK_WEIGHT,
     JOINT_OFFSETS_M,
     OFFSET_PREDICTOR_RANGE,
     OFFSET_PREDICTORS,
     TRUNK_REF_M,
     apply_offsets,
     body_frame,
+    elbows_at_proportion,
     offset_predictors,
     trunk_length,
 )
@@ -33,6 +36,51 @@ def test_errors_are_signed_in_the_body_frame_and_mirrored() -> None:
     assert np.allclose(e["knee_l"], [10, 0, 0], atol=1e-6)
     assert np.allclose(e["knee_r"], [10, 20, 0], atol=1e-6)
     assert np.allclose(e["hip_l"], 0.0)
+
+
+def _arm(joints: dict, side: str) -> tuple[np.ndarray, float, np.ndarray]:
+    """(shoulder, shoulder-to-wrist length, unit direction) of one arm."""
+    sh, wr = joints[f"shoulder_{side}"], joints[f"wrist_{side}"]
+    length = float(np.linalg.norm(wr - sh))
+    return sh, length, (wr - sh) / length
+
+
+def test_elbows_move_along_the_arm_only() -> None:
+    truth = rig_joints()
+    sh, length, u = _arm(truth, "l")
+    f_true = float((truth["elbow_l"] - sh) @ u) / length
+    table = {"1": f_true, "sex": 0.02}
+    across = np.cross(u, [0.0, 0.0, 1.0])
+    across /= np.linalg.norm(across)
+    est = {k: v.copy() for k, v in truth.items()}
+    est["elbow_l"] = truth["elbow_l"] + 0.015 * u + 0.005 * across  # 15 mm distal, 5 mm across
+    moved = elbows_at_proportion(est, 0.0, table, weight=0.2)
+    d = moved["elbow_l"] - truth["elbow_l"]
+    assert np.isclose(d @ u, 0.2 * 0.015, atol=1e-9)  # the along-arm error shrinks to the landmark's share
+    assert np.isclose(d @ across, 0.005, atol=1e-9)  # the flexion, across the arm, is as measured
+    assert all(np.array_equal(moved[k], est[k]) for k in est if not k.startswith("elbow"))
+    # the right arm mirrors the left on the default rig: its true elbow stays put
+    assert np.linalg.norm(moved["elbow_r"] - truth["elbow_r"]) < 1e-6
+    # weight 1 keeps the landmark, 0 puts the elbow at the proportion; the sex score moves that place
+    assert np.allclose(elbows_at_proportion(est, 0.0, table, weight=1.0)["elbow_l"], est["elbow_l"])
+    at = elbows_at_proportion(est, 1.0, table, weight=0.0)["elbow_l"]
+    assert np.isclose(float((at - sh) @ u) / length, f_true + 0.02, atol=1e-12)
+    assert np.isclose((at - est["elbow_l"]) @ across, 0.0, atol=1e-12)
+
+
+def test_elbows_at_proportion_leave_incomplete_arms_and_refuse_a_bad_weight() -> None:
+    truth = rig_joints()
+    no_wrist = {k: v for k, v in truth.items() if k != "wrist_l"}
+    assert np.array_equal(elbows_at_proportion(no_wrist, 0.0)["elbow_l"], truth["elbow_l"])
+    folded = {**truth, "wrist_r": truth["shoulder_r"].copy()}  # shoulder and wrist coincide
+    assert np.array_equal(elbows_at_proportion(folded, None)["elbow_r"], truth["elbow_r"])
+    with pytest.raises(InputError, match="weight") as e:
+        elbows_at_proportion(truth, 0.0, weight=1.5)
+    assert e.value.argument == "weight"
+    # the learned table is about the rig's elbows: MakeHuman's women and men lie around it
+    assert 0.0 < ELBOW_LANDMARK_WEIGHT < 1.0 and ELBOW_FRACTION["sex"] > 0.0
+    sh, length, u = _arm(truth, "l")
+    assert abs(float((truth["elbow_l"] - sh) @ u) / length - ELBOW_FRACTION["1"]) < 0.03
 
 
 def test_offsets_move_each_side_outward_alike() -> None:

@@ -48,7 +48,10 @@ of the limb's cross-section); seen usably by one view only, the surface point pu
 limb's half-thickness. An offset per joint kind in the body's own frame, linear in the body's measurements
 (trunk length; for the hip and the shoulder also the hip and shoulder widths and the leg length:
 :data:`JOINT_OFFSETS_M`, learned on synthetic subjects, see there), then moves MediaPipe's landmark to the
-anatomical joint centre.
+anatomical joint centre. Along the arm MediaPipe's elbow scatters more than the arm's proportions do: each
+elbow is moved along its shoulder-to-wrist line most of the way to the place :data:`ELBOW_FRACTION` gives for
+the sex read from the capture (:func:`elbows_at_proportion`; across the arm, where the flexion shows, it
+stays where it was lifted).
 """
 
 from __future__ import annotations
@@ -175,6 +178,48 @@ JOINT_OFFSETS_M: dict[str, dict[str, tuple[float, float, float]]] = {
     "knee": {"1": (0.0083, -0.0152, 0.0024), "trunk": (-0.0018, -0.1841, 0.1075)},
     "ankle": {"1": (0.0047, -0.0446, 0.0023), "trunk": (0.0252, -0.2096, 0.0217)},
 }
+
+#: Where the elbow joint centre lies along the line from the shoulder's to the wrist's (corrected) joint
+#: centre, as a fraction of that distance from the shoulder: ``"1"`` at sex score 0 and ``"sex"`` per unit of
+#: the sex score (:mod:`bsv.frontend.sex`: +1 a woman, -1 a man). Learned with :data:`JOINT_OFFSETS_M` by
+#: ``benchmarks/learn_joint_offsets.py`` on the 80 training subjects of seeds 11-18, on top of the shipped
+#: offsets: on held-out seeds 0, 2, 4, 6 the elbow's median 3-D error goes 6.4 -> 5.3 mm, its 95th percentile
+#: 13.9 -> 11.6 mm (MediaPipe's elbow scatters more along the arm than the arm's proportions do). The rig's
+#: own elbows lie at 0.525 (a woman) and 0.485 (a man) of their true shoulder-to-wrist lines.
+ELBOW_FRACTION: dict[str, float] = {"1": 0.5101, "sex": 0.0111}
+#: The weight of the lifted landmark's own place along the arm against :data:`ELBOW_FRACTION`'s (0: the
+#: proportion alone, 1: the landmark alone), the one of 0, 0.05, ..., 1 that scatters least on the training
+#: subjects.
+ELBOW_LANDMARK_WEIGHT = 0.1
+
+
+def elbows_at_proportion(joints: Mapping[str, np.ndarray], sex_score: float | None,
+                         fraction: Mapping[str, float] | None = None,
+                         weight: float = ELBOW_LANDMARK_WEIGHT) -> dict[str, np.ndarray]:
+    """Joint centres by name with each elbow moved along its shoulder-to-wrist line to ``weight`` times its
+    own place plus ``1 - weight`` times the place ``fraction`` (default :data:`ELBOW_FRACTION`) gives for
+    ``sex_score`` (None: 0); only the component along that line changes, so the elbow's flexion stays as
+    measured. An arm without its shoulder, elbow and wrist, or whose shoulder and wrist coincide, is left
+    as it is. Raises :class:`bsv.errors.InputError` naming ``weight`` outside [0, 1]."""
+    if not 0.0 <= weight <= 1.0:
+        err = InputError(f"elbows_at_proportion(weight={weight!r}): a weight lies in [0, 1]")
+        err.argument = "weight"
+        raise err
+    table = ELBOW_FRACTION if fraction is None else fraction
+    f = float(table["1"]) + float(table["sex"]) * float(sex_score or 0.0)
+    out = {j: np.asarray(p, dtype=np.float64) for j, p in joints.items()}
+    for side in ("l", "r"):
+        names = (f"shoulder_{side}", f"elbow_{side}", f"wrist_{side}")
+        if not all(n in out for n in names):
+            continue
+        sh, el, wr = (out[n] for n in names)
+        length = float(np.linalg.norm(wr - sh))
+        if not np.isfinite(length) or length <= 0.0:
+            continue
+        u = (wr - sh) / length
+        along = float((el - sh) @ u)
+        out[names[1]] = el + (1.0 - weight) * (f * length - along) * u
+    return out
 
 
 def build_measurements(joints: Mapping[str, np.ndarray]) -> dict[str, float]:
@@ -709,8 +754,9 @@ def joint_centres(segs: Mapping[str, Segmentation], depths: Mapping[str, np.ndar
                   cameras: Mapping[str, Camera], correct: bool = True) -> dict[str, JointCentre]:
     """3-D centres (world frame, metres) of the joints of :data:`JOINTS` from the two views' segmentations
     (:func:`segment_views`), their aligned depth images (metres) and calibrated cameras; see the module
-    notes. ``correct``: add the learned offsets of :data:`JOINT_OFFSETS_M`. A joint that no view could
-    place (no depth under it) is left out."""
+    notes. ``correct``: add the learned offsets of :data:`JOINT_OFFSETS_M` and move the elbows along the arms
+    (:func:`elbows_at_proportion`, for the sex the labels were drawn for). A joint that no view could place
+    (no depth under it) is left out."""
     views = [v for v in VIEWS if v in segs]
     raw: dict[str, np.ndarray] = {}
     conf: dict[str, float] = {}
@@ -779,8 +825,13 @@ def joint_centres(segs: Mapping[str, Segmentation], depths: Mapping[str, np.ndar
         raw[joint] = xyz
         conf[joint] = float(np.clip(confidence, 0.0, 1.0))
         src[joint] = where + (f" ({'; '.join(notes)})" if notes else "")
-    out_xyz = apply_offsets(raw) if correct else raw
+    out_xyz = elbows_at_proportion(apply_offsets(raw), _sex_score(segs)) if correct else raw
     return {j: JointCentre(out_xyz[j], conf[j], src[j]) for j in raw}
+
+
+def _sex_score(segs: Mapping[str, Segmentation]) -> float | None:
+    """The sex score the views' labels were drawn for (both views hold the same), None without one."""
+    return next((float(s.sex.score) for s in segs.values() if s.sex is not None), None)
 
 
 def trunk_length(joints: Mapping[str, np.ndarray]) -> float:
@@ -853,6 +904,8 @@ def capture_joints(capture_dir: Any, calibration: Any = None, cameras: Sequence[
 
 __all__ = [
     "DEPTH_RADIUS_PX",
+    "ELBOW_FRACTION",
+    "ELBOW_LANDMARK_WEIGHT",
     "FLOOR_CLEARANCE_M",
     "JOINTS",
     "JOINT_OFFSETS_M",
@@ -867,6 +920,7 @@ __all__ = [
     "build_measurements",
     "capture_joints",
     "detection_from_other_view",
+    "elbows_at_proportion",
     "joint_centres",
     "lifted_joints",
     "offset_predictors",

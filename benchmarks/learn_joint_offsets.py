@@ -10,10 +10,11 @@ constant, the trunk length, for the hip and the shoulder also the hip and should
 reference: bsv.frontend.landmarks.offset_predictors); the script prints the table and the evaluation
 cohorts' errors without offsets, with a constant offset (the median), with the trunk length alone and with
 the fit. It then learns where the elbow lies along the line from the shoulder to the wrist, both corrected by
-the shipped offsets (JOINT_OFFSETS_M, so that the elbow's table can be updated alone), (bsv.frontend.landmarks.ELBOW_FRACTION: least squares of the rig's elbow's fraction on the capture's
-sex score) and the weight of the landmark's own place against it (ELBOW_LANDMARK_WEIGHT: the one of 0, 0.05,
-..., 1 whose along-arm error scatters least on the training subjects), and prints the evaluation cohorts'
-errors with them too.
+the shipped offsets (JOINT_OFFSETS_M, so that the elbow's table can be updated alone):
+bsv.frontend.landmarks.ELBOW_FRACTION, the least squares of the rig's elbow's fraction of that line on the
+capture's sex score, and ELBOW_LANDMARK_WEIGHT, the weight of the landmark's own place against it (the one of
+0, 0.05, ..., 1 whose along-arm error scatters least on the training subjects); it prints the evaluation
+cohorts' errors with them too.
 
     .venv/bin/python benchmarks/learn_joint_offsets.py --n 10 --train-seeds 11,12,13,14,15,16,17,18 \
         --eval-seeds 0,2,4,6
@@ -148,6 +149,8 @@ def learn_elbows(pairs: list[Pair], offsets: dict) -> tuple[dict[str, float], fl
             if all(n in moved for n in names) and f"elbow_{side}" in truth:
                 sh, el, wr = (moved[n] for n in names)
                 length = float(np.linalg.norm(wr - sh))
+                if not np.isfinite(length) or length <= 0.0:  # elbows_at_proportion leaves such an arm alone
+                    continue
                 u = (wr - sh) / length
                 rows.append((sex, length, float((el - sh) @ u) / length, float((truth[f"elbow_{side}"] - sh) @ u) / length))
     r = np.array(rows)

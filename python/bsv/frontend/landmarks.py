@@ -34,7 +34,10 @@ the knee line a fraction of the knee-ankle length below the knees; MediaPipe's a
 once resolved, each view's ankle landmarks are moved to the height above the floor that
 ``SegmentParams.ankle_height`` gives as a fraction of the stature (read from the depth:
 :func:`person_stature`), keeping their place across (:func:`place_ankles`); the joint centres take the
-moved ankles too.
+moved ankles too. Once the labels are drawn, each leg's shin and foot pixels are split again in 3-D
+(:func:`cut_feet_at_ankle_plane`): below :data:`ANKLE_PLANE`, a height above the floor at the ankle that
+rises towards the toes (the body's own ankle loop lies 91 mm up, sd 4 mm, on every body of the cohort),
+foot; above it, shin. The 2-D line stays where there is no depth or no stature.
 
 Every substitute is a warning naming the landmark (:attr:`Segmentation.warnings`, the volumes JSON's
 ``warnings``, the report). Only a landmark that none of these gives (in practice: a limb not seen in
@@ -191,6 +194,65 @@ ELBOW_FRACTION: dict[str, float] = {"1": 0.5101, "sex": 0.0111}
 #: proportion alone, 1: the landmark alone), the one of 0, 0.05, ..., 1 that scatters least on the training
 #: subjects.
 ELBOW_LANDMARK_WEIGHT = 0.1
+
+
+#: The camera path's shin / foot boundary, a plane in the world (:func:`cut_feet_at_ankle_plane`): at the
+#: ankle, ``height_m + height_per_stature x stature`` above the floor, rising towards the toes by
+#: ``forward_slope`` (metres up per metre forward), that height holding ``forward_offset_m`` forward of the
+#: ankle. The rig's true ankle loops (bsv.anatomy's ankle boundary) fitted by ``benchmarks/learn_ankle_plane.py``
+#: on the 160 legs of seeds 11-18: the loop's centroid lies 91 mm above the floor (sd 3.9 mm; the stature
+#: explains almost none of it), 10 mm forward of the ankle joint, the loop tilted 16 deg. On held-out seeds
+#: 0-7 the plane's height is off by +0.3 mm, sd 4.2 mm. The 2-D line through MediaPipe's ankle, placed at a
+#: fraction of the stature, put the cloud's shin end 10 mm (sd) off the true loop (benchmarks/BENCH.md, round 2
+#: session 25).
+ANKLE_PLANE: dict[str, float] = {"height_m": 0.0662, "height_per_stature": 0.0148, "forward_slope": 0.291,
+                                 "forward_offset_m": 0.0104}
+#: A leg pixel farther than this (metres, horizontally) from its ankle keeps its 2-D label: the plane is the
+#: ankle's, not the mask's spill onto the floor or the wall.
+ANKLE_PLANE_RADIUS_M = 0.2
+
+_LEGS: tuple[tuple[str, int, int], ...] = (("l", SEGMENT_IDS["shin_l"], SEGMENT_IDS["foot_l"]),
+                                           ("r", SEGMENT_IDS["shin_r"], SEGMENT_IDS["foot_r"]))
+
+
+def cut_feet_at_ankle_plane(labels: np.ndarray, depth: np.ndarray, camera: Camera, ankles: Mapping[str, np.ndarray],
+                            stature: float, forward: np.ndarray | None = None,
+                            plane: Mapping[str, float] | None = None) -> np.ndarray:
+    """One view's labels with each leg's shin and foot pixels split again in 3-D by the ankle plane.
+
+    ``labels`` (H, W) segment ids and ``depth`` (H, W) metres of one view, its calibrated ``camera``; ``ankles``
+    the 3-D ankles by joint name (``ankle_l``, ``ankle_r``; world frame, y up, the floor y = 0); ``stature``
+    metres; ``forward`` the subject's horizontal facing direction (default +z, the world frame's
+    convention); ``plane`` :data:`ANKLE_PLANE`'s keys. A pixel of a leg's shin or foot with depth, within
+    :data:`ANKLE_PLANE_RADIUS_M` of its ankle across the floor, becomes foot below the plane and shin above it;
+    every other pixel, a leg whose ankle is missing and every pixel when the stature is unknown keep their
+    labels. The input is not modified."""
+    pl = ANKLE_PLANE if plane is None else plane
+    up = np.array([0.0, 1.0, 0.0])
+    f = np.array([0.0, 0.0, 1.0]) if forward is None else np.asarray(forward, dtype=np.float64)
+    f = f - (f @ up) * up
+    if not np.all(np.isfinite(f)) or np.linalg.norm(f) < 1e-9:
+        f = np.array([0.0, 0.0, 1.0])
+    f = f / np.linalg.norm(f)
+    out = np.array(labels, copy=True)
+    if not np.isfinite(stature) or stature <= 0:
+        return out
+    height = pl["height_m"] + pl["height_per_stature"] * stature
+    d = np.asarray(depth, dtype=np.float64)
+    for side, shin, foot in _LEGS:
+        a = ankles.get(f"ankle_{side}")
+        if a is None or not np.all(np.isfinite(a)):
+            continue
+        a = np.asarray(a, dtype=np.float64)
+        ys, xs = np.nonzero(((out == shin) | (out == foot)) & (d > 0) & np.isfinite(d))
+        if len(ys) == 0:
+            continue
+        w = camera.deproject(np.column_stack([xs, ys]).astype(np.float64), d[ys, xs])
+        rel = w - a
+        near = np.hypot(rel[:, 0], rel[:, 2]) <= ANKLE_PLANE_RADIUS_M
+        cut = height + pl["forward_slope"] * (rel @ f - pl["forward_offset_m"])
+        out[ys[near], xs[near]] = np.where(w[near, 1] < cut[near], foot, shin)
+    return out
 
 
 def elbows_at_proportion(joints: Mapping[str, np.ndarray], sex_score: float | None,
@@ -642,8 +704,17 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
         place_ankles(dets[v], resolved[v][0], cameras[v], depths[v], stature)
     masks = {v: person_mask(dets[v], depths[v] if use_depth else None, resolved[v][0]) for v in views}
     crotches = agreeing_crotches(masks, {v: resolved[v][0] for v in views})
-    return {v: label_detection(dets[v], depths[v] if use_depth else None, *resolved[v][:3], sex=sex, mask=masks[v],
+    segs = {v: label_detection(dets[v], depths[v] if use_depth else None, *resolved[v][:3], sex=sex, mask=masks[v],
                                crotch=crotches[v]) for v in views}
+    if not use_depth or not np.isfinite(stature):
+        return segs
+    poses = {v: resolved[v][0] for v in views}
+    lifted = lifted_joints(dets, poses, cameras, depths, ("ankle_l", "ankle_r", "hip_l", "hip_r", "shoulder_l", "shoulder_r"))
+    frame = _body_frame(lifted)
+    forward = None if frame is None else frame[2]
+    return {v: dataclasses.replace(segs[v], labels=cut_feet_at_ankle_plane(segs[v].labels, depths[v], cameras[v], lifted,
+                                                                            stature, forward))
+            for v in views}
 
 
 #: The joints :func:`sex_estimate` lifts (:func:`bsv.frontend.sex.sex_measurements` takes them).
@@ -903,6 +974,8 @@ def capture_joints(capture_dir: Any, calibration: Any = None, cameras: Sequence[
 
 
 __all__ = [
+    "ANKLE_PLANE",
+    "ANKLE_PLANE_RADIUS_M",
     "DEPTH_RADIUS_PX",
     "ELBOW_FRACTION",
     "ELBOW_LANDMARK_WEIGHT",
@@ -919,6 +992,7 @@ __all__ = [
     "body_frame",
     "build_measurements",
     "capture_joints",
+    "cut_feet_at_ankle_plane",
     "detection_from_other_view",
     "elbows_at_proportion",
     "joint_centres",

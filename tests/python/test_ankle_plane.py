@@ -96,3 +96,31 @@ def test_the_shipped_plane_lies_at_the_templates_ankle_loop():
         assert 0.08 < p["height_m"] + p["height_per_stature"] * stature < 0.10
     assert 10.0 < np.degrees(np.arctan(p["forward_slope"])) < 25.0
     assert 0.0 < p["forward_offset_m"] < 0.03
+
+
+def test_the_plane_stands_on_the_floor_the_view_sees():
+    """A view whose calibration puts the floor 3 cm above y = 0 puts the legs 3 cm up as well: the plane is
+    measured from the floor seen around the ankle (floor_near_ankles), so it moves up with it; with
+    ``seen_floor=False``, or without floor pixels, it stays above y = 0."""
+    cam, labels, depth, height = _scene()
+    floor_y = 0.03
+    bg = np.zeros_like(labels, dtype=bool)
+    bg[130:, :60] = True  # background pixels below the horizon on the image's left: the floor
+    rows = np.arange(200)[:, None] * np.ones((1, 200))
+    labels = labels.copy()
+    labels[bg] = 0
+    depth = depth.copy()
+    depth[bg] = ((0.1 - floor_y) * 2000.0 / (rows - 99.5))[bg]  # the level camera's ray meets y = floor_y
+    ankles = {"ankle_l": np.array([0.05, 0.07, -0.01]), "ankle_r": np.array([-0.05, 0.07, -0.01])}
+    seen = lm.floor_near_ankles(labels, depth, cam, ankles)
+    assert seen["ankle_l"] == pytest.approx(floor_y, abs=1e-6) and seen["ankle_r"] == pytest.approx(floor_y, abs=1e-6)
+    on_seen = lm.cut_feet_at_ankle_plane(labels, depth, cam, ankles, STATURE, plane=PLANE)
+    on_zero = lm.cut_feet_at_ankle_plane(labels, depth, cam, ankles, STATURE, plane=PLANE, seen_floor=False)
+    cut = PLANE["height_m"] + PLANE["height_per_stature"] * STATURE
+    col = 150  # the left leg
+    top_seen, top_zero = int(np.argmax(on_seen[:, col] == FOOT_L)), int(np.argmax(on_zero[:, col] == FOOT_L))
+    assert height[top_seen, col] < cut + floor_y <= height[top_seen - 1, col]
+    assert height[top_zero, col] < cut <= height[top_zero - 1, col]
+    no_floor = labels.copy()
+    no_floor[bg] = SEGMENT_IDS["torso"]  # no background pixel left: the calibration's floor
+    assert lm.floor_near_ankles(no_floor, depth, cam, ankles) == {"ankle_l": 0.0, "ankle_r": 0.0}

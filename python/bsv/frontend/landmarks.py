@@ -210,23 +210,58 @@ ANKLE_PLANE: dict[str, float] = {"height_m": 0.0662, "height_per_stature": 0.014
 #: A leg pixel farther than this (metres, horizontally) from its ankle keeps its 2-D label: the plane is the
 #: ankle's, not the mask's spill onto the floor or the wall.
 ANKLE_PLANE_RADIUS_M = 0.2
+#: The floor the plane stands on is the one the view sees around each ankle (:func:`floor_near_ankles`): its
+#: background pixels between these horizontal distances from the ankle (metres) ...
+FLOOR_RING_M: tuple[float, float] = (0.08, 0.5)
+#: ... that the calibration puts within this height of y = 0 (metres) ...
+FLOOR_NEAR_M = 0.05
+#: ... when there are at least this many of them (every second row and column); else the floor is y = 0.
+FLOOR_MIN_PIXELS = 200
 
 _LEGS: tuple[tuple[str, int, int], ...] = (("l", SEGMENT_IDS["shin_l"], SEGMENT_IDS["foot_l"]),
                                            ("r", SEGMENT_IDS["shin_r"], SEGMENT_IDS["foot_r"]))
 
 
+def floor_near_ankles(labels: np.ndarray, depth: np.ndarray, camera: Camera,
+                      ankles: Mapping[str, np.ndarray]) -> dict[str, float]:
+    """The floor's height (world y, metres) one view sees around each ankle: the median height of its
+    background pixels (label 0, with depth; every second row and column) between :data:`FLOOR_RING_M` from the
+    ankle across the floor and within :data:`FLOOR_NEAR_M` of y = 0; 0.0 for an ankle with fewer than
+    :data:`FLOOR_MIN_PIXELS` such pixels (no floor in view: the calibration's floor). A camera whose
+    calibration is off by a fraction of a degree sees the floor at the feet centimetres from y = 0, and its
+    own pixels of the legs are off by as much: heights above the floor it sees do not depend on that."""
+    d = np.asarray(depth, dtype=np.float64)[::2, ::2]
+    bg = (np.asarray(labels)[::2, ::2] == 0) & (d > 0) & np.isfinite(d)
+    ys, xs = np.nonzero(bg)
+    out = {f"ankle_{side}": 0.0 for side, _, _ in _LEGS}
+    if len(ys) == 0:
+        return out
+    w = camera.deproject(np.column_stack([2 * xs, 2 * ys]).astype(np.float64), d[ys, xs])
+    w = w[np.abs(w[:, 1]) < FLOOR_NEAR_M]
+    for name in out:
+        a = ankles.get(name)
+        if a is None or not np.all(np.isfinite(a)):
+            continue
+        r = np.hypot(w[:, 0] - a[0], w[:, 2] - a[2])
+        ring = (r >= FLOOR_RING_M[0]) & (r <= FLOOR_RING_M[1])
+        if ring.sum() >= FLOOR_MIN_PIXELS:
+            out[name] = float(np.median(w[ring, 1]))
+    return out
+
+
 def cut_feet_at_ankle_plane(labels: np.ndarray, depth: np.ndarray, camera: Camera, ankles: Mapping[str, np.ndarray],
                             stature: float, forward: np.ndarray | None = None,
-                            plane: Mapping[str, float] | None = None) -> np.ndarray:
+                            plane: Mapping[str, float] | None = None, seen_floor: bool = True) -> np.ndarray:
     """One view's labels with each leg's shin and foot pixels split again in 3-D by the ankle plane.
 
     ``labels`` (H, W) segment ids and ``depth`` (H, W) metres of one view, its calibrated ``camera``; ``ankles``
     the 3-D ankles by joint name (``ankle_l``, ``ankle_r``; world frame, y up, the floor y = 0); ``stature``
     metres; ``forward`` the subject's horizontal facing direction (default +z, the world frame's
-    convention); ``plane`` :data:`ANKLE_PLANE`'s keys. A pixel of a leg's shin or foot with depth, within
-    :data:`ANKLE_PLANE_RADIUS_M` of its ankle across the floor, becomes foot below the plane and shin above it;
-    every other pixel, a leg whose ankle is missing and every pixel when the stature is unknown keep their
-    labels. The input is not modified."""
+    convention); ``plane`` :data:`ANKLE_PLANE`'s keys; ``seen_floor``: the plane's height is above the floor
+    this view sees around each ankle (:func:`floor_near_ankles`), else above y = 0. A pixel of a leg's shin or
+    foot with depth, within :data:`ANKLE_PLANE_RADIUS_M` of its ankle across the floor, becomes foot below the
+    plane and shin above it; every other pixel, a leg whose ankle is missing and every pixel when the stature
+    is unknown keep their labels. The input is not modified."""
     pl = ANKLE_PLANE if plane is None else plane
     up = np.array([0.0, 1.0, 0.0])
     f = np.array([0.0, 0.0, 1.0]) if forward is None else np.asarray(forward, dtype=np.float64)
@@ -239,6 +274,7 @@ def cut_feet_at_ankle_plane(labels: np.ndarray, depth: np.ndarray, camera: Camer
         return out
     height = pl["height_m"] + pl["height_per_stature"] * stature
     d = np.asarray(depth, dtype=np.float64)
+    floor = floor_near_ankles(out, d, camera, ankles) if seen_floor else {}
     for side, shin, foot in _LEGS:
         a = ankles.get(f"ankle_{side}")
         if a is None or not np.all(np.isfinite(a)):
@@ -250,7 +286,7 @@ def cut_feet_at_ankle_plane(labels: np.ndarray, depth: np.ndarray, camera: Camer
         w = camera.deproject(np.column_stack([xs, ys]).astype(np.float64), d[ys, xs])
         rel = w - a
         near = np.hypot(rel[:, 0], rel[:, 2]) <= ANKLE_PLANE_RADIUS_M
-        cut = height + pl["forward_slope"] * (rel @ f - pl["forward_offset_m"])
+        cut = floor.get(f"ankle_{side}", 0.0) + height + pl["forward_slope"] * (rel @ f - pl["forward_offset_m"])
         out[ys[near], xs[near]] = np.where(w[near, 1] < cut[near], foot, shin)
     return out
 
@@ -980,6 +1016,9 @@ __all__ = [
     "ELBOW_FRACTION",
     "ELBOW_LANDMARK_WEIGHT",
     "FLOOR_CLEARANCE_M",
+    "FLOOR_MIN_PIXELS",
+    "FLOOR_NEAR_M",
+    "FLOOR_RING_M",
     "JOINTS",
     "JOINT_OFFSETS_M",
     "LIMBS",
@@ -995,6 +1034,7 @@ __all__ = [
     "cut_feet_at_ankle_plane",
     "detection_from_other_view",
     "elbows_at_proportion",
+    "floor_near_ankles",
     "joint_centres",
     "lifted_joints",
     "offset_predictors",

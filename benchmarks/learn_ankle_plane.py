@@ -2,7 +2,7 @@
 labels.
 
 The body's shin / foot boundary (MakeHuman's: the ankle loop of bsv.anatomy) is, on every body of the cohort,
-nearly the same plane around the ankle: a loop whose centroid lies 91 +- 3 mm above the floor, whatever the
+nearly the same plane around the ankle: a loop whose centroid lies 91 +- 4 mm above the floor, whatever the
 stature, rising towards the toes by about 13 deg. The 2-D line that cut the camera clouds' shins from the feet
 (through MediaPipe's ankle, placed at a fraction of the stature) put the cloud's shin end 10 mm (sd) off that
 loop, and the fitted shin's end followed it. So the camera path cuts the shins from the feet in 3-D: a point of

@@ -14,6 +14,7 @@ from bsv.bench.boundaries import (
     boundaries_markdown,
     boundary_errors,
     distance_to_segments,
+    end_errors,
     explained,
     limb_boundaries,
     loop_edges,
@@ -109,8 +110,9 @@ def test_the_table_pools_sides_and_names_the_worst() -> None:
 def test_each_limb_is_bounded_by_the_joints_the_table_names() -> None:
     assert limb_boundaries("upper_arm") == ("shoulder", "elbow")
     assert limb_boundaries("thigh") == ("hip", "knee")
-    assert limb_boundaries("forearm") == ("elbow", None)  # the wrist loop is not measured
-    assert limb_boundaries("shin") == ("knee", None)
+    assert limb_boundaries("forearm") == ("elbow", "wrist")  # the forearm's far end: end_errors
+    assert limb_boundaries("shin") == ("knee", "ankle")
+    assert limb_boundaries("torso") == (None, None)
 
 
 def _limb_runs(n: int, shoulder_cost: float, elbow_cost: float, at_zero: float, noise: float = 0.0) -> list[Run]:
@@ -143,3 +145,37 @@ def test_too_few_runs_are_not_fitted_and_the_report_says_what_is() -> None:
     assert explained(_limb_runs(5, -0.9, 0.3, 0.5)) == {}
     md = "\n".join(boundaries_markdown(_limb_runs(12, -0.9, 0.3, 0.5)))
     assert "What the boundaries cost each limb" in md and "| noer | upper_arm | 12 |" in md
+
+
+def test_where_a_fitted_forearm_or_shin_ends_against_the_true_wrist_or_ankle(template: Mesh) -> None:
+    """end_errors: the 9-segment template (its forearms and shins end in caps) against its own full body reads
+    within 3 mm of zero (its caps' rims are not quite its loops); against a full body whose left wrist loop and
+    right ankle loop were moved 15 mm into the hand and the foot it reads the fitted segments 15 mm short there,
+    and the other ends as before. A fitted mesh that has the hands and feet is not measured."""
+    full = bsv.default_template(full=True)
+    base = end_errors(template, full)
+    assert set(base) == {f"{k}_{s}" for k in ("wrist", "ankle") for s in "lr"}
+    assert all(abs(e) < 3.0 for e in base.values()), base
+    fine = subdivide_midpoint(full)
+    shifted = end_errors(template, moved(moved(fine, "forearm_l", "hand_l", 15.0), "shin_r", "foot_r", 15.0))
+    assert shifted["wrist_l"] - base["wrist_l"] == pytest.approx(-15.0, abs=2.5)
+    assert shifted["ankle_r"] - base["ankle_r"] == pytest.approx(-15.0, abs=2.5)
+    assert shifted["wrist_r"] == pytest.approx(base["wrist_r"]) and shifted["ankle_l"] == pytest.approx(base["ankle_l"])
+    assert end_errors(full, full) == {}
+
+
+def test_the_far_ends_join_the_table_and_the_split() -> None:
+    """Runs that measured the elbow and the wrist: the table has a wrist row and the forearm's error is split
+    over both (a forearm 1 mm short at the wrist is 0.15 % smaller)."""
+    rng = np.random.default_rng(5)
+    runs = []
+    for i in range(12):
+        el, wr = rng.normal(0.0, 3.0, 2)
+        err = -0.7 * el + 0.15 * wr
+        runs.append(Run(f"subject_{i:03d}", "noer", "bsv", True, truth_l={"forearm_l": 1.0},
+                        estimated_l={"forearm_l": 1.0 * (1 + err / 100)},
+                        info={INFO_KEY: {"elbow_l": float(el), "wrist_l": float(wr)}}))
+    assert summarise(runs)["noer"]["wrist"]["n"] == 12
+    split = explained(runs)["noer"]["forearm"]
+    assert split["per_mm"] == pytest.approx({"elbow": -0.7, "wrist": 0.15}, abs=1e-9)
+    assert "| wrist | 12 |" in "\n".join(boundaries_markdown(runs))

@@ -1,5 +1,7 @@
 """Where a fitted mesh's segment boundaries lie against the true ones: for each limb joint's boundary
-loop (shoulder, elbow, hip, knee), how far the fitted loop sits from the true loop along the limb.
+loop (shoulder, elbow, hip, knee), how far the fitted loop sits from the true loop along the limb; for the
+wrists and ankles, where the fitted forearms and shins end (:func:`end_errors`: the hands and feet are not
+fitted, so each ends in a cap), against the true loop.
 
 What decides a limb's volume besides its surface is where it is cut off. A run's boundary error is read
 on the fitted surface itself: points are drawn on it (area-weighted, the same draw for every run), each
@@ -34,6 +36,15 @@ from .reference import ordered_conditions
 INFO_KEY = "boundary_errors_mm"
 #: The limb joints whose loops separate two measured segments, in table order.
 KINDS: tuple[str, ...] = ("shoulder", "elbow", "hip", "knee")
+#: The far ends of the forearms and the shins: the hands and feet are not fitted, so each of these segments
+#: ends in a cap, measured by :func:`end_errors` against the true wrist or ankle loop when the truth has them.
+END_KINDS: tuple[str, ...] = ("wrist", "ankle")
+#: Every kind a run's :data:`INFO_KEY` may hold, in table order (proximal to distal per limb).
+ALL_KINDS: tuple[str, ...] = ("shoulder", "elbow", "wrist", "hip", "knee", "ankle")
+#: A fitted face belongs to a segment's far cap when its normal lies within this cosine of the limb's axis ...
+CAP_COS = 0.85
+#: ... and its centre within this distance (metres) of the segment's farthest face along the axis.
+CAP_DEPTH_M = 0.04
 #: Points drawn on the fitted surface (the same draw for every run: seed 0).
 SAMPLES = 200_000
 #: A drawn point counts only within this distance of the true surface (metres).
@@ -136,6 +147,54 @@ def boundary_errors(fitted: Mesh, truth: Mesh, samples: int = SAMPLES) -> dict[s
     return out
 
 
+def _loop_centroid(v: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """The length-weighted centroid of a loop's edges (E, 2) over vertices ``v``."""
+    a, b = v[edges[:, 0]], v[edges[:, 1]]
+    length = np.linalg.norm(b - a, axis=1)
+    return np.asarray(((a + b) / 2 * length[:, None]).sum(axis=0) / max(float(length.sum()), 1e-12))
+
+
+def end_errors(fitted: Mesh, truth: Mesh) -> dict[str, float]:
+    """{joint: mm} for the wrists and ankles (:data:`END_KINDS`, both sides): where the fitted forearm or shin
+    ends (the centroid of its cap's rim; the cap: its faces facing along the limb, within :data:`CAP_DEPTH_M`
+    of its far end) minus where the true one does (the centroid of the true wrist or ankle loop), along the true
+    limb's axis (from its near loop's centroid to its far loop's), + = the fitted segment reaches farther.
+    Measured only when the fitted mesh has the segment and not the hand or foot beyond it, and the truth has
+    both and the loop before it; empty when either mesh has no labels. The embedded template against its own
+    full body reads -1.4 mm at the wrists and +2.3 mm at the ankles (its caps' rims are not quite its loops)."""
+    fl, tl = _face_labels(fitted), _face_labels(truth)
+    if fl is None or tl is None:
+        return {}
+    vf, ff = np.asarray(fitted.vertices, dtype=np.float64), np.asarray(fitted.faces, dtype=np.int64)
+    vt, ft = np.asarray(truth.vertices, dtype=np.float64), np.asarray(truth.faces, dtype=np.int64)
+    out: dict[str, float] = {}
+    for kind in END_KINDS:
+        for side in ("l", "r"):
+            joint = f"{kind}_{side}"
+            seg, beyond = JOINTS[joint]
+            before = next(a for a, b in JOINTS.values() if b == seg)
+            p, d, o = SEGMENT_IDS[seg], SEGMENT_IDS[beyond], SEGMENT_IDS[before]
+            if not np.any(fl == p) or np.any(fl == d):
+                continue
+            far, near = loop_edges(ft, tl, p, d), loop_edges(ft, tl, o, p)
+            if len(far) == 0 or len(near) == 0:
+                continue
+            end = _loop_centroid(vt, far)
+            axis = end - _loop_centroid(vt, near)
+            axis = axis / max(float(np.linalg.norm(axis)), 1e-12)
+            tri = vf[ff[fl == p]]
+            cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+            area = np.linalg.norm(cross, axis=1)
+            centre = tri.mean(axis=1)
+            along = centre @ axis
+            cap = ((cross @ axis) > CAP_COS * area) & (along > along.max() - CAP_DEPTH_M)
+            rim = loop_edges(ff[fl == p], np.where(cap, 1, 2).astype(np.uint8), 1, 2)
+            if len(rim) == 0:
+                continue
+            out[joint] = round(1000.0 * float((_loop_centroid(vf, rim) - end) @ axis), 2)
+    return out
+
+
 def _collect(runs: Sequence[Run]) -> dict[tuple[str, str], list[tuple[str, float]]]:
     """(condition, kind) -> [(subject side, mm)] of the bsv runs that measured their boundaries."""
     out: dict[tuple[str, str], list[tuple[str, float]]] = {}
@@ -154,7 +213,7 @@ def summarise(runs: Sequence[Run]) -> dict[str, dict[str, dict[str, Any]]]:
     table: dict[str, dict[str, dict[str, Any]]] = {}
     for cond in ordered_conditions({c for c, _ in data}):
         rows = {}
-        for kind in KINDS:
+        for kind in ALL_KINDS:
             items = data.get((cond, kind), [])
             if not items:
                 continue
@@ -174,11 +233,11 @@ MIN_EXPLAINED = 8
 
 
 def limb_boundaries(limb: str) -> tuple[str | None, str | None]:
-    """The joint kinds of :data:`KINDS` whose loops bound a limb segment kind: (proximal, distal), None where
-    no measured loop bounds it (the wrist and the ankle: hands and feet are not fitted). From
+    """The joint kinds of :data:`ALL_KINDS` whose loops (or, for the wrist and the ankle, the segment's far
+    end: :func:`end_errors`) bound a limb segment kind: (proximal, distal), None where nothing bounds it. From
     :data:`bsv.biomech.tables.JOINTS`, the one table of which two segments each joint separates."""
-    prox = next((k for k in KINDS if JOINTS[f"{k}_l"][1] == f"{limb}_l"), None)
-    dist = next((k for k in KINDS if JOINTS[f"{k}_l"][0] == f"{limb}_l"), None)
+    prox = next((k for k in ALL_KINDS if JOINTS[f"{k}_l"][1] == f"{limb}_l"), None)
+    dist = next((k for k in ALL_KINDS if JOINTS[f"{k}_l"][0] == f"{limb}_l"), None)
     return prox, dist
 
 
@@ -235,8 +294,9 @@ def boundary_figure(runs: Sequence[Run], path: str | Path) -> Path | None:
     conds = ordered_conditions({c for c, _ in data})
     if not conds:
         return None
-    values = {c: [[e for _, e in data.get((c, kind), [])] for kind in KINDS] for c in conds}
-    return kind_boxplot(values, KINDS, path, ylabel="fitted loop - true loop along the limb (mm, + distal)",
+    kinds = tuple(k for k in ALL_KINDS if any(data.get((c, k)) for c in conds))
+    values = {c: [[e for _, e in data.get((c, kind), [])] for kind in kinds] for c in conds}
+    return kind_boxplot(values, kinds, path, ylabel="fitted loop - true loop along the limb (mm, + distal)",
                         title="Segment boundaries of the fitted mesh against the truth", line=(0.0, None))
 
 
@@ -248,7 +308,8 @@ def boundaries_markdown(runs: Sequence[Run]) -> list[str]:
     md = ["## Segment boundaries: fitted loop against the true loop (mm along the limb; bsv)", "",
           ("The fitted mesh's boundary loop between two segments against the true body's, read on the fitted "
            "surface (bsv.bench.boundaries): + = the fitted loop lies distal of the true one (the proximal "
-           "segment too long). Left and right pooled. 1 mm is about 0.65 % of a thigh at the hip, 0.46 % of a "
+           "segment too long; for the wrist and the ankle, the forearm's or shin's cap against the true loop, + = "
+           "the segment reaches too far). Left and right pooled. 1 mm is about 0.65 % of a thigh at the hip, 0.46 % of a "
            f"shin at the knee, 1.0 % of an upper arm at the shoulder, 0.8 % of a forearm at the elbow. Figure: {FIGURE}."), ""]
     for cond, rows in table.items():
         md += [f"**{cond}**", "", "| boundary | n | mean (signed) | sd | median abs | p95 abs | worst (subject side) |",
@@ -261,7 +322,8 @@ def boundaries_markdown(runs: Sequence[Run]) -> list[str]:
     if split:
         md += ["### What the boundaries cost each limb", "",
                ("Each limb's signed volume error (%, both sides) fitted as a line in the errors of the loops that "
-                "bound it (bsv.bench.boundaries.explained; the wrist and ankle loops are not measured): the error "
+                "bound it (bsv.bench.boundaries.explained; the wrist and ankle: where the fitted forearm or shin "
+                "ends, its cap against the true loop, when every run measured it): the error "
                 "with the loops in place, what 1 mm costs, and the mean RVE the line leaves (in-sample). "
                 "RVE minus that is what a better boundary could gain at most."), "",
                "| condition | limb | n | mean RVE | signed | with the loops in place | % per mm (proximal, distal) | RVE left |",
@@ -276,7 +338,11 @@ def boundaries_markdown(runs: Sequence[Run]) -> list[str]:
 
 
 __all__ = [
+    "ALL_KINDS",
     "BAND_M",
+    "CAP_COS",
+    "CAP_DEPTH_M",
+    "END_KINDS",
     "FIGURE",
     "INFO_KEY",
     "KINDS",
@@ -291,6 +357,7 @@ __all__ = [
     "boundary_errors",
     "boundary_figure",
     "distance_to_segments",
+    "end_errors",
     "explained",
     "limb_boundaries",
     "loop_edges",

@@ -225,10 +225,10 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
                 from .coverage import record
 
                 run.info["uncertainty"] = record(fit.mesh, truth_surface, cams, segmentation=segmentation)
-                from .boundaries import INFO_KEY, boundary_errors
+                from .boundaries import INFO_KEY, boundary_errors, end_errors
 
                 try:  # a metric that cannot be read (a diverged fit) is said, the run keeps its volumes
-                    run.info[INFO_KEY] = boundary_errors(fit.mesh, truth_surface)
+                    run.info[INFO_KEY] = {**boundary_errors(fit.mesh, truth_surface), **end_errors(fit.mesh, truth_surface)}
                 except (BsvError, ValueError) as exc:
                     run.info[INFO_KEY + "_error"] = f"{type(exc).__name__}: {exc}"
                 if refined is not None:

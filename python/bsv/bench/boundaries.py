@@ -36,11 +36,13 @@ from .reference import ordered_conditions
 INFO_KEY = "boundary_errors_mm"
 #: The limb joints whose loops separate two measured segments, in table order.
 KINDS: tuple[str, ...] = ("shoulder", "elbow", "hip", "knee")
-#: The far ends of the forearms and the shins: the hands and feet are not fitted, so each of these segments
-#: ends in a cap, measured by :func:`end_errors` against the true wrist or ankle loop when the truth has them.
-END_KINDS: tuple[str, ...] = ("wrist", "ankle")
-#: Every kind a run's :data:`INFO_KEY` may hold, in table order (proximal to distal per limb).
-ALL_KINDS: tuple[str, ...] = ("shoulder", "elbow", "wrist", "hip", "knee", "ankle")
+#: Every kind a run's :data:`INFO_KEY` may hold, in table order (proximal to distal per limb): the limb joints
+#: of :data:`bsv.biomech.tables.JOINTS`.
+ALL_KINDS: tuple[str, ...] = tuple(dict.fromkeys(j.rsplit("_", 1)[0] for j in JOINTS if j.endswith(("_l", "_r"))))
+#: The far ends of the forearms and the shins (the kinds not in :data:`KINDS`): the hands and feet are not
+#: fitted, so each of these segments ends in a cap, measured by :func:`end_errors` against the true wrist or
+#: ankle loop when the truth has them.
+END_KINDS: tuple[str, ...] = tuple(k for k in ALL_KINDS if k not in KINDS)
 #: A fitted face belongs to a segment's far cap when its normal lies within this cosine of the limb's axis ...
 CAP_COS = 0.85
 #: ... and its centre within this distance (metres) of the segment's farthest face along the axis.

@@ -429,7 +429,7 @@ def process(
     (:func:`bsv.keypoints.confine_upper_arms`; counted in volumes.json's ``cloud``).
     ``keypoints`` (camera segmentation): the joint centres lifted from both views pull the template's
     joints in the first iterations (``bsv.register``'s keypoint term): None (the default) the shoulders,
-    wrists and hips only (:data:`bsv.keypoints.CAMERA_KEYPOINT_KINDS`, where the measurements on the synthetic cohort
+    elbows, wrists and hips only (:data:`bsv.keypoints.CAMERA_KEYPOINT_KINDS`, where the measurements on the synthetic cohort
     say why), True (``--keypoints``) every joint, False (``--no-keypoints``) none.
     ``pose_template`` (camera segmentation, the template's segments; ``--no-pose-template`` turns it off):
     the embedded template is first posed like the subject, its arm, elbow and hip angles read from the

@@ -182,14 +182,14 @@ def test_confine_upper_arms_refuses_bad_input() -> None:
 
 
 def test_select_joints_and_the_camera_paths_default_joints(monkeypatch) -> None:
-    """The camera path lets the shoulders, wrists and hips pull by default; ``keypoints=true`` every joint,
+    """The camera path lets the shoulders, elbows, wrists and hips pull by default (not the knees); ``keypoints=true`` every joint,
     ``false`` none."""
     from bsv.bench import common
     from bsv.keypoints import CAMERA_KEYPOINT_KINDS, JOINT_NAMES, select_joints
 
     joints = {n: [0.0, 1.0, 0.0] for n in JOINT_NAMES}
     arms = select_joints(joints, CAMERA_KEYPOINT_KINDS)
-    assert sorted(arms) == sorted(f"{j}_{s}" for j in ("shoulder", "wrist", "hip") for s in "lr")
+    assert sorted(arms) == sorted(f"{j}_{s}" for j in ("shoulder", "elbow", "wrist", "hip") for s in "lr")
     assert select_joints(joints, None) == joints and select_joints(joints, ()) == {}
     seen: list[object] = []
 

@@ -117,7 +117,7 @@ class Fit:
 
 
 #: ``--param`` keys the bench itself reads (not registration parameters): the camera path's measured
-#: joints pull the template's as in ``bsv process``: by default the shoulders, wrists and hips only
+#: joints pull the template's as in ``bsv process``: by default the shoulders, elbows, wrists and hips only
 #: (:data:`bsv.keypoints.CAMERA_KEYPOINT_KINDS`), ``keypoints=true`` every joint (``--keypoints``),
 #: ``keypoints=false`` none (``--no-keypoints``); ``keypoint_joints=elbow+knee`` keeps only those joints;
 #: ``pose_template=false`` keeps the template's own A-pose on the camera path (``--no-pose-template``).

@@ -333,13 +333,19 @@ class SegmentParams:
 #: 0.06 -> 0.05: the shins had gone 0.4 % smaller with the groin line). Judged on seeds 0, 2, 4, 6: the thighs'
 #: mean RVE 2.28-2.41 -> 2.03-2.06 %, the torso's 1.15 -> 0.93-1.02 %, the eight limbs' mean 2.04 / 2.13 ->
 #: 1.95 / 1.96 % (benchmarks/BENCH.md, round 2 session 23).
+#: The wrist lines moved 0.035 of the forearm's length towards the elbow in round 2 session 26 (front 0.03 ->
+#: -0.005, back 0.06 -> 0.025), when the elbows joined the keypoints (:data:`bsv.keypoints.CAMERA_KEYPOINT_KINDS`):
+#: their pull put the fitted elbow loop 0.8 mm nearer the shoulder on average and the forearms came out +0.7 %
+#: signed (seeds 0-7). Sized on seeds 1, 3, 5, 7 (0.02 and 0.035 tried: the eight limbs' mean 2.03 / 2.00 ->
+#: 2.03 / 1.98 and 2.02 / 1.98 %; 0.035 centres the forearms over noer and l515), judged on seeds 0, 2, 4, 6:
+#: the forearms' signed error +0.86 / +0.06 -> +0.04 / -0.88 %, their mean RVE 1.92 / 2.00 -> 1.81 / 1.97 %.
 DEFAULT_PARAMS: dict[str, SegmentParams] = {
     "front": SegmentParams(shoulder_inset=0.15, hip_widen=1.5, hip_raise=0.425, torso_weight=0.95, elbow_shift=0.012,
-                           knee_shift=0.095, ankle_height=0.056, arm_girth_power=0.5, arm_girth_ref=0.0323, knee_shift_sex=0.018,
+                           wrist_shift=-0.005, knee_shift=0.095, ankle_height=0.056, arm_girth_power=0.5, arm_girth_ref=0.0323, knee_shift_sex=0.018,
                            hip_raise_sex=0.025, armpit_angle=14.3, armpit_arm_slope=-0.585, armpit_sex_slope=-2.0,
                            groin_angle=32.8, groin_offset=0.04),
     "back": SegmentParams(neck_fraction=0.5, shoulder_inset=0.05, hip_widen=1.3, hip_raise=0.3, crotch_drop=0.2,
-                          torso_weight=0.95, elbow_shift=0.022, wrist_shift=0.06, knee_shift=0.05, ankle_shift=0.09,
+                          torso_weight=0.95, elbow_shift=0.022, wrist_shift=0.025, knee_shift=0.05, ankle_shift=0.09,
                           ankle_height=0.062, arm_girth_power=0.5, arm_girth_ref=0.0312, knee_shift_sex=0.018,
                           hip_raise_sex=0.025, armpit_angle=5.8, armpit_arm_slope=-0.66, armpit_sex_slope=-4.4,
                           groin_angle=16.1, groin_offset=0.04),

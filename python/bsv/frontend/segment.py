@@ -66,6 +66,7 @@ from ..extras import require
 from ..types import SEGMENT_IDS as _SEGMENT_IDS
 from ..types import SEGMENT_NAMES as _SEGMENT_NAMES
 from .errors import LandmarkMissingError, PersonNotFoundError, SegmentationError
+from .pose_model import POSE_MODEL_FILES, require_pose_model
 from .sex import SexEstimate
 
 PathLike = str | Path
@@ -109,7 +110,6 @@ HAND_BONES: tuple[tuple[int, int], ...] = (
     (0, 1), (1, 2), (2, 3), (3, 4), (0, 5), (5, 6), (6, 7), (7, 8), (5, 9), (9, 10), (10, 11), (11, 12),
     (9, 13), (13, 14), (14, 15), (15, 16), (13, 17), (0, 17), (17, 18), (18, 19), (19, 20),
 )
-_POSE_MODELS = {0: "pose_landmark_lite.tflite", 1: "pose_landmark_full.tflite", 2: "pose_landmark_heavy.tflite"}
 VIEWS = ("front", "back")
 
 
@@ -117,7 +117,8 @@ VIEWS = ("front", "back")
 class SegmentParams:
     """Tunable numbers of :func:`segment_image` (distances are fractions of the body's own lengths)."""
 
-    #: MediaPipe pose model: 1 (full) is the one the 0.10.21 wheel ships; 0 and 2 are downloaded.
+    #: MediaPipe pose model: 0 lite, 1 full (the one the 0.10.21 wheel ships), 2 heavy (0 and 2 installed from
+    #: the npm registry by :mod:`bsv.frontend.pose_model`).
     model_complexity: int = 1
     #: Person detection confidence of MediaPipe.
     min_detection_confidence: float = 0.75
@@ -240,7 +241,7 @@ class SegmentParams:
     limb_fill_band_m: float = 0.1
 
     def __post_init__(self) -> None:
-        if self.model_complexity not in _POSE_MODELS:
+        if self.model_complexity not in POSE_MODEL_FILES:
             raise SegmentationError(f"model_complexity must be 0, 1 or 2, got {self.model_complexity!r}")
         for name in ("min_detection_confidence", "min_visibility", "fallback_visibility", "mask_threshold"):
             v = getattr(self, name)
@@ -408,19 +409,6 @@ def _mediapipe_holistic() -> ModuleType:
     return require("mediapipe.python.solutions.holistic")
 
 
-def _check_model(holistic: Any, complexity: int) -> None:
-    """The pose model file must be present: 0.10.21 ships only the full model, the others are downloaded."""
-    base = Path(holistic.__file__).resolve().parents[2] / "modules" / "pose_landmark"
-    if not (base / _POSE_MODELS[complexity]).is_file():
-        try:
-            holistic._download_oss_pose_landmark_model(complexity)  # what Holistic() does
-        except Exception as e:  # network errors of any kind
-            raise SegmentationError(
-                f"model_complexity={complexity} needs {base / _POSE_MODELS[complexity]}, which the mediapipe "
-                f"wheel does not ship and which could not be downloaded ({e}); use model_complexity=1"
-            ) from e
-
-
 #: The MediaPipe Holistic graphs of this process, by (model complexity, detection confidence), with the
 #: process id that made them: building a graph costs about 0.1 s per image, more than the inference, and a
 #: graph inherited through fork() has lost its worker threads, so a child process builds its own.
@@ -437,7 +425,7 @@ def _holistic_model(complexity: int, min_detection_confidence: float) -> Any:
     if made is not None and made[0] == os.getpid():
         return made[1]
     holistic = _mediapipe_holistic()
-    _check_model(holistic, complexity)
+    require_pose_model(complexity)
     model = holistic.Holistic(static_image_mode=True, model_complexity=complexity, enable_segmentation=True,
                               refine_face_landmarks=False, min_detection_confidence=min_detection_confidence)
     _MODELS[key] = (os.getpid(), model)

@@ -1,0 +1,91 @@
+"""bsv.frontend.pose_model: the heavy pose model is installed from a checked npm tarball, or its absence is a
+clear error that names the command."""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import tarfile
+from pathlib import Path
+
+import pytest
+
+from bsv.errors import SegmentationError
+from bsv.frontend import pose_model as pm
+
+
+def _registry(root: Path, files: dict[str, bytes]) -> tuple[str, bytes]:
+    """A file:// registry holding a tarball of ``files`` (under ``package/``) at the npm path; (url, tarball)."""
+    buf = io.BytesIO()
+    with tarfile.open(fileobj=buf, mode="w:gz") as tar:
+        for name, data in files.items():
+            info = tarfile.TarInfo(f"package/{name}")
+            info.size = len(data)
+            tar.addfile(info, io.BytesIO(data))
+    blob = buf.getvalue()
+    url = pm.tarball_url(f"file://{root}")
+    path = Path(url.removeprefix("file://"))
+    path.parent.mkdir(parents=True)
+    path.write_bytes(blob)
+    return f"file://{root}", blob
+
+
+def test_a_missing_model_names_the_install_command(tmp_path, monkeypatch):
+    monkeypatch.setattr(pm, "model_dir", lambda: tmp_path)
+    with pytest.raises(SegmentationError, match=r"pose_landmark_heavy\.tflite.*python -m bsv\.frontend\.pose_model"):
+        pm.require_pose_model(2)
+    with pytest.raises(SegmentationError, match="model_complexity must be 0, 1 or 2"):
+        pm.require_pose_model(3)
+
+
+def test_a_tarball_of_another_checksum_is_refused_and_nothing_is_written(tmp_path):
+    registry, _ = _registry(tmp_path / "reg", {"pose_landmark_heavy.tflite": b"not a model"})
+    target = tmp_path / "models"
+    target.mkdir()
+    with pytest.raises(SegmentationError, match="refusing to install"):
+        pm.install_pose_models((2,), registry=registry, target=target)
+    assert list(target.iterdir()) == []
+
+
+def test_a_model_of_another_checksum_is_refused_and_nothing_is_written(tmp_path, monkeypatch):
+    registry, blob = _registry(tmp_path / "reg", {"pose_landmark_heavy.tflite": b"not a model"})
+    monkeypatch.setattr(pm, "TARBALL_SHA256", hashlib.sha256(blob).hexdigest())
+    target = tmp_path / "models"
+    target.mkdir()
+    with pytest.raises(SegmentationError, match=r"pose_landmark_heavy\.tflite .* refusing"):
+        pm.install_pose_models((2,), registry=registry, target=target)
+    assert list(target.iterdir()) == []
+
+
+def test_a_checked_model_is_installed_once(tmp_path, monkeypatch):
+    model = b"heavy model bytes"
+    registry, blob = _registry(tmp_path / "reg", {"pose_landmark_heavy.tflite": model})
+    monkeypatch.setattr(pm, "TARBALL_SHA256", hashlib.sha256(blob).hexdigest())
+    monkeypatch.setitem(pm.MODEL_SHA256, 2, hashlib.sha256(model).hexdigest())
+    target = tmp_path / "models"
+    target.mkdir()
+    paths = pm.install_pose_models((2,), registry=registry, target=target)
+    assert paths[2].read_bytes() == model
+    assert sorted(p.name for p in target.iterdir()) == ["pose_landmark_heavy.tflite"]  # no temporary left
+    # installed: checked, not fetched again (the registry is gone)
+    Path(pm.tarball_url(registry).removeprefix("file://")).unlink()
+    assert pm.install_pose_models((2,), registry=registry, target=target) == paths
+    # a file there that is not the model is reported, not overwritten
+    paths[2].write_bytes(b"something else")
+    with pytest.raises(SegmentationError, match="remove it"):
+        pm.install_pose_models((2,), registry=registry, target=target)
+    assert paths[2].read_bytes() == b"something else"
+
+
+def test_an_unreachable_registry_is_a_clear_error(tmp_path):
+    with pytest.raises(SegmentationError, match=r"could not fetch .*BSV_NPM_REGISTRY"):
+        pm.install_pose_models((2,), registry=f"file://{tmp_path / 'nowhere'}", target=tmp_path)
+
+
+def test_the_installed_models_are_mediapipe_s():
+    """scripts/setup.sh installed the lite and heavy models beside the wheel's full one, each the pinned file."""
+    pytest.importorskip("mediapipe", reason="the front-end's packages are not installed")
+    for complexity, digest in pm.MODEL_SHA256.items():
+        path = pm.require_pose_model(complexity)
+        assert hashlib.sha256(path.read_bytes()).hexdigest() == digest, path
+    assert pm.main(["--check"]) == 0

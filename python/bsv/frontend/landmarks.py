@@ -153,8 +153,8 @@ OFFSET_PREDICTORS: dict[str, float] = {"1": 0.0, "trunk": TRUNK_REF_M, "hip_widt
 #: coefficients are large and of opposite signs; clipped, a build far outside the cohort's (or a hip width
 #: centimetres off) cannot move a joint by centimetres. No held-out subject of seeds 0, 2, 4, 6 is clipped.
 OFFSET_PREDICTOR_RANGE: dict[str, tuple[float, float]] = {
-    "trunk": (-0.090, 0.081), "hip_width": (-0.040, 0.049), "shoulder_width": (-0.082, 0.073),
-    "leg_length": (-0.167, 0.162),
+    "trunk": (-0.095, 0.065), "hip_width": (-0.018, 0.043), "shoulder_width": (-0.081, 0.078),
+    "leg_length": (-0.168, 0.188),
 }
 #: Offset (metres) from the landmark-based estimate to the anatomical joint centre, per joint kind, in the
 #: body frame (x: lateral, toward the joint's own side; y: up, hips to shoulders; z: forward, the
@@ -163,23 +163,22 @@ OFFSET_PREDICTOR_RANGE: dict[str, tuple[float, float]] = {
 #: offset = sum over the kind's predictors p of c_p * (m_p - reference_p), with the measurements m_p of
 #: :data:`OFFSET_PREDICTORS`, as ``{predictor: c_p}``. Each kind's predictors are the ones that lower its
 #: held-out error (the hip and the shoulder: all four; the others: the trunk length, as all kinds before). Least squares on
-#: cohort seeds 11-18 (80 subjects, clinic room, noer; left and right pooled; MediaPipe on each image and
-#: its mirror image, averaged: ``SegmentParams.flip_average``) by ``benchmarks/learn_joint_offsets.py``;
-#: held out, seeds 0, 2, 4 and 6 (40 subjects): see benchmarks/BENCH.md, round 2 session 12 (the hip's
-#: vertical error sd 9.9 mm with the trunk length alone, 6.6 mm with the four, its p95 3-D error 24.0 ->
-#: 19.2 mm; the shoulder's lateral error sd 7.3 -> 6.1 mm). What it corrects: MediaPipe's ankle is the malleoli's outline, about 40 mm above the rig's
+#: cohort seeds 11-18 (80 subjects, clinic room, noer; left and right pooled; MediaPipe's heavy pose model
+#: on each image and its mirror image, averaged: ``SegmentParams.flip_average``) by
+#: ``benchmarks/learn_joint_offsets.py``; held out, seeds 0, 2, 4 and 6 (40 subjects): see benchmarks/BENCH.md,
+#: round 2 session 12 (the hip's vertical error sd 9.9 mm with the trunk length alone, 6.6 mm with the four,
+#: its p95 3-D error 24.0 -> 19.2 mm; the shoulder's lateral error sd 7.3 -> 6.1 mm) and session 27 (re-learned
+#: for the heavy model: medians shoulder 7.8, elbow 5.3, wrist 4.6, hip 8.5, knee 8.8, ankle 5.2 mm). What it corrects: MediaPipe's ankle is the malleoli's outline, about 40 mm above the rig's
 #: ankle joint (the head of the foot bone); its hip, knee, elbow and shoulder lie 10-15 mm medial of the
 #: joint centres; its hip marks the hip's outline, not the femoral head, and where the femoral head lies
 #: below it depends on the build (trunk, pelvis and shoulder widths, legs).
 JOINT_OFFSETS_M: dict[str, dict[str, tuple[float, float, float]]] = {
-    "shoulder": {"1": (0.0167, -0.0015, 0.0045), "trunk": (0.0368, 0.0975, -0.1361), "hip_width": (-0.2865, -0.1468, 0.0429),
-                 "shoulder_width": (0.3410, 0.0757, -0.0706), "leg_length": (-0.0492, 0.0077, 0.0420)},
-    "elbow": {"1": (0.0123, -0.0017, -0.0076), "trunk": (0.0495, 0.0095, -0.1236)},
-    "wrist": {"1": (0.0009, -0.0018, -0.0008), "trunk": (0.0635, -0.0179, 0.0516)},
-    "hip": {"1": (0.0214, 0.0083, -0.0110), "trunk": (0.0343, 0.6672, -0.1229), "hip_width": (-0.3599, -0.4192, 0.1737),
-            "shoulder_width": (0.0484, 0.1780, -0.1010), "leg_length": (0.0903, -0.2016, -0.0109)},
-    "knee": {"1": (0.0083, -0.0152, 0.0024), "trunk": (-0.0018, -0.1841, 0.1075)},
-    "ankle": {"1": (0.0047, -0.0446, 0.0023), "trunk": (0.0252, -0.2096, 0.0217)},
+    "shoulder": {"1": (0.0187, 0.0025, 0.0033), "trunk": (0.1217, 0.0936, -0.0328), "hip_width": (-0.3346, -0.0589, 0.1079), "shoulder_width": (0.2703, 0.0614, -0.0716), "leg_length": (-0.0644, 0.0079, -0.0248)},
+    "elbow": {"1": (0.0107, 0.0005, -0.0089), "trunk": (-0.0003, 0.0442, -0.1300)},
+    "wrist": {"1": (0.0004, 0.0003, -0.0016), "trunk": (0.0350, 0.0040, 0.0365)},
+    "hip": {"1": (0.0212, 0.0114, -0.0105), "trunk": (0.0647, 0.7095, -0.0317), "hip_width": (-0.2720, -0.4367, 0.2362), "shoulder_width": (-0.0010, 0.1687, -0.0793), "leg_length": (0.0840, -0.2184, -0.0733)},
+    "knee": {"1": (0.0044, -0.0235, 0.0014), "trunk": (-0.0021, -0.2445, 0.0711)},
+    "ankle": {"1": (0.0028, -0.0436, -0.0019), "trunk": (0.0283, -0.1593, -0.0962)},
 }
 
 #: Where the elbow joint centre lies along the line from the shoulder's to the wrist's (corrected) joint
@@ -187,12 +186,15 @@ JOINT_OFFSETS_M: dict[str, dict[str, tuple[float, float, float]]] = {
 #: the sex score (:mod:`bsv.frontend.sex`: +1 a woman, -1 a man). Learned with :data:`JOINT_OFFSETS_M` by
 #: ``benchmarks/learn_joint_offsets.py`` on the 80 training subjects of seeds 11-18, on top of the shipped
 #: offsets: on held-out seeds 0, 2, 4, 6 the elbow's median 3-D error goes 6.4 -> 5.3 mm, its 95th percentile
-#: 13.9 -> 11.6 mm (MediaPipe's elbow scatters more along the arm than the arm's proportions do). The rig's
+#: 13.9 -> 11.6 mm (MediaPipe's elbow scatters more along the arm than the arm's proportions do; re-learned
+#: for the heavy pose model in round 2 session 27). The rig's
 #: own elbows lie at 0.525 (a woman) and 0.485 (a man) of their true shoulder-to-wrist lines.
-ELBOW_FRACTION: dict[str, float] = {"1": 0.5101, "sex": 0.0111}
+ELBOW_FRACTION: dict[str, float] = {"1": 0.5095, "sex": 0.0111}
 #: The weight of the lifted landmark's own place along the arm against :data:`ELBOW_FRACTION`'s (0: the
 #: proportion alone, 1: the landmark alone), the one of 0, 0.05, ..., 1 that scatters least on the training
-#: subjects.
+#: subjects (with the full pose model; with the heavy one the script prints 0.3, whose elbow is 0.2 mm better
+#: at the median but whose fitted elbow loops scatter 0.2-0.4 mm more and the forearms 0.06-0.15 points more:
+#: round 2 session 27, seeds 1, 3, 5, 7).
 ELBOW_LANDMARK_WEIGHT = 0.1
 
 

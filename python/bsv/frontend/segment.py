@@ -118,8 +118,11 @@ class SegmentParams:
     """Tunable numbers of :func:`segment_image` (distances are fractions of the body's own lengths)."""
 
     #: MediaPipe pose model: 0 lite, 1 full (the one the 0.10.21 wheel ships), 2 heavy (0 and 2 installed from
-    #: the npm registry by :mod:`bsv.frontend.pose_model`).
-    model_complexity: int = 1
+    #: the npm registry by :mod:`bsv.frontend.pose_model`). Heavy since round 2 session 27: its wrists, elbows,
+    #: knees and shoulders place the fitted boundaries with less scatter (benchmarks/BENCH.md); the joint
+    #: offsets (:data:`bsv.frontend.landmarks.JOINT_OFFSETS_M`) and the cut lines of :data:`DEFAULT_PARAMS` are
+    #: sized for it.
+    model_complexity: int = 2
     #: Person detection confidence of MediaPipe.
     min_detection_confidence: float = 0.75
     #: Visibility below which a required landmark (ankle, wrist, ...) is not trusted (the paper's 0.75): it is
@@ -342,13 +345,13 @@ class SegmentParams:
 #: the forearms' signed error +0.86 / +0.06 -> +0.04 / -0.88 %, their mean RVE 1.92 / 2.00 -> 1.81 / 1.97 %.
 DEFAULT_PARAMS: dict[str, SegmentParams] = {
     "front": SegmentParams(shoulder_inset=0.15, hip_widen=1.5, hip_raise=0.425, torso_weight=0.95, elbow_shift=0.012,
-                           wrist_shift=-0.005, knee_shift=0.095, ankle_height=0.056, arm_girth_power=0.5, arm_girth_ref=0.0323, knee_shift_sex=0.018,
-                           hip_raise_sex=0.025, armpit_angle=14.3, armpit_arm_slope=-0.585, armpit_sex_slope=-2.0,
+                           wrist_shift=-0.005, knee_shift=0.115, ankle_height=0.056, arm_girth_power=0.5, arm_girth_ref=0.0323, knee_shift_sex=0.018,
+                           hip_raise_sex=0.025, armpit_angle=13.3, armpit_arm_slope=-0.585, armpit_sex_slope=-2.0,
                            groin_angle=32.8, groin_offset=0.04),
     "back": SegmentParams(neck_fraction=0.5, shoulder_inset=0.05, hip_widen=1.3, hip_raise=0.3, crotch_drop=0.2,
-                          torso_weight=0.95, elbow_shift=0.022, wrist_shift=0.025, knee_shift=0.05, ankle_shift=0.09,
+                          torso_weight=0.95, elbow_shift=0.022, wrist_shift=0.025, knee_shift=0.07, ankle_shift=0.09,
                           ankle_height=0.062, arm_girth_power=0.5, arm_girth_ref=0.0312, knee_shift_sex=0.018,
-                          hip_raise_sex=0.025, armpit_angle=5.8, armpit_arm_slope=-0.66, armpit_sex_slope=-4.4,
+                          hip_raise_sex=0.025, armpit_angle=4.8, armpit_arm_slope=-0.66, armpit_sex_slope=-4.4,
                           groin_angle=16.1, groin_offset=0.04),
 }
 

@@ -283,7 +283,8 @@ def test_ankles_are_placed_at_the_height_the_stature_gives(capture, monkeypatch)
     for v in seg.VIEWS:
         for name in ("left_ankle", "right_ankle"):
             got, own = raw[v].landmark(name), clean[v].landmark(name)
-            assert 12.0 < own[1] - got[1] < 30.0, (v, name, got, own)  # left 20 px up (and not placed)
+            # left 20 px up (and not placed); the clean ankle is itself placed, by up to about 10 px
+            assert 8.0 < own[1] - got[1] < 30.0, (v, name, got, own)
 
 
 def test_the_stature_is_read_from_the_depth_of_the_person(capture, monkeypatch):

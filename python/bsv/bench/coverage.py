@@ -24,7 +24,7 @@ its rows have ``calibration`` "refined" (:data:`CALIBRATIONS`), and :func:`refin
 floor before and after.
 
 The error model must come from other subjects than the ones scored (see :mod:`bsv.bench.noisemodel` and
-``benchmarks/derive_noise_model.sh``: cohort seeds 1 and 3, and 4-7 for the camera path; the benchmark's
+``benchmarks/derive_noise_model.sh``: cohort seeds 1 and 3, and 4-10 for the camera path; the benchmark's
 default seed is 0, and 2 is the other held-out seed).
 """
 

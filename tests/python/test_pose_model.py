@@ -89,3 +89,17 @@ def test_the_installed_models_are_mediapipe_s():
         path = pm.require_pose_model(complexity)
         assert hashlib.sha256(path.read_bytes()).hexdigest() == digest, path
     assert pm.main(["--check"]) == 0
+
+
+def test_segmentation_without_the_model_names_the_command(tmp_path, monkeypatch):
+    """The camera path's first detection, not a download, reports a missing heavy model."""
+    pytest.importorskip("mediapipe", reason="the front-end's packages are not installed")
+    import numpy as np
+
+    from bsv.frontend import segment as seg
+
+    monkeypatch.setattr(pm, "model_dir", lambda: tmp_path)
+    img = np.zeros((64, 48, 3), np.uint8)
+    # a detection confidence no other test uses: no graph of this process is reused
+    with pytest.raises(SegmentationError, match=r"python -m bsv\.frontend\.pose_model"):
+        seg.segment_image(img, "front", min_detection_confidence=0.613)

@@ -193,7 +193,7 @@ ELBOW_FRACTION: dict[str, float] = {"1": 0.5095, "sex": 0.0111}
 #: The weight of the lifted landmark's own place along the arm against :data:`ELBOW_FRACTION`'s (0: the
 #: proportion alone, 1: the landmark alone), the one of 0, 0.05, ..., 1 that scatters least on the training
 #: subjects (with the full pose model; with the heavy one the script prints 0.3, whose elbow is 0.2 mm better
-#: at the median but whose fitted elbow loops scatter 0.2-0.4 mm more and the forearms 0.06-0.15 points more:
+#: at the median but whose fitted elbow loops scatter 0.1-0.4 mm more and the forearms 0.06-0.16 points more:
 #: round 2 session 27, seeds 1, 3, 5, 7).
 ELBOW_LANDMARK_WEIGHT = 0.1
 

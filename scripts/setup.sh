@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Sets up BSV on a fresh machine: a virtualenv in .venv with the bsv Python package (Rust extension built
-# by maturin) and the bsv-cli binary. Idempotent; re-running rebuilds only what changed.
+# by maturin), the bsv-cli binary and MediaPipe's heavy pose model (from the npm registry). Idempotent; re-running rebuilds only what changed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY=${PYTHON:-python3}

@@ -34,15 +34,23 @@ def test_a_missing_model_names_the_install_command(tmp_path, monkeypatch):
     monkeypatch.setattr(pm, "model_dir", lambda: tmp_path)
     with pytest.raises(SegmentationError, match=r"pose_landmark_heavy\.tflite.*python -m bsv\.frontend\.pose_model"):
         pm.require_pose_model(2)
-    with pytest.raises(SegmentationError, match="model_complexity must be 0, 1 or 2"):
-        pm.require_pose_model(3)
+    with pytest.raises(SegmentationError, match=r"pose_landmark_full\.tflite.*reinstall the mediapipe wheel"):
+        pm.require_pose_model(1)
+    for bad in (3, "2", True, [2]):
+        with pytest.raises(SegmentationError, match="model_complexity must be 0, 1 or 2"):
+            pm.require_pose_model(bad)  # type: ignore[arg-type]
+    # a truncated model (an interrupted download of another tool) is not taken for the model
+    (tmp_path / "pose_landmark_heavy.tflite").write_bytes(b"truncated")
+    with pytest.raises(SegmentationError, match="truncated or foreign file; remove it"):
+        pm.require_pose_model(2)
+    assert pm.main(["--check"]) == 1
 
 
 def test_a_tarball_of_another_checksum_is_refused_and_nothing_is_written(tmp_path):
     registry, _ = _registry(tmp_path / "reg", {"pose_landmark_heavy.tflite": b"not a model"})
     target = tmp_path / "models"
     target.mkdir()
-    with pytest.raises(SegmentationError, match="refusing to install"):
+    with pytest.raises(SegmentationError, match=f"not the pinned {pm.TARBALL_SHA256}: refusing to install from it"):
         pm.install_pose_models((2,), registry=registry, target=target)
     assert list(target.iterdir()) == []
 
@@ -75,6 +83,31 @@ def test_a_checked_model_is_installed_once(tmp_path, monkeypatch):
     with pytest.raises(SegmentationError, match="remove it"):
         pm.install_pose_models((2,), registry=registry, target=target)
     assert paths[2].read_bytes() == b"something else"
+
+
+def test_an_unwritable_folder_is_a_clear_error_and_leaves_nothing(tmp_path, monkeypatch, capsys):
+    models = {"pose_landmark_lite.tflite": b"lite model bytes", "pose_landmark_heavy.tflite": b"heavy model bytes"}
+    registry, blob = _registry(tmp_path / "reg", models)
+    monkeypatch.setattr(pm, "TARBALL_SHA256", hashlib.sha256(blob).hexdigest())
+    for c in (0, 2):
+        monkeypatch.setitem(pm.MODEL_SHA256, c, hashlib.sha256(models[pm.POSE_MODEL_FILES[c]]).hexdigest())
+    target = tmp_path / "models"
+    target.mkdir()
+
+    def refuse(src: str, dst: object) -> None:  # what a read-only site-packages does to the rename
+        raise PermissionError(13, "Permission denied", str(dst))
+
+    monkeypatch.setattr(pm.os, "replace", refuse)
+    with pytest.raises(SegmentationError, match=r"could not write .*may write to"):
+        pm.install_pose_models((2,), registry=registry, target=target)
+    assert list(target.iterdir()) == []  # the temporary file is gone too
+    # the command line, the registry taken from the environment: the same clear error, exit status 1
+    monkeypatch.setenv("BSV_NPM_REGISTRY", registry)
+    monkeypatch.setattr(pm, "model_dir", lambda: target)
+    capsys.readouterr()
+    assert pm.main([]) == 1
+    assert "error: could not write" in capsys.readouterr().err
+    assert list(target.iterdir()) == []
 
 
 def test_an_unreachable_registry_is_a_clear_error(tmp_path):

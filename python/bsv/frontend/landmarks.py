@@ -151,7 +151,8 @@ OFFSET_PREDICTORS: dict[str, float] = {"1": 0.0, "trunk": TRUNK_REF_M, "hip_widt
 #: training cohort's range widened by a quarter of its span on each side (printed by
 #: ``benchmarks/learn_joint_offsets.py``). The build terms rise and fall together, so their fitted
 #: coefficients are large and of opposite signs; clipped, a build far outside the cohort's (or a hip width
-#: centimetres off) cannot move a joint by centimetres. No held-out subject of seeds 0, 2, 4, 6 is clipped.
+#: centimetres off) cannot move a joint by centimetres. Of the held-out subjects of seeds 0, 2, 4, 6 one is
+#: clipped, by 1 mm (seed 4 subject 3's hip width; the heavy pose model's ranges, round 2 session 27).
 OFFSET_PREDICTOR_RANGE: dict[str, tuple[float, float]] = {
     "trunk": (-0.095, 0.065), "hip_width": (-0.018, 0.043), "shoulder_width": (-0.081, 0.078),
     "leg_length": (-0.168, 0.188),

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import hashlib
+import http.client
 import io
 import os
 import sys
@@ -34,6 +35,8 @@ from ..errors import SegmentationError
 #: The model file of each MediaPipe model complexity (0 lite, 1 full, 2 heavy).
 POSE_MODEL_FILES: dict[int, str] = {0: "pose_landmark_lite.tflite", 1: "pose_landmark_full.tflite",
                                     2: "pose_landmark_heavy.tflite"}
+#: Size in bytes of each model file (a file of another size is a truncated or foreign one).
+MODEL_SIZES: dict[int, int] = {0: 2_819_824, 1: 6_440_512, 2: 27_709_200}
 #: SHA-256 of each model file (the full model's is the one the mediapipe 0.10.21 wheel ships).
 MODEL_SHA256: dict[int, str] = {
     0: "f17bfbecadb61c3be1baa8b8d851cc6619c870a87167b32848ad20db306b9d61",
@@ -49,6 +52,15 @@ TARBALL_SHA256 = "8bb349a7b3a3ba699df23be804ddd3b3eab810b50b15406894be257859388a
 NPM_REGISTRY = "https://registry.npmjs.org"
 #: The install command a missing model's error names.
 INSTALL_COMMAND = "python -m bsv.frontend.pose_model"
+#: The complexities :func:`install_pose_models` fetches (the full model comes with the mediapipe wheel).
+NPM_COMPLEXITIES: tuple[int, ...] = (0, 2)
+
+
+def check_complexity(complexity: object) -> int:
+    """``complexity`` if it is a model complexity of :data:`POSE_MODEL_FILES`, else a SegmentationError."""
+    if isinstance(complexity, bool) or not isinstance(complexity, int) or complexity not in POSE_MODEL_FILES:
+        raise SegmentationError(f"model_complexity must be 0, 1 or 2, got {complexity!r}")
+    return complexity
 
 
 def model_dir() -> Path:
@@ -65,20 +77,23 @@ def model_dir() -> Path:
 
 def model_path(complexity: int) -> Path:
     """Where the model of ``complexity`` (0, 1 or 2) lives; SegmentationError for another complexity."""
-    if complexity not in POSE_MODEL_FILES:
-        raise SegmentationError(f"model_complexity must be 0, 1 or 2, got {complexity!r}")
-    return model_dir() / POSE_MODEL_FILES[complexity]
+    return model_dir() / POSE_MODEL_FILES[check_complexity(complexity)]
 
 
 def require_pose_model(complexity: int) -> Path:
-    """The model file of ``complexity`` if it is installed, else a SegmentationError naming the file and the
-    command that installs it (:data:`INSTALL_COMMAND`)."""
+    """The model file of ``complexity`` if it is installed whole (its size is :data:`MODEL_SIZES`'), else a
+    SegmentationError naming the file and what installs it: :data:`INSTALL_COMMAND` for the lite and heavy
+    models, the mediapipe wheel for the full one."""
     path = model_path(complexity)
+    remedy = (f"install it once with `{INSTALL_COMMAND}` (it fetches MediaPipe's @mediapipe/pose package from the "
+              "npm registry; scripts/setup.sh does this)" if complexity in NPM_COMPLEXITIES else
+              "reinstall the mediapipe wheel (pip install --force-reinstall -r requirements-frontend.txt)")
     if not path.is_file():
-        raise SegmentationError(
-            f"model_complexity={complexity} needs MediaPipe's {POSE_MODEL_FILES[complexity]}, which is not at "
-            f"{path}: install it once with `{INSTALL_COMMAND}` (it fetches MediaPipe's @mediapipe/pose package "
-            "from the npm registry; scripts/setup.sh does this)")
+        raise SegmentationError(f"model_complexity={complexity} needs MediaPipe's {POSE_MODEL_FILES[complexity]}, "
+                                f"which is not at {path}: {remedy}")
+    if path.stat().st_size != MODEL_SIZES[complexity]:
+        raise SegmentationError(f"{path} has {path.stat().st_size} bytes, not MediaPipe's {MODEL_SIZES[complexity]}: "
+                                f"a truncated or foreign file; remove it and {remedy}")
     return path
 
 
@@ -98,7 +113,7 @@ def _fetch(url: str, timeout_s: float) -> bytes:
     try:
         with urllib.request.urlopen(url, timeout=timeout_s) as response:
             data: bytes = response.read()
-    except (urllib.error.URLError, OSError, ValueError) as e:
+    except (urllib.error.URLError, OSError, ValueError, http.client.HTTPException) as e:
         raise SegmentationError(
             f"could not fetch {url} ({e}); check the connection to the npm registry, or set BSV_NPM_REGISTRY to "
             "a mirror that holds the package") from e
@@ -117,28 +132,39 @@ def _members(tarball: bytes, url: str, wanted: dict[int, str]) -> dict[int, byte
                     raise KeyError(name)
                 out[complexity] = member.read()
     except (tarfile.TarError, KeyError, OSError) as e:
-        raise SegmentationError(f"{url} is not the expected @mediapipe/pose package ({e!r})") from e
+        raise SegmentationError(f"{url} is not the expected @mediapipe/pose package ({e!r}); if BSV_NPM_REGISTRY "
+                                "points to a mirror, unset it to use the npm registry") from e
     for complexity, data in out.items():
         if _sha256(data) != MODEL_SHA256[complexity]:
             raise SegmentationError(
                 f"{POSE_MODEL_FILES[complexity]} in {url} has SHA-256 {_sha256(data)}, not the pinned "
-                f"{MODEL_SHA256[complexity]}: refusing to install it")
+                f"{MODEL_SHA256[complexity]}: refusing to install it (if BSV_NPM_REGISTRY points to a mirror, unset it "
+                "to use the npm registry)")
     return out
 
 
 def _write_atomically(path: Path, data: bytes) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    """``data`` into ``path`` through a temporary file of its folder, synced, then renamed over it; a
+    SegmentationError (and no file left behind) when the folder cannot be written."""
+    tmp: str | None = None
     try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
         with os.fdopen(fd, "wb") as f:
             f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
         os.chmod(tmp, 0o644)  # mkstemp's 0600 would hide the model from other users of the environment
         os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    except OSError as e:
+        raise SegmentationError(
+            f"could not write {path} ({e}): run `{INSTALL_COMMAND}` as a user who may write to {path.parent} (the "
+            "mediapipe package's folder), or install BSV into a virtual environment of your own") from e
+    finally:
+        if tmp is not None and os.path.exists(tmp):
+            os.unlink(tmp)
 
 
-def install_pose_models(complexities: tuple[int, ...] = (0, 2), *, registry: str | None = None,
+def install_pose_models(complexities: tuple[int, ...] = NPM_COMPLEXITIES, *, registry: str | None = None,
                         target: Path | None = None, timeout_s: float = 120.0) -> dict[int, Path]:
     """Installs the pose models of ``complexities`` that are missing from ``target`` (default
     :func:`model_dir`) and returns where each one is. A model already there is checked, not replaced; one
@@ -148,12 +174,14 @@ def install_pose_models(complexities: tuple[int, ...] = (0, 2), *, registry: str
     paths = {}
     wanted = {}
     for c in complexities:
-        if c not in POSE_MODEL_FILES:
-            raise SegmentationError(f"model_complexity must be 0, 1 or 2, got {c!r}")
-        path = folder / POSE_MODEL_FILES[c]
+        path = folder / POSE_MODEL_FILES[check_complexity(c)]
         paths[c] = path
         if path.is_file():
-            if _sha256(path.read_bytes()) != MODEL_SHA256[c]:
+            try:
+                digest = _sha256(path.read_bytes())
+            except OSError as e:
+                raise SegmentationError(f"could not read {path} ({e}); remove it and run `{INSTALL_COMMAND}` again") from e
+            if digest != MODEL_SHA256[c]:
                 raise SegmentationError(
                     f"{path} is not MediaPipe's {POSE_MODEL_FILES[c]} (its SHA-256 differs from the pinned one); "
                     f"remove it and run `{INSTALL_COMMAND}` again")
@@ -167,7 +195,8 @@ def install_pose_models(complexities: tuple[int, ...] = (0, 2), *, registry: str
     tarball = _fetch(url, timeout_s)
     if _sha256(tarball) != TARBALL_SHA256:
         raise SegmentationError(f"{url} has SHA-256 {_sha256(tarball)}, not the pinned {TARBALL_SHA256}: "
-                                "refusing to install from it")
+                                "refusing to install from it (if BSV_NPM_REGISTRY points to a mirror, unset it to use "
+                                "the npm registry)")
     for c, data in _members(tarball, url, wanted).items():
         _write_atomically(paths[c], data)
     return paths
@@ -175,7 +204,8 @@ def install_pose_models(complexities: tuple[int, ...] = (0, 2), *, registry: str
 
 def main(argv: list[str] | None = None) -> int:
     """Command line: install the lite and heavy pose models (or ``--check`` that they are there)."""
-    ap = argparse.ArgumentParser(prog="python -m bsv.frontend.pose_model", description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(prog=INSTALL_COMMAND, description="Installs MediaPipe's lite and heavy pose models "
+                                 "from the npm registry (checked against pinned SHA-256s).")
     ap.add_argument("--check", action="store_true", help="only check; exit status 1 if a model is missing")
     ap.add_argument("--registry", help=f"npm registry (default: BSV_NPM_REGISTRY or {NPM_REGISTRY})")
     a = ap.parse_args(argv)

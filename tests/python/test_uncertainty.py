@@ -413,6 +413,22 @@ def test_noisemodel_command_warns_on_few_subjects_and_keeps_its_cross_validation
     assert unc.ErrorModel.from_json(doc["depth_models"]["exact"]).entries["trunk_limbs"][1] > 0
 
 
+def test_the_derivation_names_the_renders_it_came_from(tmp_path):
+    """The clinic room's and the studio's runs of one seed are told apart in the derivation's source."""
+    from bsv.bench.noisemodel import load_runs
+
+    paths = []
+    for name, room in (("room", "clinic"), ("studio", "studio"), ("grey", False)):
+        p = tmp_path / name / "results.json"
+        p.parent.mkdir()
+        p.write_text(json.dumps({"config": {"seed": 4, "n": 10, "segmentation": "camera", "room": room}, "runs": []}))
+        paths.append(p)
+    _, where = load_runs(paths)
+    parts = where.split("; ")
+    assert parts[0].endswith("clinic room renders)") and parts[1].endswith("studio renders)")
+    assert "renders" not in parts[2]
+
+
 def test_a_gross_failure_is_listed_not_spread_over_every_interval():
     """One fit that misses its upper arm by 36 % among 40 normal ones (2 % SD) would double the SD: the
     whole fit (its other quantities too) is left out and listed; normal fits are never left out."""

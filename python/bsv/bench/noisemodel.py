@@ -252,8 +252,10 @@ def load_runs(paths: Sequence[str | Path]) -> tuple[list[Run], str]:
             raise BenchError(f"{p}: cannot read benchmark results ({exc})") from exc
         runs += [Run.from_json(r) for r in doc.get("runs", [])]
         cfg = doc.get("config", {})
+        room = cfg.get("room")  # "clinic", "studio", or False: the body alone on grey
+        room = f", {'clinic room' if room == 'clinic' else room} renders" if room else ""
         where.append(f"bench synth seed {cfg.get('seed')} n {cfg.get('n')} ({cfg.get('conditions')}, "
-                     f"{cfg.get('segmentation')}, local modifiers {cfg.get('local_modifiers')})")
+                     f"{cfg.get('segmentation')}, local modifiers {cfg.get('local_modifiers')}{room})")
     return runs, "; ".join(where)
 
 

@@ -429,6 +429,26 @@ def test_the_derivation_names_the_renders_it_came_from(tmp_path):
     assert "renders" not in parts[2]
 
 
+def test_the_files_of_one_seed_are_left_out_together(tmp_path):
+    """A seed's room and studio runs hold the same subjects: the self-check leaves them out together, so no
+    subject is scored on a model derived from itself."""
+    from bsv.bench.noisemodel import load_groups
+
+    rng = np.random.default_rng(9)
+    paths = []
+    for folder, seed in (("camera_seed4", 4), ("studio_seed4", 4), ("camera_seed5", 5), ("loose", None)):
+        p = tmp_path / folder / "results.json"
+        p.parent.mkdir()
+        cfg = {"n": 3, "room": "studio" if folder.startswith("studio") else "clinic"}
+        if seed is not None:
+            cfg["seed"] = seed
+        p.write_text(json.dumps({"config": cfg, "runs": [r.to_json() for r in _noer_runs(3, rng)]}))
+        paths.append(p)
+    groups, _ = load_groups(paths)
+    assert {k: len(v) for k, v in groups.items()} == {"camera_seed4 + studio_seed4 (seed 4)": 6,
+                                                       "camera_seed5 (seed 5)": 3, "loose (no seed)": 3}
+
+
 def test_a_gross_failure_is_listed_not_spread_over_every_interval():
     """One fit that misses its upper arm by 36 % among 40 normal ones (2 % SD) would double the SD: the
     whole fit (its other quantities too) is left out and listed; normal fits are never left out."""

@@ -18,11 +18,11 @@ Calibrate on some cohort seeds and score the coverage on others (never on the de
 How many subjects: the prediction interval is exact on average for normal residuals, but one derivation's
 SD of a quantity is off by about ``1 / sqrt(2 (n - 1))`` (16 % with n = 20), and a held-out cohort of 10
 subjects then shows false "distinguishable" asymmetries from 0 to 14 % where 5 % is due. Every model
-should rest on at least :data:`MIN_SUBJECTS` subjects (a warning says when not). Each results file is a
-group (one cohort seed); with two groups or more, :func:`cross_validate` scores every group with the
-model derived from the others (coverage, half-widths, false "distinguishable" rate of
-:func:`bsv.bench.coverage.coverage_rows`) and the document keeps it under ``derivation.cross_validation``:
-a self-check of the derivation on subjects it did not see.
+should rest on at least :data:`MIN_SUBJECTS` subjects (a warning says when not). The results files of one
+cohort seed are a group (its subjects, in every look the files hold); with two groups or more,
+:func:`cross_validate` scores every group with the model derived from the others (coverage, half-widths,
+false "distinguishable" rate of :func:`bsv.bench.coverage.coverage_rows`) and the document keeps it under
+``derivation.cross_validation``: a self-check of the derivation on subjects it did not see.
 """
 
 from __future__ import annotations
@@ -225,19 +225,26 @@ def cross_validation_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
 
 
 def load_groups(paths: Sequence[str | Path]) -> tuple[dict[str, list[Run]], str]:
-    """The runs of each ``results.json`` (a group, named by its file and cohort seed) and a description
-    of their configurations."""
-    groups: dict[str, list[Run]] = {}
+    """The runs of the ``results.json`` files grouped by cohort seed, and a description of their
+    configurations. The files of one seed hold the same subjects (other looks, another segmentation), so
+    they form one group, named by their folders and the seed ("camera_seed4 + studio_seed4 (seed 4)"): leaving
+    out one look of a seed while its other look stays in would score the subjects on a model derived from
+    themselves. A file without a seed is a group of its own."""
+    by_seed: dict[Any, list[tuple[str, list[Run]]]] = {}
     where = []
-    for p in paths:
+    for k, p in enumerate(paths):
         runs, desc = load_runs([p])
         try:
             seed = json.loads(Path(p).read_text()).get("config", {}).get("seed")
         except (OSError, json.JSONDecodeError) as exc:  # load_runs read it a moment ago
             raise BenchError(f"{p}: cannot read benchmark results ({exc})") from exc
-        name = f"{Path(p).parent.name or p} (seed {seed})"
-        groups[name if name not in groups else f"{p} (seed {seed})"] = runs
+        by_seed.setdefault(seed if seed is not None else ("file", k), []).append((Path(p).parent.name or str(p), runs))
         where.append(desc)
+    groups: dict[str, list[Run]] = {}
+    for seed, files in by_seed.items():
+        label = f"seed {seed}" if not isinstance(seed, tuple) else "no seed"
+        name = f"{' + '.join(f for f, _ in files)} ({label})"
+        groups[name if name not in groups else f"{name} #{len(groups)}"] = [r for _, rs in files for r in rs]
     return groups, "; ".join(where)
 
 

@@ -4,6 +4,7 @@ answers, the model's probability and score, a given sex, and the parameters' ran
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -97,7 +98,7 @@ def test_a_given_sex_is_a_full_score():
 
 
 @pytest.mark.parametrize("bad", [{"sex_score": 2.0}, {"sex_score": -1.01}, {"knee_shift_sex": -0.01},
-                                 {"hip_raise_sex": 0.2}])
+                                 {"hip_raise_sex": 0.2}, {"elbow_shift_sex": -0.01}, {"groin_offset_sex": 0.3}])
 def test_the_sex_parameters_are_range_checked(bad):
     with pytest.raises(SegmentationError, match="sex"):
         SegmentParams(**bad)
@@ -138,6 +139,36 @@ def test_the_sex_moves_the_knee_line_and_the_hip_corners():
     changed = lab[1.0] != lab[-1.0]
     changed[:330] = False  # the drawn hands hang at the hips: the torso polygon's corners trade with them
     kinds = {SEGMENT_IDS[k] for k in ("thigh_l", "thigh_r", "shin_l", "shin_r", "torso")}
+    assert set(np.unique(lab[1.0][changed])) <= kinds and set(np.unique(lab[-1.0][changed])) <= kinds
+
+
+def test_the_sex_moves_the_elbow_and_groin_lines():
+    """A woman's elbow line lies further towards the wrist (fewer forearm pixels) and her groin line lower (more
+    torso, fewer thigh pixels) than a man's; a score of 0 is the plain rule. Only the upper arms, forearms,
+    torso and thighs change."""
+    h, w = 640, 400
+    mask = np.zeros((h, w), bool)
+    mask[55:615, 100:300] = True
+    pose = _standing_pose()
+    base = SegmentParams(elbow_shift_sex=0.05, groin_offset_sex=0.05, groin_angle=30.0, knee_shift_sex=0.0,
+                         hip_raise_sex=0.0)
+    crotch = np.array([200.0, 330.0])
+    lab = {s: label_pixels(mask, pose, [None, None], dataclasses.replace(base, sex_score=s), crotch=crotch)
+           for s in (1.0, 0.0, -1.0)}
+    plain = label_pixels(mask, pose, [None, None], dataclasses.replace(base, elbow_shift_sex=0.0, groin_offset_sex=0.0),
+                         crotch=crotch)
+    assert np.array_equal(lab[0.0], plain)
+
+    def count(v: np.ndarray, *names: str) -> int:
+        return int(np.isin(v, [SEGMENT_IDS[n] for n in names]).sum())
+
+    fore = {s: count(v, "forearm_l", "forearm_r") for s, v in lab.items()}
+    assert fore[1.0] < fore[0.0] < fore[-1.0]
+    thigh = {s: count(v, "thigh_l", "thigh_r") for s, v in lab.items()}
+    assert thigh[1.0] < thigh[0.0] < thigh[-1.0]
+    changed = lab[1.0] != lab[-1.0]
+    kinds = {SEGMENT_IDS[k] for k in ("upper_arm_l", "upper_arm_r", "forearm_l", "forearm_r", "thigh_l", "thigh_r",
+                                      "torso")}
     assert set(np.unique(lab[1.0][changed])) <= kinds and set(np.unique(lab[-1.0][changed])) <= kinds
 
 

@@ -36,8 +36,8 @@ once resolved, each view's ankle landmarks are moved to the height above the flo
 :func:`person_stature`), keeping their place across (:func:`place_ankles`); the joint centres take the
 moved ankles too. Once the labels are drawn, each leg's shin and foot pixels are split again in 3-D
 (:func:`cut_feet_at_ankle_plane`): below :data:`ANKLE_PLANE`, a height above the floor at the ankle that
-rises towards the toes (the body's own ankle loop lies 91 mm up, sd 4 mm, on every body of the cohort),
-foot; above it, shin. The 2-D line stays where there is no depth or no stature.
+rises towards the toes (the body's own ankle loop lies 91 mm up, sd 4 mm, on every body of the cohort; the
+stature and the sex read from the capture place it within 2 mm), foot; above it, shin. The 2-D line stays where there is no depth or no stature.
 
 Every substitute is a warning naming the landmark (:attr:`Segmentation.warnings`, the volumes JSON's
 ``warnings``, the report). Only a landmark that none of these gives (in practice: a limb not seen in
@@ -200,16 +200,19 @@ ELBOW_LANDMARK_WEIGHT = 0.1
 
 
 #: The camera path's shin / foot boundary, a plane in the world (:func:`cut_feet_at_ankle_plane`): at the
-#: ankle, ``height_m + height_per_stature x stature`` above the floor, rising towards the toes by
-#: ``forward_slope`` (metres up per metre forward), that height holding ``forward_offset_m`` forward of the
-#: ankle. The rig's true ankle loops (bsv.anatomy's ankle boundary) fitted by ``benchmarks/learn_ankle_plane.py``
-#: on the 160 legs of seeds 11-18: the loop's centroid lies 91 mm above the floor (sd 3.9 mm; the stature
-#: explains almost none of it), 10 mm forward of the ankle joint, the loop tilted 16 deg. On held-out seeds
-#: 0-7 the plane's height is off by +0.3 mm, sd 4.2 mm. The 2-D line through MediaPipe's ankle, placed at a
-#: fraction of the stature, put the cloud's shin end 10 mm (sd) off the true loop (benchmarks/BENCH.md, round 2
-#: session 25).
-ANKLE_PLANE: dict[str, float] = {"height_m": 0.0662, "height_per_stature": 0.0148, "forward_slope": 0.291,
-                                 "forward_offset_m": 0.0104}
+#: ankle, ``height_m + height_per_stature x stature + height_per_sex x sex score`` above the floor (the sex
+#: score of :mod:`bsv.frontend.sex`: +1 a woman, -1 a man), rising towards the toes by ``forward_slope``
+#: (metres up per metre forward), that height holding ``forward_offset_m`` forward of the ankle. The rig's
+#: true ankle loops (bsv.anatomy's ankle boundary) fitted by ``benchmarks/learn_ankle_plane.py`` on the 160
+#: legs of seeds 11-18: the loop's centroid lies 91 mm above the floor (sd 3.9 mm), 10 mm forward of the ankle
+#: joint, the loop tilted 16 deg. The stature alone explains almost none of the height, the stature and the
+#: sex together most of it (a woman's loop lies 10 mm higher than a man's of the same stature): on held-out
+#: seeds 0-7 the plane's height is off by sd 1.9 mm (4.2 mm with the stature alone; round 2 session 29, when
+#: the camera path's shins had come out 0.8-1.0 % larger per unit of the sex score, their ends 3.4-3.8 mm
+#: lower). The 2-D line through MediaPipe's ankle, placed at a fraction of the stature, put the cloud's shin
+#: end 10 mm (sd) off the true loop (benchmarks/BENCH.md, round 2 session 25).
+ANKLE_PLANE: dict[str, float] = {"height_m": 0.0121, "height_per_stature": 0.0467, "height_per_sex": 0.00512,
+                                 "forward_slope": 0.291, "forward_offset_m": 0.0104}
 #: A leg pixel farther than this (metres, horizontally) from its ankle keeps its 2-D label: the plane is the
 #: ankle's, not the mask's spill onto the floor or the wall.
 ANKLE_PLANE_RADIUS_M = 0.2
@@ -254,7 +257,8 @@ def floor_near_ankles(labels: np.ndarray, depth: np.ndarray, camera: Camera,
 
 def cut_feet_at_ankle_plane(labels: np.ndarray, depth: np.ndarray, camera: Camera, ankles: Mapping[str, np.ndarray],
                             stature: float, forward: np.ndarray | None = None,
-                            plane: Mapping[str, float] | None = None, seen_floor: bool = True) -> np.ndarray:
+                            plane: Mapping[str, float] | None = None, seen_floor: bool = True,
+                            sex_score: float | None = None) -> np.ndarray:
     """One view's labels with each leg's shin and foot pixels split again in 3-D by the ankle plane.
 
     ``labels`` (H, W) segment ids and ``depth`` (H, W) metres of one view, its calibrated ``camera``; ``ankles``
@@ -275,7 +279,7 @@ def cut_feet_at_ankle_plane(labels: np.ndarray, depth: np.ndarray, camera: Camer
     out = np.array(labels, copy=True)
     if not np.isfinite(stature) or stature <= 0:
         return out
-    height = pl["height_m"] + pl["height_per_stature"] * stature
+    height = pl["height_m"] + pl["height_per_stature"] * stature + pl.get("height_per_sex", 0.0) * (sex_score or 0.0)
     d = np.asarray(depth, dtype=np.float64)
     floor = floor_near_ankles(out, d, camera, ankles) if seen_floor else {}
     for side, shin, foot in _LEGS:
@@ -752,7 +756,7 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
     frame = _body_frame(lifted)
     forward = None if frame is None else frame[2]
     return {v: dataclasses.replace(segs[v], labels=cut_feet_at_ankle_plane(segs[v].labels, depths[v], cameras[v], lifted,
-                                                                            stature, forward))
+                                                                            stature, forward, sex_score=sex.score))
             for v in views}
 
 

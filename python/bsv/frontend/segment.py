@@ -175,6 +175,9 @@ class SegmentParams:
     arm_girth_ref: float = 0.032
     #: Upper arm / forearm line: past the elbow by this fraction of the forearm length.
     elbow_shift: float = 0.0
+    #: The elbow line moves towards the wrist by ``sex_score`` times this fraction of the forearm length more
+    #: (a woman's elbow boundary lies further from MediaPipe's elbow than a man's).
+    elbow_shift_sex: float = 0.0
     #: Forearm / hand line: past the wrist by this fraction of the forearm length.
     wrist_shift: float = 0.03
     #: Transverse (thigh/shin) line through the knees, moved down by this fraction of the shin length.
@@ -211,6 +214,9 @@ class SegmentParams:
     groin_angle: float | None = None
     #: The groin line moved up (towards the torso, a parallel shift) by this fraction of the hip-knee length.
     groin_offset: float = 0.0
+    #: The groin line moves down by ``sex_score`` times this fraction of the hip-knee length more (a woman's
+    #: torso / thigh boundary lies lower against the crotch than a man's).
+    groin_offset_sex: float = 0.0
     #: How far above and below the crotch the groin line decides, as a fraction of the hip-knee length.
     groin_reach: float = 0.8
     #: Shin / foot line through each ankle, moved down by this fraction of the shin length.
@@ -267,6 +273,10 @@ class SegmentParams:
         if not (0.0 <= self.knee_shift_sex <= 0.1) or not (0.0 <= self.hip_raise_sex <= 0.1):
             raise SegmentationError(f"knee_shift_sex and hip_raise_sex must lie in [0, 0.1] (fractions of the shin "
                                     f"and hip-knee lengths), got {self.knee_shift_sex!r} and {self.hip_raise_sex!r}")
+        if not (0.0 <= self.elbow_shift_sex <= 0.1) or not (0.0 <= self.groin_offset_sex <= 0.1):
+            raise SegmentationError(f"elbow_shift_sex and groin_offset_sex must lie in [0, 0.1] (fractions of the "
+                                    f"forearm and hip-knee lengths per unit of sex_score), got "
+                                    f"{self.elbow_shift_sex!r} and {self.groin_offset_sex!r}")
         if self.armpit_angle is not None and not (-60.0 <= self.armpit_angle <= 60.0):
             raise SegmentationError(f"armpit_angle must lie in [-60, 60] degrees or be None (the nearest-bone rule "
                                     f"alone), got {self.armpit_angle!r}")
@@ -347,16 +357,24 @@ class SegmentParams:
 #: 0.07; 0.015 left the shins +0.2 to +0.5 % signed) and the shoulder lines 1 deg flatter (``armpit_angle``
 #: front 14.3 -> 13.3, back 5.8 -> 4.8: the fit plus 1.5 deg; the upper arms had come out +1.1 % signed);
 #: sized on seeds 1, 3, 5, 7, judged on 0, 2, 4, 6: the eight limbs' mean 1.84 / 1.91 -> 1.67 / 1.74 %.
+#: The elbow and groin lines follow the subject's sex since round 2 session 29 (``elbow_shift_sex`` 0.03,
+#: ``groin_offset_sex`` 0.02 per unit of ``sex_score``), with the ankle plane's sex term
+#: (:data:`bsv.frontend.landmarks.ANKLE_PLANE`): over 120 subjects the fitted elbow loops lay 1.2-1.5 mm nearer
+#: the shoulder per unit of the sex score (a woman's forearm +1.1 % against a man's -1.1 %), the hip loops
+#: 1.4-1.8 mm (the thighs +0.8-0.9 % per unit), in the clinic room and in the studio alike. Tried on seeds 1,
+#: 3, 5, 7 (elbow 0.008, 0.025, 0.035; groin 0.015, 0.03; the knee's 0.018 -> 0.03 overshot and cost the
+#: thighs 0.1 points), judged on 0, 2, 4, 6: the eight limbs' mean 1.67 / 1.74 -> 1.58 / 1.68 % in the room,
+#: 2.02 / 2.11 -> 1.94 / 2.09 % in the studio (benchmarks/BENCH.md, round 2 session 29).
 DEFAULT_PARAMS: dict[str, SegmentParams] = {
-    "front": SegmentParams(shoulder_inset=0.15, hip_widen=1.5, hip_raise=0.425, torso_weight=0.95, elbow_shift=0.012,
+    "front": SegmentParams(shoulder_inset=0.15, hip_widen=1.5, hip_raise=0.425, torso_weight=0.95, elbow_shift=0.012, elbow_shift_sex=0.03,
                            wrist_shift=-0.005, knee_shift=0.115, ankle_height=0.056, arm_girth_power=0.5, arm_girth_ref=0.0323, knee_shift_sex=0.018,
                            hip_raise_sex=0.025, armpit_angle=13.3, armpit_arm_slope=-0.585, armpit_sex_slope=-2.0,
-                           groin_angle=32.8, groin_offset=0.04),
+                           groin_angle=32.8, groin_offset=0.04, groin_offset_sex=0.02),
     "back": SegmentParams(neck_fraction=0.5, shoulder_inset=0.05, hip_widen=1.3, hip_raise=0.3, crotch_drop=0.2,
-                          torso_weight=0.95, elbow_shift=0.022, wrist_shift=0.025, knee_shift=0.07, ankle_shift=0.09,
+                          torso_weight=0.95, elbow_shift=0.022, elbow_shift_sex=0.03, wrist_shift=0.025, knee_shift=0.07, ankle_shift=0.09,
                           ankle_height=0.062, arm_girth_power=0.5, arm_girth_ref=0.0312, knee_shift_sex=0.018,
                           hip_raise_sex=0.025, armpit_angle=4.8, armpit_arm_slope=-0.66, armpit_sex_slope=-4.4,
-                          groin_angle=16.1, groin_offset=0.04),
+                          groin_angle=16.1, groin_offset=0.04, groin_offset_sex=0.02),
 }
 
 
@@ -985,7 +1003,7 @@ def label_pixels(mask: np.ndarray, pose: np.ndarray, hands: list, params: Segmen
         fore = float(np.hypot(*(wr - el)))
         n_el = _unit(_unit(el - sh) + _unit(wr - el))
         n_wr = _unit(wr - el)
-        past_el = (p - (el + params.elbow_shift * fore * n_el)) @ n_el > 0
+        past_el = (p - (el + (params.elbow_shift + sex * params.elbow_shift_sex) * fore * n_el)) @ n_el > 0
         past_wr = (p - (wr + params.wrist_shift * fore * n_wr)) @ n_wr > 0
         arm = on & ((group == 1) | (group == 2))
         out[arm] = np.where(past_wr[arm], SEGMENT_IDS["hand" + sfx],
@@ -1197,7 +1215,7 @@ def _groin_line(out: np.ndarray, p: np.ndarray, left: np.ndarray, mask: np.ndarr
     if c is None or not np.all(np.isfinite(c)):  # the legs together: the torso polygon stands
         return
     rel = p - c
-    height = -(rel @ down) - params.groin_offset * thigh_len
+    height = -(rel @ down) - (params.groin_offset - (params.sex_score or 0.0) * params.groin_offset_sex) * thigh_len
     reach = np.abs(height) < params.groin_reach * thigh_len
     rise = math.tan(math.radians(params.groin_angle))
     for sfx, outward, on in (("_l", lat, left), ("_r", -lat, ~left)):

@@ -37,7 +37,8 @@ once resolved, each view's ankle landmarks are moved to the height above the flo
 moved ankles too. Once the labels are drawn, each leg's shin and foot pixels are split again in 3-D
 (:func:`cut_feet_at_ankle_plane`): below :data:`ANKLE_PLANE`, a height above the floor at the ankle that
 rises towards the toes (the body's own ankle loop lies 91 mm up, sd 4 mm, on every body of the cohort; the
-stature and the sex read from the capture place it within 2 mm), foot; above it, shin. The 2-D line stays where there is no depth or no stature.
+stature and the sex read from the capture place it within 2 mm), foot; above it, shin. The 2-D line stays
+where there is no depth or no stature.
 
 Every substitute is a warning naming the landmark (:attr:`Segmentation.warnings`, the volumes JSON's
 ``warnings``, the report). Only a landmark that none of these gives (in practice: a limb not seen in
@@ -265,8 +266,9 @@ def cut_feet_at_ankle_plane(labels: np.ndarray, depth: np.ndarray, camera: Camer
     the 3-D ankles by joint name (``ankle_l``, ``ankle_r``; world frame, y up, the floor y = 0); ``stature``
     metres; ``forward`` the subject's horizontal facing direction (default +z, the world frame's
     convention); ``plane`` :data:`ANKLE_PLANE`'s keys; ``seen_floor``: the plane's height is above the floor
-    this view sees around each ankle (:func:`floor_near_ankles`), else above y = 0. A pixel of a leg's shin or
-    foot with depth, within :data:`ANKLE_PLANE_RADIUS_M` of its ankle across the floor, becomes foot below the
+    this view sees around each ankle (:func:`floor_near_ankles`), else above y = 0; ``sex_score`` the subject's
+    (:mod:`bsv.frontend.sex`: +1 a woman, -1 a man; None counts as 0) for the plane's ``height_per_sex``. A
+    pixel of a leg's shin or foot with depth, within :data:`ANKLE_PLANE_RADIUS_M` of its ankle across the floor, becomes foot below the
     plane and shin above it; every other pixel, a leg whose ankle is missing and every pixel when the stature
     is unknown keep their labels. The input is not modified."""
     pl = ANKLE_PLANE if plane is None else plane

@@ -363,8 +363,9 @@ class SegmentParams:
 #: the shoulder per unit of the sex score (a woman's forearm +1.1 % against a man's -1.1 %), the hip loops
 #: 1.4-1.8 mm (the thighs +0.8-0.9 % per unit), in the clinic room and in the studio alike. Tried on seeds 1,
 #: 3, 5, 7 (elbow 0.008, 0.025, 0.035; groin 0.015, 0.03; the knee's 0.018 -> 0.03 overshot and cost the
-#: thighs 0.1 points), judged on 0, 2, 4, 6: the eight limbs' mean 1.67 / 1.74 -> 1.58 / 1.68 % in the room,
-#: 2.02 / 2.11 -> 1.94 / 2.09 % in the studio (benchmarks/BENCH.md, round 2 session 29).
+#: thighs 0.1 points, 0.024 lost on the judging seeds), judged on 0, 2, 4, 6: the eight limbs' mean 1.67 / 1.74
+#: -> 1.58 / 1.68 % in the room, 2.02 / 2.11 -> 1.94 / 2.09 % in the studio; on seeds 8-11 (room) 1.82 / 1.94
+#: -> 1.66 / 1.76 % (benchmarks/BENCH.md, round 2 session 29).
 DEFAULT_PARAMS: dict[str, SegmentParams] = {
     "front": SegmentParams(shoulder_inset=0.15, hip_widen=1.5, hip_raise=0.425, torso_weight=0.95, elbow_shift=0.012, elbow_shift_sex=0.03,
                            wrist_shift=-0.005, knee_shift=0.115, ankle_height=0.056, arm_girth_power=0.5, arm_girth_ref=0.0323, knee_shift_sex=0.018,

@@ -3,10 +3,11 @@ labels.
 
 The body's shin / foot boundary (MakeHuman's: the ankle loop of bsv.anatomy) is, on every body of the cohort,
 nearly the same plane around the ankle: a loop whose centroid lies 91 +- 4 mm above the floor (the stature and
-the sex together place it within 2 mm), rising towards the toes by about 13 deg. The 2-D line that cut the camera clouds' shins from the feet
-(through MediaPipe's ankle, placed at a fraction of the stature) put the cloud's shin end 10 mm (sd) off that
-loop, and the fitted shin's end followed it. So the camera path cuts the shins from the feet in 3-D: a point of
-a leg below the plane is foot (bsv.frontend.landmarks.cut_feet_at_ankle_plane).
+the sex together place it within 2 mm), rising towards the toes by about 13 deg. The 2-D line that cut the
+camera clouds' shins from the feet (through MediaPipe's ankle, placed at a fraction of the stature) put the
+cloud's shin end 10 mm (sd) off that loop, and the fitted shin's end followed it. So the camera path cuts the
+shins from the feet in 3-D: a point of a leg below the plane is foot
+(bsv.frontend.landmarks.cut_feet_at_ankle_plane).
 
 For every subject of the given cohort seeds (bodies only, no rendering) and each leg, this script fits a plane
 ``y = h + s * (z - z_c) + t * (x - x_c)`` to the true loop's edge midpoints ((x_c, z_c) their centroid) and

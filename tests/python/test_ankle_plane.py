@@ -127,9 +127,9 @@ def test_the_plane_stands_on_the_floor_the_view_sees():
 
 
 def test_a_womans_plane_lies_higher_by_the_sex_term():
-    """``height_per_sex`` moves the plane up by that many metres per unit of the sex score (+1 a woman): the
-    rig's true ankle loops lie 5 mm higher on a woman than on a man of the same stature. A score of None or 0
-    is the plane without the term."""
+    """``height_per_sex`` moves the plane up by that many metres per unit of the sex score (+1 a woman, -1 a
+    man): the rig's true ankle loops lie about 5 mm higher per unit, 10 mm from a man to a woman of the same
+    stature. A score of None or 0 is the plane without the term."""
     cam, labels, depth, _ = _scene()
     ankles = {"ankle_l": np.array([0.05, 0.07, -0.01]), "ankle_r": np.array([-0.05, 0.07, -0.01])}
     plane = {**PLANE, "height_per_sex": 0.005}

@@ -268,8 +268,8 @@ def cut_feet_at_ankle_plane(labels: np.ndarray, depth: np.ndarray, camera: Camer
     convention); ``plane`` :data:`ANKLE_PLANE`'s keys; ``seen_floor``: the plane's height is above the floor
     this view sees around each ankle (:func:`floor_near_ankles`), else above y = 0; ``sex_score`` the subject's
     (:mod:`bsv.frontend.sex`: +1 a woman, -1 a man; None counts as 0) for the plane's ``height_per_sex``. A
-    pixel of a leg's shin or foot with depth, within :data:`ANKLE_PLANE_RADIUS_M` of its ankle across the floor, becomes foot below the
-    plane and shin above it; every other pixel, a leg whose ankle is missing and every pixel when the stature
+    pixel of a leg's shin or foot with depth, within :data:`ANKLE_PLANE_RADIUS_M` of its ankle across the
+    floor, becomes foot below the plane and shin above it; every other pixel, a leg whose ankle is missing and every pixel when the stature
     is unknown keep their labels. The input is not modified."""
     pl = ANKLE_PLANE if plane is None else plane
     up = np.array([0.0, 1.0, 0.0])

@@ -286,6 +286,21 @@ def test_capture_cloud_with_the_true_label_images_is_the_scanner_cloud(body: bsv
     assert np.mean(cloud.labels[i] == rebuilt.labels) > 0.999
 
 
+def test_hip_abduction_option_reaches_the_synth_config() -> None:
+    from bsv.bench.main import parser, synth_config, synth_record
+    from bsv.bodies import HIP_ABDUCTION_RANGE_DEG, NARROW_HIP_ABDUCTION_RANGE_DEG
+
+    args = parser().parse_args(["synth", "--hip-abduction", "0,1.5"])
+    cfg = synth_config(args)
+    cfg.validate()
+    assert cfg.leg_range == NARROW_HIP_ABDUCTION_RANGE_DEG == (0.0, 1.5)
+    assert synth_record(cfg, args)["hip_abduction_deg"] == [0.0, 1.5]
+    default = parser().parse_args(["synth"])
+    assert synth_config(default).leg_range == HIP_ABDUCTION_RANGE_DEG
+    with pytest.raises(SystemExit):
+        parser().parse_args(["synth", "--hip-abduction", "3,1"])
+
+
 def test_arm_down_option_reaches_the_synth_config() -> None:
     from bsv.bench.main import parser, synth_config, synth_record
     from bsv.bodies import ARM_DOWN_RANGE_DEG, WIDE_ARM_DOWN_RANGE_DEG

@@ -206,6 +206,27 @@ def test_wide_arm_range_changes_only_the_arms():
     assert min(arms) < ARM_DOWN_RANGE_DEG[0] and max(arms) > ARM_DOWN_RANGE_DEG[1], arms
 
 
+def test_a_narrow_stance_draws_the_same_subject_with_the_legs_closer():
+    """--hip-abduction 0,1.5 keeps every other draw of a subject (sex, modifiers, arms) and only brings the
+    thighs closer together; bad ranges are PoseErrors naming the hip abduction."""
+    from bsv.bodies import HIP_ABDUCTION_RANGE_DEG, NARROW_HIP_ABDUCTION_RANGE_DEG
+
+    lo, hi = NARROW_HIP_ABDUCTION_RANGE_DEG
+    for i in range(3):
+        std = bodies.subject(i, seed=5, check=False)
+        narrow = bodies.subject(i, seed=5, check=False, leg_range=NARROW_HIP_ABDUCTION_RANGE_DEG)
+        assert narrow.phenotype.local == std.phenotype.local and narrow.sex == std.sex
+        assert (narrow.pose.arm_down_l, narrow.pose.elbow_r) == (std.pose.arm_down_l, std.pose.elbow_r)
+        assert lo <= narrow.pose.hip_abduction_l <= hi and lo <= narrow.pose.hip_abduction_r <= hi
+        assert narrow.pose.hip_abduction_l <= std.pose.hip_abduction_l
+        assert std.info()["hip_abduction_deg"] == list(HIP_ABDUCTION_RANGE_DEG)
+        assert narrow.info()["hip_abduction_deg"] == [lo, hi]
+    assert bodies.check_leg_range("0,1.5") == (0.0, 1.5)
+    for bad in ((3.0, 1.0), (-2.0, 4.0), (0.0, 25.0), (), "x,y", (math.nan, 2.0)):
+        with pytest.raises(bodies.PoseError, match="hip abduction range"):
+            bodies.subject(0, seed=5, leg_range=bad)
+
+
 def test_bad_arm_ranges_are_pose_errors():
     from bsv.bodies.variants import hard_subject
 

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from ..argtypes import key_value, seed, whole
-from ..bodies.cohort import ARM_DOWN_RANGE_DEG, arm_down_help, arm_range_arg
+from ..bodies.cohort import ARM_DOWN_RANGE_DEG, HIP_ABDUCTION_RANGE_DEG, arm_down_help, arm_range_arg, leg_range_arg
 from .reference import CONDITIONS
 from .synth import COHORTS, SynthConfig
 
@@ -87,6 +87,11 @@ def parser() -> argparse.ArgumentParser:
     s.add_argument("--no-local", action="store_true", help="cohort without MakeHuman local modifiers")
     s.add_argument("--arm-down", type=arm_range_arg, default=ARM_DOWN_RANGE_DEG, metavar="LOW,HIGH",
                    help=f"{arm_down_help()}; the camera path's shoulder boundary moves with the arms")
+    lo, hi = HIP_ABDUCTION_RANGE_DEG
+    s.add_argument("--hip-abduction", type=leg_range_arg, default=HIP_ABDUCTION_RANGE_DEG, metavar="LOW,HIGH",
+                   help=f"the interval each thigh's angle outward of the vertical is drawn from, degrees (default "
+                        f"{lo:g},{hi:g}; 0,1.5 for a narrow stance, where heavier subjects' thighs touch below the "
+                        "crotch)")
     s.add_argument("--cohort", choices=COHORTS, default="standard",
                    help="standard: bsv.bodies.cohort; hard: the same subjects reshaped into the registration's "
                    "hard classes (deep upper arms, bumps, a swollen segment, extreme segment modifiers; "
@@ -118,7 +123,8 @@ def synth_config(args: argparse.Namespace) -> SynthConfig:
                        template=args.template, methods=_methods(args), params=dict(args.param),
                        local=not args.no_local, cloud=args.cloud, room=args.room, studio=args.studio,
                        cloud_params=dict(args.cloud_param), cohort=args.cohort,
-                       refine_calibration=args.refine_calibration, arm_range=args.arm_down)
+                       refine_calibration=args.refine_calibration, arm_range=args.arm_down,
+                       leg_range=args.hip_abduction)
 
 
 def synth_record(cfg: SynthConfig, args: argparse.Namespace) -> dict[str, Any]:
@@ -129,7 +135,8 @@ def synth_record(cfg: SynthConfig, args: argparse.Namespace) -> dict[str, Any]:
             "room": ("studio" if cfg.studio else "clinic") if cfg.uses_room() else False,
             "cloud_params": cfg.cloud_params, "template": cfg.template, "methods": ",".join(cfg.methods),
             "params": cfg.params, "local_modifiers": cfg.local, "jobs": args.jobs,
-            "cohort": cfg.cohort, "arm_down_deg": list(cfg.arm_range), "scheduler": args.scheduler,
+            "cohort": cfg.cohort, "arm_down_deg": list(cfg.arm_range),
+            "hip_abduction_deg": list(cfg.leg_range), "scheduler": args.scheduler,
             "refine_calibration": cfg.refine_calibration}
 
 

@@ -31,7 +31,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..bodies.cohort import ARM_DOWN_RANGE_DEG, check_arm_range
+from ..bodies.cohort import ARM_DOWN_RANGE_DEG, HIP_ABDUCTION_RANGE_DEG, check_arm_range, check_leg_range
 from ..errors import BsvError, PoseError
 from ..types import Mesh, PointCloud
 from .common import SEX_TEMPLATE, BenchError, Run, keep_trunk_limbs, load_template, register_method
@@ -64,6 +64,9 @@ class SynthConfig:
     #: The arms' angle below the horizontal the subjects are drawn from (degrees; ``--arm-down``):
     #: :data:`bsv.bodies.cohort.ARM_DOWN_RANGE_DEG` by default, wider to test the pose's effect.
     arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG
+    #: The hips' abduction the subjects are drawn from (degrees; ``--hip-abduction``):
+    #: :data:`bsv.bodies.cohort.HIP_ABDUCTION_RANGE_DEG` by default, narrower for thighs that touch.
+    leg_range: tuple[float, float] = HIP_ABDUCTION_RANGE_DEG
     cloud: str = "raw"
     #: Cloud-building keywords for the lab path (``bsv process``'s defaults when empty), e.g. {"sor": True}.
     cloud_params: dict[str, Any] = field(default_factory=dict)
@@ -101,6 +104,10 @@ class SynthConfig:
             check_arm_range(self.arm_range)
         except PoseError as exc:
             raise BenchError(f"--arm-down: {exc}") from None
+        try:
+            check_leg_range(self.leg_range)
+        except PoseError as exc:
+            raise BenchError(f"--hip-abduction: {exc}") from None
         if self.cohort not in COHORTS:
             raise BenchError(f"--cohort {self.cohort}: use one of {', '.join(COHORTS)}")
         if self.segmentation not in SEGMENTATIONS:
@@ -379,7 +386,7 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] |
     t0 = time.perf_counter()
     try:
         make = hard_subject if cfg.cohort == "hard" else subject
-        s = make(index, cfg.seed, local=cfg.local, arm_range=cfg.arm_range)
+        s = make(index, cfg.seed, local=cfg.local, arm_range=cfg.arm_range, leg_range=cfg.leg_range)
     except Exception as exc:
         err = f"subject generation failed: {type(exc).__name__}: {exc}"
         runs: list[Run] = [Run(name, c, m, False, error=err) for c in cfg.conditions for m in cfg.methods]

@@ -11,9 +11,12 @@ from .asset import AssetError, asset_path, load_asset
 from .body import Body, SolveError, make_body, solve_stature_bmi
 from .cohort import (
     ARM_DOWN_RANGE_DEG,
+    HIP_ABDUCTION_RANGE_DEG,
+    NARROW_HIP_ABDUCTION_RANGE_DEG,
     WIDE_ARM_DOWN_RANGE_DEG,
     Subject,
     check_arm_range,
+    check_leg_range,
     cohort,
     iter_cohort,
     subject,
@@ -29,6 +32,8 @@ from .template import templates, write_templates
 
 __all__ = [
     "ARM_DOWN_RANGE_DEG",
+    "HIP_ABDUCTION_RANGE_DEG",
+    "NARROW_HIP_ABDUCTION_RANGE_DEG",
     "PALETTE",
     "WIDE_ARM_DOWN_RANGE_DEG",
     "AssetError",
@@ -42,6 +47,7 @@ __all__ = [
     "Subject",
     "asset_path",
     "check_arm_range",
+    "check_leg_range",
     "cohort",
     "iter_cohort",
     "load_asset",

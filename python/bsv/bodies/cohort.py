@@ -48,12 +48,21 @@ ARM_DOWN_RANGE_DEG: tuple[float, float] = (25.0, 50.0)
 #: A wider A-pose range (``bsv bench synth --arm-down 15,60``): arms from nearly horizontal to close to
 #: the body, where the camera path's shoulder boundary moves (BENCH.md, round 2 session 10).
 WIDE_ARM_DOWN_RANGE_DEG: tuple[float, float] = (15.0, 60.0)
+#: The cohort's hip abduction (degrees, each thigh outward of the vertical, both sides drawn around one value):
+#: the stance the standard cohort covers.
+HIP_ABDUCTION_RANGE_DEG: tuple[float, float] = (0.0, 6.0)
+#: A narrow stance (``bsv bench synth --hip-abduction 0,1.5``): feet nearly together, where a heavier subject's
+#: thighs touch below the crotch and the gap between the legs opens only under them (BENCH.md, round 2
+#: session 30).
+NARROW_HIP_ABDUCTION_RANGE_DEG: tuple[float, float] = (0.0, 1.5)
 #: The lowest angle (degrees below the horizontal) the collision loop raises a colliding arm to: the arm
 #: range's low bound, or this when the bound is higher (a body must come out free; the cohorts before
 #: ``arm_range`` existed used this floor).
 ARM_FREE_FLOOR_DEG = 10.0
 #: The bounds an arm range must lie in (degrees below the horizontal; see :func:`check_arm_range`).
 _ARM_DOWN_LIMITS_DEG: tuple[float, float] = (0.0, 80.0)
+#: The bounds a hip abduction range must lie in (degrees; see :func:`check_leg_range`).
+_HIP_ABDUCTION_LIMITS_DEG: tuple[float, float] = (0.0, 20.0)
 
 
 @dataclass
@@ -73,19 +82,22 @@ class Subject:
     #: The interval the arm angles were drawn from (``arm_range`` of :func:`subject`; degrees below the
     #: horizontal): with (index, seed) it reproduces the subject.
     arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG
+    #: The interval the hips' abduction was drawn from (``leg_range`` of :func:`subject`; degrees).
+    leg_range: tuple[float, float] = HIP_ABDUCTION_RANGE_DEG
 
     def volumes_l(self) -> dict[str, float]:
         """Ground-truth volumes (litres): 14 segments and aggregates."""
         return self.body.volumes_l()
 
     def info(self) -> dict:
-        """JSON-ready description (draws, phenotype, pose, the arm range ``arm_down_deg``, measured
-        stature/BMI)."""
+        """JSON-ready description (draws, phenotype, pose, the arm range ``arm_down_deg``, the hips'
+        ``hip_abduction_deg``, measured stature/BMI)."""
         return {"index": self.index, "seed": self.seed, "sex": self.sex,
                 "stature_target_m": self.stature_target, "bmi_target": self.bmi_target,
                 "stature_m": self.body.stature, "bmi": self.body.bmi, "volume_l": self.body.volume_l,
                 "phenotype": asdict(self.phenotype), "pose": asdict(self.pose),
                 "arm_down_deg": [float(a) for a in self.arm_range],
+                "hip_abduction_deg": [float(a) for a in self.leg_range],
                 **({"variant": self.variant} if self.variant else {})}
 
 
@@ -135,6 +147,21 @@ def check_arm_range(arm_range: Sequence[float] | str) -> tuple[float, float]:
     return lo, hi
 
 
+def check_leg_range(leg_range: Sequence[float] | str) -> tuple[float, float]:
+    """``leg_range`` (two hip abduction angles, or the command line's ``"LOW,HIGH"``) as floats, or PoseError
+    when it is not an increasing pair inside [0, 20] degrees (each thigh outward of the vertical: from feet
+    together to a wide stance; the collision loop may spread the legs further)."""
+    parts = leg_range.split(",") if isinstance(leg_range, str) else leg_range
+    try:
+        lo, hi = (float(x) for x in parts)
+    except (TypeError, ValueError) as exc:
+        raise PoseError(f"hip abduction range {leg_range!r}: give two angles in degrees, LOW < HIGH, e.g. 0,1.5") from exc
+    low, high = _HIP_ABDUCTION_LIMITS_DEG
+    if not (low <= lo < hi <= high):
+        raise PoseError(f"hip abduction range ({lo:g}, {hi:g}) deg: need {low:g} <= low < high <= {high:g}")
+    return lo, hi
+
+
 def arm_range_arg(text: str) -> tuple[float, float]:
     """The argparse type of ``--arm-down LOW,HIGH`` (``bsv cohort``, ``bsv bench synth``):
     :func:`check_arm_range`, its message as the usage error."""
@@ -142,6 +169,17 @@ def arm_range_arg(text: str) -> tuple[float, float]:
 
     try:
         return check_arm_range(text)
+    except PoseError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def leg_range_arg(text: str) -> tuple[float, float]:
+    """The argparse type of ``--hip-abduction LOW,HIGH`` (``bsv bench synth``): :func:`check_leg_range`, its
+    message as the usage error."""
+    import argparse
+
+    try:
+        return check_leg_range(text)
     except PoseError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
@@ -175,13 +213,18 @@ def _free_step(pose: Pose, hits: Iterable[str], arm_floor: float) -> Pose:
 
 
 def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
-            arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG) -> Subject:
+            arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG,
+            leg_range: tuple[float, float] = HIP_ABDUCTION_RANGE_DEG) -> Subject:
     """Subject ``index`` of the cohort of ``seed`` (deterministic). ``arm_range``: the interval (degrees
     below the horizontal, :func:`check_arm_range`) the arms' angle is drawn from; the default keeps the
     cohort as it always was, a wider one (:data:`WIDE_ARM_DOWN_RANGE_DEG`) draws the same random numbers,
     so every other draw stays. Both arm angles stay inside ``arm_range`` unless a collision raises an arm
-    (then down to ``min(low, ARM_FREE_FLOOR_DEG)``); a body that still collides there is a SolveError."""
+    (then down to ``min(low, ARM_FREE_FLOOR_DEG)``); a body that still collides there is a SolveError.
+    ``leg_range`` likewise for the hips' abduction (degrees, :func:`check_leg_range`; a narrower stance,
+    :data:`NARROW_HIP_ABDUCTION_RANGE_DEG`, draws the same random numbers); a collision spreads the legs past
+    it."""
     lo, hi = check_arm_range(arm_range)
+    llo, lhi = check_leg_range(leg_range)
     rng = np.random.default_rng([int(seed), int(index)])
     female = index % 2 == 0
     mu, sd = (1.63, 0.065) if female else (1.77, 0.07)
@@ -195,11 +238,11 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
                    age=Phenotype.age_from_years(years), muscle=float(rng.uniform(0.3, 0.6)),
                    proportions=float(rng.uniform(0.3, 0.7)), african=float(race[0]), asian=float(race[1]),
                    caucasian=float(race[2]))
-    arm, elbow, hip = rng.uniform(lo, hi), rng.uniform(0, 20), rng.uniform(0, 6)
+    arm, elbow, hip = rng.uniform(lo, hi), rng.uniform(0, 20), rng.uniform(llo, lhi)
     d = rng.normal(0, 1.5, size=3)
     pose = Pose(float(np.clip(arm + d[0], lo, hi)), float(np.clip(arm - d[0], lo, hi)),
                 float(np.clip(elbow + d[1], 0, 20)), float(np.clip(elbow - d[1], 0, 20)),
-                float(np.clip(hip + d[2] / 3, 0, 6)), float(np.clip(hip - d[2] / 3, 0, 6)))
+                float(np.clip(hip + d[2] / 3, llo, lhi)), float(np.clip(hip - d[2] / 3, llo, lhi)))
     loc = _draw_local(rng)
     if local:
         ph = ph.with_(local=loc)
@@ -221,7 +264,7 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
         if check and penetrations(body.vertices, body.faces, body.face_labels):
             raise SolveError(f"cohort subject {index} (seed {seed}) still self-intersects after pose changes")
     return Subject(index, int(seed), "female" if female else "male", stature, bmi_used, ph, pose, body,
-                   arm_range=(lo, hi))
+                   arm_range=(lo, hi), leg_range=(llo, lhi))
 
 
 def cohort(n: int, seed: int = 0, local: bool = True, check: bool = True,
@@ -325,9 +368,27 @@ def main(argv: list[str] | None = None) -> int:
 
 
 __all__ = [
-    "ARM_DOWN_RANGE_DEG", "ARM_FREE_FLOOR_DEG", "LOCAL_CENTRAL", "LOCAL_SIDED", "WIDE_ARM_DOWN_RANGE_DEG", "Subject", "arm_down_help",
-    "arm_range_arg", "check_arm_range", "cohort", "iter_cohort", "main", "subject", "subject_files",
-    "volumes_json", "write_cohort", "write_subject",
+    "ARM_DOWN_RANGE_DEG",
+    "ARM_FREE_FLOOR_DEG",
+    "HIP_ABDUCTION_RANGE_DEG",
+    "LOCAL_CENTRAL",
+    "LOCAL_SIDED",
+    "NARROW_HIP_ABDUCTION_RANGE_DEG",
+    "WIDE_ARM_DOWN_RANGE_DEG",
+    "Subject",
+    "arm_down_help",
+    "arm_range_arg",
+    "check_arm_range",
+    "check_leg_range",
+    "cohort",
+    "iter_cohort",
+    "leg_range_arg",
+    "main",
+    "subject",
+    "subject_files",
+    "volumes_json",
+    "write_cohort",
+    "write_subject",
 ]
 
 

@@ -17,7 +17,12 @@ Per view and line, the lean is fitted by least squares as ``angle + slope * pose
 = 1 - 2 x MakeHuman's gender (+1 a woman, -1 a man: the camera path's sex score). The script prints the three
 numbers per view and line and the residual's sd left out one capture at a time, next to the lean's own sd. The
 groin's lean follows neither usefully (its fit leaves a residual no smaller than its sd), so only its mean is
-used: SegmentParams.groin_angle. DEFAULT_PARAMS holds these fits with the line moved where the pixel-true line left the limb's volume biased on training seeds 1 and 3
+used: SegmentParams.groin_angle.
+
+- crotch: where the thighs do not touch (the gap top not below the true torso / thigh boundary's lowest point
+  between the knees by more than CROTCH_TOUCH_TRUTH), the gap top's depth below the hips' midpoint as a fraction
+  of the hip-knee distance, against the thighs' mean angle outward and the sex score: the three numbers are
+  bsv.frontend.segment.CROTCH_DEPTH's "1", "spread" and "sex", where a crotch is expected when the thighs touch. DEFAULT_PARAMS holds these fits with the line moved where the pixel-true line left the limb's volume biased on training seeds 1 and 3
 (the volume the registration carries from the labels, not the pixels, is what is measured): the shoulder's
 angle raised by 2.5 deg in both views (benchmarks/BENCH.md, round 2 session 22), the groin's line moved up
 (SegmentParams.groin_offset) as DEFAULT_PARAMS' notes say.
@@ -49,6 +54,7 @@ from bsv.frontend.segment import (
     armpit_point,
     body_axes,
     crotch_point,
+    thigh_angle_deg,
 )
 
 #: Shoulder: the true boundary pixels used, up to this many pixels above the armpit and within this many
@@ -111,9 +117,34 @@ def groin_leans(mask: np.ndarray, pose: np.ndarray, truth: np.ndarray) -> Leans:
         if sel.sum() < 10:
             continue
         rise = math.degrees(math.atan(float(np.sum(height[sel] * across[sel])) / float(np.sum(across[sel] ** 2))))
-        knee = P[f"{side}_knee"] - P[f"{side}_hip"]  # the thigh's angle outward of the body axis
-        out.append((rise, math.degrees(math.atan2(float(knee @ outward), float(knee @ down)))))
+        out.append((rise, thigh_angle_deg(P[f"{side}_hip"], P[f"{side}_knee"], down, outward)))
     return out
+
+
+#: Crotch: a gap top lower than the true torso / thigh boundary's lowest point between the knees by more than
+#: this fraction of the hip-knee distance is where the thighs touch, not the crotch: left out of the fit.
+CROTCH_TOUCH_TRUTH = 0.02
+
+
+def crotch_depths(mask: np.ndarray, pose: np.ndarray, truth: np.ndarray) -> Leans:
+    """(the crotch's depth below the hips' midpoint as a fraction of the hip-knee distance, the thighs' mean
+    angle outward of the body axis) of one view whose crotch is found where the thighs do not touch (the gap top
+    not below the true torso's lowest point between the knees by more than :data:`CROTCH_TOUCH_TRUTH`)."""
+    P = {n: pose[i, :2].astype(np.float64) for i, n in enumerate(POSE_NAMES)}
+    _, h_mid, down, lat = body_axes(P)
+    span = float(((P["left_knee"] + P["right_knee"]) / 2 - h_mid) @ down)
+    c = crotch_point(mask, P["left_knee"], P["right_knee"], float(h_mid[1]))
+    xa, xb = sorted((round(float(P["left_knee"][0])), round(float(P["right_knee"][0]))))
+    ys, xs = np.nonzero(truth[:, max(xa, 0):xb + 1] == SEGMENT_IDS["torso"])
+    if c is None or span <= 1.0 or len(ys) == 0:
+        return []
+    k = int(np.argmax(ys))
+    apex = np.array([max(xa, 0) + xs[k], ys[k]], dtype=np.float64)
+    depth, apex_depth = float((c - h_mid) @ down) / span, float((apex - h_mid) @ down) / span
+    if depth > apex_depth + CROTCH_TOUCH_TRUTH:
+        return []
+    spread = [thigh_angle_deg(P[f"{side}_hip"], P[f"{side}_knee"], down, out) for side, out in (("left", lat), ("right", -lat))]
+    return [(depth, float(np.mean(spread)))]
 
 
 #: The lines learned: name -> (the function measuring one view, the names of the fit's three terms: the
@@ -121,6 +152,7 @@ def groin_leans(mask: np.ndarray, pose: np.ndarray, truth: np.ndarray) -> Leans:
 LINES: dict[str, tuple[Callable[[np.ndarray, np.ndarray, np.ndarray], Leans], tuple[str, str, str]]] = {
     "shoulder": (shoulder_leans, ("armpit_angle", "armpit_arm_slope", "armpit_sex_slope")),
     "groin": (groin_leans, ("groin_angle", "deg per deg of the thigh's angle", "deg per unit of sex score")),
+    "crotch": (crotch_depths, ("depth (CROTCH_DEPTH '1')", "per deg of the thighs' angle", "per unit of sex score ('sex')")),
 }
 
 
@@ -165,9 +197,9 @@ def main() -> None:
         arr = np.array(r, dtype=np.float64)
         coef, resid = fit(arr)
         names = LINES[line][1]
-        print(f"{line} {v}: {len(arr)} sides, lean {arr[:, 1].mean():.1f} +- {arr[:, 1].std():.1f} deg; "
-              f"{names[0]} {coef[0]:.2f}, {names[1]} {coef[1]:.3f}, {names[2]} {coef[2]:.2f}; residual sd left out "
-              f"{resid:.2f} deg")
+        print(f"{line} {v}: {len(arr)} sides, {arr[:, 1].mean():.4f} +- {arr[:, 1].std():.4f}; "
+              f"{names[0]} {coef[0]:.4f}, {names[1]} {coef[1]:.4f}, {names[2]} {coef[2]:.4f}; residual sd left out "
+              f"{resid:.4f}")
 
 
 if __name__ == "__main__":

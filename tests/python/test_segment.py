@@ -505,24 +505,37 @@ def test_the_two_views_crotches_agree():
     """A gap between the legs only shows lower than the crotch: when one view's gap starts far lower than the
     other's (depths below the hips differing by more than CROTCH_VIEWS_DISAGREE of the hip-knee distance),
     its crotch moves up to the other's depth; views that agree keep their own; a view with no gap takes the
-    other's depth at the midline; gaps deeper than CROTCH_MAX_DEPTH in both views are no crotch."""
+    other's depth at the midline; gaps deeper than the expected crotch by more than CROTCH_TOUCH_MARGIN in both
+    views (the thighs touch) put each view's crotch at its expected depth, a woman's lower than a man's."""
     pose = _legs_pose()
     open_, closed = _drawn_legs(), _drawn_legs()
     closed[200:260, 185:215] = True  # the thighs touch down to row 260 (depth 0.37 against 0.06)
-    c = seg.agreeing_crotches({"front": open_, "back": closed}, {"front": pose, "back": pose})
+    c, notes = seg.agreeing_crotches({"front": open_, "back": closed}, {"front": pose, "back": pose})
+    assert list(notes) == ["back"] and "the thighs touch" in notes["back"] and "other view" in notes["back"], notes
     assert c["front"] is not None and c["back"] is not None
     assert abs(c["front"][1] - 201.0) <= 1.0 and abs(c["back"][1] - 201.0) <= 1.0, c
     near = _drawn_legs()
     near[200:205, 185:215] = True  # 4 px lower: within the views' agreement, kept
-    c = seg.agreeing_crotches({"front": open_, "back": near}, {"front": pose, "back": pose})
+    c, notes = seg.agreeing_crotches({"front": open_, "back": near}, {"front": pose, "back": pose})
+    assert notes == {}
     assert c["back"] is not None and abs(c["back"][1] - 205.0) <= 1.0, c
     together = _drawn_legs(gap=False)
-    c = seg.agreeing_crotches({"front": open_, "back": together}, {"front": pose, "back": pose})
+    c, notes = seg.agreeing_crotches({"front": open_, "back": together}, {"front": pose, "back": pose})
     assert c["back"] is not None and abs(c["back"][1] - 201.0) <= 1.5 and abs(c["back"][0] - 200.0) <= 1.0, c
     deep = _drawn_legs()
-    deep[200:320, 185:215] = True  # both views' gaps start at depth 0.69: not a crotch, and no groin line
-    none = seg.agreeing_crotches({"front": deep, "back": deep}, {"front": pose, "back": pose})
-    assert all(np.isnan(c).all() for c in none.values()), none
+    deep[200:320, 185:215] = True  # both views' gaps start at depth 0.69: the thighs touch above it
+    spread = math.degrees(math.atan2(5.0, 190.0))  # each knee 5 px outward of its hip
+    assert seg.thigh_angle_deg(np.array([250.0, 190.0]), np.array([255.0, 380.0]), np.array([0.0, 1.0]),
+                               np.array([1.0, 0.0])) == pytest.approx(spread)
+    for sex in (-1.0, 0.0, 1.0):
+        c, notes = seg.agreeing_crotches({"front": deep, "back": deep}, {"front": pose, "back": pose}, sex)
+        assert sorted(notes) == ["back", "front"] and all("expected depth" in n for n in notes.values()), notes
+        for v in ("front", "back"):
+            want = 190.0 + 190.0 * seg.expected_crotch_depth(v, sex, spread)
+            assert c[v] is not None and abs(c[v][1] - want) <= 0.5 and abs(c[v][0] - 200.0) <= 0.5, (sex, v, c)
+    assert seg.expected_crotch_depth("front", 1.0, spread) > seg.expected_crotch_depth("front", -1.0, spread)
+    assert seg.expected_crotch_depth("back", 0.0, 10.0) < seg.expected_crotch_depth("back", 0.0, 0.0)
+    assert all(seg.expected_crotch_depth(v, 0.0, spread) + seg.CROTCH_TOUCH_MARGIN < 0.37 for v in ("front", "back"))
 
 
 def test_the_groin_line_from_the_crotch_labels_the_hips_closer_to_the_truth(scans):
@@ -548,7 +561,7 @@ def test_the_groin_line_from_the_crotch_labels_the_hips_closer_to_the_truth(scan
         assert prm.groin_angle is not None
         rule, line = _cut_against_rule(s, truth, prm, {"groin_angle": None}, [torso, *thighs], wrong)
         no_crotch = seg.label_pixels(s.mask, s.pose, [None, None], prm, crotch=np.full(2, np.nan))
-        assert (no_crotch == rule).all()  # agreeing_crotches' "no crotch": no groin line
+        assert (no_crotch == rule).all()  # a NaN crotch: no groin line, the torso polygon
         higher = seg.label_pixels(s.mask, s.pose, [None, None],
                                   dataclasses.replace(prm, groin_offset=prm.groin_offset + 0.05))
         assert np.isin(higher, thighs).sum() > np.isin(line, thighs).sum()

@@ -748,9 +748,10 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
     for v in views:
         place_ankles(dets[v], resolved[v][0], cameras[v], depths[v], stature)
     masks = {v: person_mask(dets[v], depths[v] if use_depth else None, resolved[v][0]) for v in views}
-    crotches = agreeing_crotches(masks, {v: resolved[v][0] for v in views})
-    segs = {v: label_detection(dets[v], depths[v] if use_depth else None, *resolved[v][:3], sex=sex, mask=masks[v],
-                               crotch=crotches[v]) for v in views}
+    crotches, crotch_notes = agreeing_crotches(masks, {v: resolved[v][0] for v in views}, sex.score)
+    segs = {v: label_detection(dets[v], depths[v] if use_depth else None, resolved[v][0], resolved[v][1],
+                               [*resolved[v][2], *([crotch_notes[v]] if v in crotch_notes else [])], sex=sex,
+                               mask=masks[v], crotch=crotches[v]) for v in views}
     if not use_depth or not np.isfinite(stature):
         return segs
     poses = {v: resolved[v][0] for v in views}

@@ -1133,50 +1133,99 @@ def crotch_point(mask: np.ndarray, left_knee: np.ndarray, right_knee: np.ndarray
 
 #: :func:`agreeing_crotches`: the two views' crotches disagree when their depths below the hips, as fractions
 #: of the hip-knee distance in each image, differ by more than this (on the rig's true silhouettes the two
-#: views differ by sd 0.03 of it, at most 0.058, with the landmarks' noise) ...
+#: views differ by sd 0.03 of it, at most 0.058, with the landmarks' noise).
 CROTCH_VIEWS_DISAGREE = 0.07
-#: ... and a gap whose top lies further below the hips than this fraction of the hip-knee distance is not the
-#: crotch (the thighs touch above it; the deepest true crotch of the cohort lies at 0.41).
-CROTCH_MAX_DEPTH = 0.55
+#: Where the crotch lies in each view where the thighs do not touch: its depth below the hips' midpoint as a
+#: fraction of the hip-knee distance, ``"1"`` plus ``"spread"`` per degree of the thighs' mean angle outward of
+#: the body axis (:func:`thigh_angle_deg`: legs apart open the gap nearer the crotch) plus ``"sex"`` per unit of
+#: the sex score (+1 a woman, -1 a man: a woman's crotch lies lower). Fitted by benchmarks/learn_cut_lines.py
+#: on the rig's renders of seeds 1, 3, 5, 7 (the gap tops not below the true torso / thigh boundary's lowest
+#: point between the knees): 0.219 +- 0.033 (front), 0.222 +- 0.047 (back); residual sd 0.030 / 0.034 left out
+#: one capture at a time.
+CROTCH_DEPTH: dict[str, dict[str, float]] = {"front": {"1": 0.2418, "spread": -0.0048, "sex": 0.0134},
+                                             "back": {"1": 0.2551, "spread": -0.0066, "sex": 0.0290}}
+#: A gap top lower than :func:`expected_crotch_depth` by more than this fraction of the hip-knee distance is
+#: where touching thighs part, not the crotch (about three residual sds; on the rig's renders touching thighs
+#: put the gap top 0.10-0.29 below the crotch and left the thighs up to 10 % small).
+CROTCH_TOUCH_MARGIN = 0.10
+#: The residual sd (fraction of the hip-knee distance) of :data:`CROTCH_DEPTH` on held-out captures, the
+#: uncertainty a crotch placed at its expected depth carries (the warning says it).
+CROTCH_DEPTH_SD = 0.03
 
 
-def agreeing_crotches(masks: Mapping[str, np.ndarray], poses: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | None]:
+def thigh_angle_deg(hip: np.ndarray, knee: np.ndarray, down: np.ndarray, outward: np.ndarray) -> float:
+    """A thigh's angle outward of the body axis in an image (degrees; the hip-knee bone against the body's
+    ``down`` and ``outward`` axes of :func:`body_axes`; negative when the knee lies inward of the hip)."""
+    bone = np.asarray(knee, dtype=np.float64) - np.asarray(hip, dtype=np.float64)
+    return math.degrees(math.atan2(float(bone @ outward), float(bone @ down)))
+
+
+def expected_crotch_depth(view: str, sex: float, spread_deg: float) -> float:
+    """The crotch's expected depth below the hips' midpoint in ``view``, a fraction of the hip-knee distance:
+    :data:`CROTCH_DEPTH` at the sex score ``sex`` (clipped to [-1, 1]) and the thighs' mean angle outward of
+    the body axis ``spread_deg`` (clipped to [-10, 20] degrees, the range it was fitted over and a little more)."""
+    table = CROTCH_DEPTH.get(view, CROTCH_DEPTH["front"])
+    return (float(table["1"]) + float(table["spread"]) * float(np.clip(spread_deg, -10.0, 20.0))
+            + float(table["sex"]) * float(np.clip(sex, -1.0, 1.0)))
+
+
+def agreeing_crotches(masks: Mapping[str, np.ndarray], poses: Mapping[str, np.ndarray],
+                      sex: float = 0.0) -> tuple[dict[str, np.ndarray | None], dict[str, str]]:
     """Each view's crotch (:func:`crotch_point` in its person mask; ``poses``: the subject-oriented pose
-    landmarks), made to agree across the views.
+    landmarks), made to agree across the views; ``sex`` the subject's sex score (+1 a woman, -1 a man).
+    Returns the crotches (pixels, x y, per view) and, per view whose own gap was set aside because the thighs
+    touch, a warning sentence saying where the crotch came from.
 
     A gap between the legs can only show lower than the crotch, never higher: where the thighs nearly touch,
     a noisy depth camera fills the narrow top of the gap (an L515 front view put one woman's crotch 25 px,
-    0.17 of the hip-knee distance, low; the back view had it right). So when the two views' depths below the
-    hips (fractions of each view's hip-knee distance) differ by more than :data:`CROTCH_VIEWS_DISAGREE`, the
-    lower crotch moves up its own body axis to the higher one's depth. A gap deeper than
-    :data:`CROTCH_MAX_DEPTH` in both views is none ((NaN, NaN) for both: no groin line is drawn, the torso
-    polygon stands); one view's such gap, or no gap at all in one view (the legs touching), takes the other
-    view's depth, on its own body axis. None: neither view shows a gap (:func:`label_pixels` then finds none
-    either)."""
+    0.17 of the hip-knee distance, low; the back view had it right), and where they touch the gap opens only
+    below them. So when the two views' depths below the hips (fractions of each view's hip-knee distance)
+    differ by more than :data:`CROTCH_VIEWS_DISAGREE`, the lower crotch moves up its own body axis to the
+    higher one's depth. A gap deeper than :func:`expected_crotch_depth` (the view's, at ``sex`` and the thighs'
+    mean :func:`thigh_angle_deg`) by more than
+    :data:`CROTCH_TOUCH_MARGIN` is where touching thighs part: one view's such gap, or no gap at all in one view
+    (the legs touching down to the knees), takes the other view's depth, on its own body axis; when neither
+    view shows a usable gap, each view's crotch is put at its expected depth on its own body axis (a view
+    whose knees lie less than a pixel below its hips gets None)."""
     axes: dict[str, tuple[np.ndarray, np.ndarray, float]] = {}  # per view: mid-hip, body axis, hip-knee span
-    depth: dict[str, float] = {}  # per view with a gap: its top's depth below the hips, a fraction of the span
+    depth: dict[str, float] = {}  # per view with a usable gap: its top's depth below the hips, a fraction of the span
+    expected: dict[str, float] = {}  # per view: expected_crotch_depth
+    touching: dict[str, float] = {}  # per view whose gap opens too deep: that depth
     out: dict[str, np.ndarray | None] = {}
     for v, mask in masks.items():
         P = {n: poses[v][i, :2].astype(np.float64) for i, n in enumerate(POSE_NAMES)}
-        _, h_mid, down, _ = body_axes(P)
+        _, h_mid, down, lat = body_axes(P)
         span = float(((P["left_knee"] + P["right_knee"]) / 2 - h_mid) @ down)
+        spread = (thigh_angle_deg(P["left_hip"], P["left_knee"], down, lat)
+                  + thigh_angle_deg(P["right_hip"], P["right_knee"], down, -lat)) / 2
+        expected[v] = expected_crotch_depth(v, sex, spread if math.isfinite(spread) else 0.0)
         axes[v] = (h_mid, down, span)
         out[v] = c = crotch_point(mask, P["left_knee"], P["right_knee"], float(h_mid[1]))
         if c is not None and span > 1.0:
-            depth[v] = float((c - h_mid) @ down) / span
-    if not depth:
-        return out
+            d = float((c - h_mid) @ down) / span
+            if d <= expected[v] + CROTCH_TOUCH_MARGIN:
+                depth[v] = d
+            else:
+                touching[v] = d
+    if not depth:  # the thighs touch in both views, or no gap shows: the crotch where it is expected
+        notes = {v: (f"{v} image: the thighs touch below the crotch (the gap between the legs opens {d:.2f} of the "
+                     f"hip-knee length below the hips) in both views: the crotch placed at its expected depth, "
+                     f"{expected[v]:.2f} (sd {CROTCH_DEPTH_SD:.2f}; the thighs' volumes move about 0.45 % per 0.01)")
+                 for v, d in touching.items()}
+        return {v: (h_mid + down * expected[v] * span if span > 1.0 else None)
+                for v, (h_mid, down, span) in axes.items()}, notes
     best = min(depth.values())
-    if best > CROTCH_MAX_DEPTH:
-        return {v: np.full(2, np.nan) for v in out}
+    notes = {v: (f"{v} image: the thighs touch below the crotch (the gap between the legs opens {d:.2f} of the "
+                 f"hip-knee length below the hips): the crotch taken from the other view, {best:.2f}")
+             for v, d in touching.items()}
     for v, (h_mid, down, span) in axes.items():
         c = out[v]
         if v in depth and c is not None:
-            if depth[v] - best > CROTCH_VIEWS_DISAGREE or depth[v] > CROTCH_MAX_DEPTH:
+            if depth[v] - best > CROTCH_VIEWS_DISAGREE:
                 out[v] = c - down * (depth[v] - best) * span
         else:
             out[v] = h_mid + down * best * span if span > 1.0 else None
-    return out
+    return out, notes
 
 
 def _shoulder_line(out: np.ndarray, p: np.ndarray, on: np.ndarray, mask: np.ndarray, P: Mapping[str, np.ndarray],
@@ -1473,7 +1522,9 @@ __all__ = [
     "ARMPIT_REF_ARM_DEG",
     "ARM_MAX_WIDTH",
     "ARM_SECTIONS",
-    "CROTCH_MAX_DEPTH",
+    "CROTCH_DEPTH",
+    "CROTCH_DEPTH_SD",
+    "CROTCH_TOUCH_MARGIN",
     "CROTCH_VIEWS_DISAGREE",
     "DEFAULT_PARAMS",
     "HAND_NAMES",
@@ -1492,6 +1543,7 @@ __all__ = [
     "body_axes",
     "crotch_point",
     "detect",
+    "expected_crotch_depth",
     "label_accuracy",
     "label_detection",
     "label_pixels",
@@ -1502,6 +1554,7 @@ __all__ = [
     "run_holistic",
     "segment_capture",
     "segment_image",
+    "thigh_angle_deg",
     "unconfident_landmarks",
     "upper_arm_half_width",
     "view_params",

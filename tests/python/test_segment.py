@@ -505,15 +505,23 @@ def test_the_two_views_crotches_agree():
     """A gap between the legs only shows lower than the crotch: when one view's gap starts far lower than the
     other's (depths below the hips differing by more than CROTCH_VIEWS_DISAGREE of the hip-knee distance),
     its crotch moves up to the other's depth; views that agree keep their own; a view with no gap takes the
-    other's depth at the midline; gaps deeper than the expected crotch by more than CROTCH_TOUCH_MARGIN in both
-    views (the thighs touch) put each view's crotch at its expected depth, a woman's lower than a man's."""
+    other's depth at the midline. A gap deeper than the expected crotch by more than CROTCH_TOUCH_MARGIN (the
+    thighs touch) puts that view's crotch at its expected depth (a woman's lower than a man's) and moves the
+    other view's up to its own expected depth when deeper, each with a warning for the touching view."""
     pose = _legs_pose()
     open_, closed = _drawn_legs(), _drawn_legs()
     closed[200:260, 185:215] = True  # the thighs touch down to row 260 (depth 0.37 against 0.06)
+    spread = math.degrees(math.atan2(5.0, 190.0))  # each knee 5 px outward of its hip
     c, notes = seg.agreeing_crotches({"front": open_, "back": closed}, {"front": pose, "back": pose})
-    assert list(notes) == ["back"] and "the thighs touch" in notes["back"] and "other view" in notes["back"], notes
-    assert c["front"] is not None and c["back"] is not None
-    assert abs(c["front"][1] - 201.0) <= 1.0 and abs(c["back"][1] - 201.0) <= 1.0, c
+    assert list(notes) == ["back"] and "the thighs touch" in notes["back"] and "expected depth" in notes["back"], notes
+    assert c["front"] is not None and c["back"] is not None  # the open view keeps its own: above its expected
+    want = 190.0 + 190.0 * seg.expected_crotch_depth("back", 0.0, spread)
+    assert abs(c["front"][1] - 201.0) <= 1.0 and abs(c["back"][1] - want) <= 0.5, c
+    lowish = _drawn_legs()
+    lowish[200:250, 185:215] = True  # the other view's gap opens below the touching thighs too: up to expected
+    c, notes = seg.agreeing_crotches({"front": lowish, "back": closed}, {"front": pose, "back": pose})
+    want_front = 190.0 + 190.0 * seg.expected_crotch_depth("front", 0.0, spread)
+    assert list(notes) == ["back"] and abs(c["front"][1] - want_front) <= 0.5, (c, notes)
     near = _drawn_legs()
     near[200:205, 185:215] = True  # 4 px lower: within the views' agreement, kept
     c, notes = seg.agreeing_crotches({"front": open_, "back": near}, {"front": pose, "back": pose})
@@ -524,7 +532,6 @@ def test_the_two_views_crotches_agree():
     assert c["back"] is not None and abs(c["back"][1] - 201.0) <= 1.5 and abs(c["back"][0] - 200.0) <= 1.0, c
     deep = _drawn_legs()
     deep[200:320, 185:215] = True  # both views' gaps start at depth 0.69: the thighs touch above it
-    spread = math.degrees(math.atan2(5.0, 190.0))  # each knee 5 px outward of its hip
     assert seg.thigh_angle_deg(np.array([250.0, 190.0]), np.array([255.0, 380.0]), np.array([0.0, 1.0]),
                                np.array([1.0, 0.0])) == pytest.approx(spread)
     for sex in (-1.0, 0.0, 1.0):

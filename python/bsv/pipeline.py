@@ -22,7 +22,7 @@ import argparse
 import contextlib
 import json
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -192,9 +192,11 @@ def _calibration(calibration: PathLike | None, capture_dir: Path, cameras: Seque
     return out
 
 
-def _intervals(reg: Registration, cameras: Sequence[Any], segmentation: str, density: float) -> Any:
+def _intervals(reg: Registration, cameras: Sequence[Any], segmentation: str, density: float,
+               extra_sd: Mapping[str, float] | None = None) -> Any:
     """The 95 % intervals (:func:`bsv.uncertainty.intervals`) with the error model of an L515 and this
-    segmentation; without a packaged model for the segmentation, the true-label model, saying so."""
+    segmentation, widened by ``extra_sd`` (:func:`segmentation_extra_sd`); without a packaged model for the
+    segmentation, the true-label model, saying so."""
     from .uncertainty import error_models, intervals, model_for
 
     name = model_for("l515", segmentation)
@@ -203,7 +205,19 @@ def _intervals(reg: Registration, cameras: Sequence[Any], segmentation: str, den
     if name not in models:
         name, note = "l515", (f"not included: the error of the {segmentation} segmentation (no packaged model; the "
                               "true-label model is used), so the intervals are too narrow for it")
-    return intervals(reg.mesh, reg.volumes, cameras, model=models[name], density=density, note=note)
+    return intervals(reg.mesh, reg.volumes, cameras, model=models[name], density=density, note=note,
+                     extra_sd=extra_sd)
+
+
+def segmentation_extra_sd(segmentations: Iterable[Any]) -> dict[str, float]:
+    """The sd the views' degraded boundaries add to each quantity
+    (:attr:`bsv.frontend.segment.Segmentation.extra_sd`): the largest of the views' per quantity (the two views
+    of one capture describe the same boundary)."""
+    out: dict[str, float] = {}
+    for seg in segmentations:
+        for name, sd in (getattr(seg, "extra_sd", None) or {}).items():
+            out[name] = max(out.get(name, 0.0), float(sd))
+    return out
 
 
 def _camera_spread(cam: str, extrinsics: dict[str, Any]) -> Any:
@@ -573,7 +587,8 @@ def process(
 
         vols["intervals"] = steps.run(
             "intervals", "95 % intervals (calibration Monte Carlo + error model)",
-            lambda: _intervals(reg, [_camera_spread(c, extrinsics[c]) for c in cameras], segmentation, density)).to_json()
+            lambda: _intervals(reg, [_camera_spread(c, extrinsics[c]) for c in cameras], segmentation, density,
+                               segmentation_extra_sd(camera_segs.values()))).to_json()
         if refined:
             vols["calibration_refinement"] = {"method": "floor plane (pitch, roll, height)", "cameras": refined}
         vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report,
@@ -921,4 +936,5 @@ __all__ = [
     "main_process",
     "output_files",
     "process",
+    "segmentation_extra_sd",
 ]

@@ -368,10 +368,13 @@ class Intervals:
                          pairs(doc.get("ratios")), float(doc.get("seconds", 0.0)), pairs(doc.get("mass_kg")))
 
 
-def combine(estimate: Mapping[str, float], model: ErrorModel, calibration_sd: Mapping[str, float] | None = None
-            ) -> dict[str, tuple[float, float]]:
-    """Per quantity of ``estimate`` that the model covers: the 95 % interval of the truth (see module doc)."""
+def combine(estimate: Mapping[str, float], model: ErrorModel, calibration_sd: Mapping[str, float] | None = None,
+            extra_sd: Mapping[str, float] | None = None) -> dict[str, tuple[float, float]]:
+    """Per quantity of ``estimate`` that the model covers: the 95 % interval of the truth (see module doc).
+    ``extra_sd``: more sd per quantity in the comparison space (a degraded boundary of the capture's
+    segmentation, :attr:`bsv.frontend.segment.Segmentation.extra_sd`), in quadrature with the others."""
     cal = calibration_sd or {}
+    extra = extra_sd or {}
     out: dict[str, tuple[float, float]] = {}
     for name, value in estimate.items():
         if name not in model.entries:
@@ -380,22 +383,23 @@ def combine(estimate: Mapping[str, float], model: ErrorModel, calibration_sd: Ma
         centre = transform(name, value) - bias
         if not math.isfinite(centre):
             continue
-        half = Z95 * math.hypot(sd, float(cal.get(name, 0.0)))
+        half = Z95 * math.hypot(sd, float(cal.get(name, 0.0)), float(extra.get(name, 0.0)))
         out[name] = (untransform(name, centre - half), untransform(name, centre + half))
     return out
 
 
 def intervals(mesh: Mesh, volumes: Mapping[str, Any], cameras: Sequence[CameraSpread], *,
               model: ErrorModel | None = None, samples: int = DEFAULT_SAMPLES, seed: int = DEFAULT_SEED,
-              density: float = 1000.0, note: str = "") -> Intervals:
+              density: float = 1000.0, note: str = "", extra_sd: Mapping[str, float] | None = None) -> Intervals:
     """The 95 % intervals of the fitted ``mesh``'s ``volumes`` report (as :func:`bsv.register` returns it),
-    combining the calibration Monte Carlo over ``cameras`` and the error ``model`` (default: packaged).
+    combining the calibration Monte Carlo over ``cameras`` and the error ``model`` (default: packaged), and
+    ``extra_sd`` per quantity where the capture's segmentation was degraded (:func:`combine`).
     ``note`` is appended to the method text (what the intervals do not cover)."""
     t0 = time.perf_counter()
     m = model or default_error_model()
     cal = calibration_spread(mesh, cameras, samples=samples, seed=seed, density=density)
     est = quantities(volumes)
-    both = combine(est, m, cal)
+    both = combine(est, m, cal, extra_sd)
     vol_keys = set((volumes.get("volumes_l") or {}).keys())
     sources = sorted({c.source for c in cameras})
     method = (f"calibration Monte Carlo ({samples} draws, seed {seed}, covariance: {', '.join(sources) or 'none'}) "
@@ -403,7 +407,9 @@ def intervals(mesh: Mesh, volumes: Mapping[str, Any], cameras: Sequence[CameraSp
               "combined in quadrature, normal, centred on the measured value corrected for the error model's mean "
               "bias (a value the fit measures low on the cohort gets an interval above it, and may lie just outside "
               "its own interval); the error model leaves out gross registration failures (a "
-              "segment missed by tens of percent), which the intervals do not cover" + (f"; {note}" if note else ""))
+              "segment missed by tens of percent), which the intervals do not cover"
+              + (f"; widened where the segmentation was degraded (sd added for {', '.join(sorted(extra_sd))})"
+                 if extra_sd else "") + (f"; {note}" if note else ""))
     tl = both.get("trunk_limbs")
     mass = {} if tl is None else {"mass_trunk_limbs_kg": (tl[0] * density / 1000.0, tl[1] * density / 1000.0)}
     return Intervals(LEVEL, method, {k: v for k, v in both.items() if k in vol_keys},

@@ -136,6 +136,29 @@ def test_combine_is_the_documented_formula():
     assert "torso" not in iv  # no model, no made-up interval
 
 
+def test_a_degraded_boundary_widens_only_its_quantities():
+    """A crotch placed at its expected depth (bsv.frontend.segment.EXPECTED_CROTCH_SD) adds its sd in quadrature
+    to the quantities it moves; the others keep their intervals; the pipeline takes the views' largest."""
+    from bsv.frontend.segment import EXPECTED_CROTCH_SD, Segmentation
+    from bsv.pipeline import segmentation_extra_sd
+
+    model = unc.ErrorModel({"thigh_l": (0.0, 0.025), "shin_l": (0.0, 0.025)}, "test")
+    est = {"thigh_l": 7.0, "shin_l": 3.5}
+    plain = unc.combine(est, model)
+    wider = unc.combine(est, model, None, EXPECTED_CROTCH_SD)
+    assert wider["shin_l"] == plain["shin_l"]
+    half = 1.959963984540054 * math.hypot(0.025, EXPECTED_CROTCH_SD["thigh_l"])
+    assert wider["thigh_l"] == pytest.approx((7.0 * math.exp(-half), 7.0 * math.exp(half)))
+    assert wider["thigh_l"][1] - wider["thigh_l"][0] > 1.1 * (plain["thigh_l"][1] - plain["thigh_l"][0])
+    z = np.zeros((2, 2), dtype=np.uint8)
+    views = [Segmentation(z, z > 0, np.zeros((71, 3)), extra_sd={"thigh_l": 0.01, "torso": 0.004}),
+             Segmentation(z, z > 0, np.zeros((71, 3)), view="back", extra_sd={"thigh_l": 0.02}),
+             Segmentation(z, z > 0, np.zeros((71, 3)))]
+    assert segmentation_extra_sd(views) == {"thigh_l": 0.02, "torso": 0.004}
+    assert set(EXPECTED_CROTCH_SD) >= {"thigh_l", "thigh_r", "torso"}
+    assert not any(k.startswith("asymmetry_") for k in EXPECTED_CROTCH_SD)
+
+
 def test_intervals_json_round_trip_and_asymmetry_text():
     iv = unc.Intervals(0.95, "m", {"trunk_limbs": (59.0, 61.0)}, {"asymmetry_forearm_pct": (-1.0, 5.0)})
     again = unc.Intervals.from_json(json.loads(json.dumps(iv.to_json())))

@@ -71,6 +71,7 @@ from ..errors import InputError, LimbMissingError, PersonNotFoundError, Segmenta
 from ..keypoints import JOINT_NAMES
 from .intrinsics import Intrinsics
 from .segment import (
+    EXPECTED_CROTCH_SD,
     POSE_NAMES,
     REQUIRED_LANDMARKS,
     SEGMENT_IDS,
@@ -752,6 +753,8 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
     segs = {v: label_detection(dets[v], depths[v] if use_depth else None, resolved[v][0], resolved[v][1],
                                [*resolved[v][2], *([crotch_notes[v]] if v in crotch_notes else [])], sex=sex,
                                mask=masks[v], crotch=crotches[v]) for v in views}
+    if crotch_notes:  # a crotch placed at its expected depth: the thighs' intervals widen by its sd
+        segs = {v: dataclasses.replace(s, extra_sd={**s.extra_sd, **EXPECTED_CROTCH_SD}) for v, s in segs.items()}
     if not use_depth or not np.isfinite(stature):
         return segs
     poses = {v: resolved[v][0] for v in views}

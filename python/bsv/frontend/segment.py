@@ -410,6 +410,10 @@ class Segmentation:
     #: The sex the labels were drawn for (:mod:`bsv.frontend.sex`; both views of a capture hold the same), or
     #: None for an image segmented alone.
     sex: SexEstimate | None = None
+    #: The sd this view's degraded boundaries add to each quantity of the volumes report, in the error models'
+    #: comparison space (:func:`bsv.uncertainty.transform`: natural log for volumes and ratios), e.g.
+    #: :data:`EXPECTED_CROTCH_SD` when the crotch was placed at its expected depth; empty for a plain view.
+    extra_sd: dict[str, float] = field(default_factory=dict)
 
     def landmark(self, name: str) -> np.ndarray:
         """(x, y, visibility) of one landmark by name (KeyError naming it if unknown)."""
@@ -1153,6 +1157,17 @@ CROTCH_TOUCH_MARGIN = 0.10
 CROTCH_DEPTH_SD = 0.03
 
 
+#: The sd a crotch placed at its expected depth (:func:`agreeing_crotches`) adds to the quantities it moves, in
+#: the error models' comparison space (natural log): :data:`CROTCH_DEPTH_SD` (0.03 of the hip-knee distance)
+#: times the volume's change per 0.01 of it, measured when the touching thighs' crotches were moved (BENCH.md,
+#: round 2 session 30): a thigh 0.45 %, so the thighs and the shin-to-thigh ratios 0.0135; a leg (a thigh is
+#: about two thirds of it) 0.009; the torso 0.12 %, so 0.0036. The left-right asymmetries are left alone: the
+#: groin line moves both thighs together.
+EXPECTED_CROTCH_SD: dict[str, float] = {"thigh_l": 0.0135, "thigh_r": 0.0135, "shin_to_thigh_l": 0.0135,
+                                        "shin_to_thigh_r": 0.0135, "leg_l": 0.009, "leg_r": 0.009,
+                                        "torso": 0.0036}
+
+
 def thigh_angle_deg(hip: np.ndarray, knee: np.ndarray, down: np.ndarray, outward: np.ndarray) -> float:
     """A thigh's angle outward of the body axis in an image (degrees; the hip-knee bone against the body's
     ``down`` and ``outward`` axes of :func:`body_axes`; negative when the knee lies inward of the hip)."""
@@ -1531,6 +1546,7 @@ __all__ = [
     "CROTCH_TOUCH_MARGIN",
     "CROTCH_VIEWS_DISAGREE",
     "DEFAULT_PARAMS",
+    "EXPECTED_CROTCH_SD",
     "HAND_NAMES",
     "LANDMARK_NAMES",
     "POSE_NAMES",

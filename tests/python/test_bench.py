@@ -299,6 +299,11 @@ def test_hip_abduction_option_reaches_the_synth_config() -> None:
     assert synth_config(default).leg_range == HIP_ABDUCTION_RANGE_DEG
     with pytest.raises(SystemExit):
         parser().parse_args(["synth", "--hip-abduction", "3,1"])
+    heavy = parser().parse_args(["synth", "--bmi-shift", "8"])
+    assert synth_config(heavy).bmi_shift == 8.0 and synth_record(synth_config(heavy), heavy)["bmi_shift"] == 8.0
+    assert synth_config(default).bmi_shift == 0.0
+    with pytest.raises(SystemExit):
+        parser().parse_args(["synth", "--bmi-shift", "40"])
 
 
 def test_arm_down_option_reaches_the_synth_config() -> None:

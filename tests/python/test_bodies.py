@@ -227,6 +227,24 @@ def test_a_narrow_stance_draws_the_same_subject_with_the_legs_closer():
             bodies.subject(0, seed=5, leg_range=bad)
 
 
+def test_a_bmi_shift_draws_the_same_subject_heavier():
+    """--bmi-shift 8 keeps every other draw (sex, stature, modifiers, pose) and solves the body for the drawn BMI
+    plus 8; bad shifts are PoseErrors naming the BMI shift."""
+    from bsv.bodies import HEAVY_BMI_SHIFT
+
+    std = bodies.subject(1, seed=5, check=False)
+    heavy = bodies.subject(1, seed=5, check=False, bmi_shift=HEAVY_BMI_SHIFT)
+    assert heavy.sex == std.sex and heavy.stature_target == std.stature_target and heavy.pose == std.pose
+    assert heavy.phenotype.local == std.phenotype.local
+    assert heavy.bmi_target == pytest.approx(std.bmi_target + HEAVY_BMI_SHIFT, abs=0.3)
+    assert heavy.body.volume_l > std.body.volume_l * 1.15
+    assert heavy.info()["bmi_shift"] == HEAVY_BMI_SHIFT and std.info()["bmi_shift"] == 0.0
+    assert bodies.check_bmi_shift("8") == 8.0
+    for bad in (-6.0, 16.0, math.nan, "heavy"):
+        with pytest.raises(bodies.PoseError, match="BMI shift"):
+            bodies.subject(0, seed=5, bmi_shift=bad)
+
+
 def test_bad_arm_ranges_are_pose_errors():
     from bsv.bodies.variants import hard_subject
 

@@ -8,7 +8,15 @@ from collections.abc import Sequence
 from typing import Any
 
 from ..argtypes import key_value, seed, whole
-from ..bodies.cohort import ARM_DOWN_RANGE_DEG, HIP_ABDUCTION_RANGE_DEG, arm_down_help, arm_range_arg, leg_range_arg
+from ..bodies.cohort import (
+    ARM_DOWN_RANGE_DEG,
+    HEAVY_BMI_SHIFT,
+    HIP_ABDUCTION_RANGE_DEG,
+    arm_down_help,
+    arm_range_arg,
+    bmi_shift_arg,
+    leg_range_arg,
+)
 from .reference import CONDITIONS
 from .synth import COHORTS, SynthConfig
 
@@ -92,6 +100,9 @@ def parser() -> argparse.ArgumentParser:
                    help=f"the interval each thigh's angle outward of the vertical is drawn from, degrees (default "
                         f"{lo:g},{hi:g}; 0,1.5 for a narrow stance, where heavier subjects' thighs touch below the "
                         "crotch)")
+    s.add_argument("--bmi-shift", type=bmi_shift_arg, default=0.0, metavar="KG_M2",
+                   help=f"added to every subject's drawn BMI (default 0: 25 +- 4 within 18.5-35; {HEAVY_BMI_SHIFT:g} for a "
+                        "heavier cohort)")
     s.add_argument("--cohort", choices=COHORTS, default="standard",
                    help="standard: bsv.bodies.cohort; hard: the same subjects reshaped into the registration's "
                    "hard classes (deep upper arms, bumps, a swollen segment, extreme segment modifiers; "
@@ -124,7 +135,7 @@ def synth_config(args: argparse.Namespace) -> SynthConfig:
                        local=not args.no_local, cloud=args.cloud, room=args.room, studio=args.studio,
                        cloud_params=dict(args.cloud_param), cohort=args.cohort,
                        refine_calibration=args.refine_calibration, arm_range=args.arm_down,
-                       leg_range=args.hip_abduction)
+                       leg_range=args.hip_abduction, bmi_shift=args.bmi_shift)
 
 
 def synth_record(cfg: SynthConfig, args: argparse.Namespace) -> dict[str, Any]:
@@ -136,7 +147,7 @@ def synth_record(cfg: SynthConfig, args: argparse.Namespace) -> dict[str, Any]:
             "cloud_params": cfg.cloud_params, "template": cfg.template, "methods": ",".join(cfg.methods),
             "params": cfg.params, "local_modifiers": cfg.local, "jobs": args.jobs,
             "cohort": cfg.cohort, "arm_down_deg": list(cfg.arm_range),
-            "hip_abduction_deg": list(cfg.leg_range), "scheduler": args.scheduler,
+            "hip_abduction_deg": list(cfg.leg_range), "bmi_shift": cfg.bmi_shift, "scheduler": args.scheduler,
             "refine_calibration": cfg.refine_calibration}
 
 

@@ -31,7 +31,13 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..bodies.cohort import ARM_DOWN_RANGE_DEG, HIP_ABDUCTION_RANGE_DEG, check_arm_range, check_leg_range
+from ..bodies.cohort import (
+    ARM_DOWN_RANGE_DEG,
+    HIP_ABDUCTION_RANGE_DEG,
+    check_arm_range,
+    check_bmi_shift,
+    check_leg_range,
+)
 from ..errors import BsvError, PoseError
 from ..types import Mesh, PointCloud
 from .common import SEX_TEMPLATE, BenchError, Run, keep_trunk_limbs, load_template, register_method
@@ -67,6 +73,9 @@ class SynthConfig:
     #: The hips' abduction the subjects are drawn from (degrees; ``--hip-abduction``):
     #: :data:`bsv.bodies.cohort.HIP_ABDUCTION_RANGE_DEG` by default, narrower for thighs that touch.
     leg_range: tuple[float, float] = HIP_ABDUCTION_RANGE_DEG
+    #: The BMI added to every subject's draw (``--bmi-shift``; :data:`bsv.bodies.cohort.HEAVY_BMI_SHIFT` for a
+    #: heavier cohort).
+    bmi_shift: float = 0.0
     cloud: str = "raw"
     #: Cloud-building keywords for the lab path (``bsv process``'s defaults when empty), e.g. {"sor": True}.
     cloud_params: dict[str, Any] = field(default_factory=dict)
@@ -108,6 +117,10 @@ class SynthConfig:
             check_leg_range(self.leg_range)
         except PoseError as exc:
             raise BenchError(f"--hip-abduction: {exc}") from None
+        try:
+            check_bmi_shift(self.bmi_shift)
+        except PoseError as exc:
+            raise BenchError(f"--bmi-shift: {exc}") from None
         if self.cohort not in COHORTS:
             raise BenchError(f"--cohort {self.cohort}: use one of {', '.join(COHORTS)}")
         if self.segmentation not in SEGMENTATIONS:
@@ -386,7 +399,8 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] |
     t0 = time.perf_counter()
     try:
         make = hard_subject if cfg.cohort == "hard" else subject
-        s = make(index, cfg.seed, local=cfg.local, arm_range=cfg.arm_range, leg_range=cfg.leg_range)
+        s = make(index, cfg.seed, local=cfg.local, arm_range=cfg.arm_range, leg_range=cfg.leg_range,
+                 bmi_shift=cfg.bmi_shift)
     except Exception as exc:
         err = f"subject generation failed: {type(exc).__name__}: {exc}"
         runs: list[Run] = [Run(name, c, m, False, error=err) for c in cfg.conditions for m in cfg.methods]

@@ -11,11 +11,13 @@ from .asset import AssetError, asset_path, load_asset
 from .body import Body, SolveError, make_body, solve_stature_bmi
 from .cohort import (
     ARM_DOWN_RANGE_DEG,
+    HEAVY_BMI_SHIFT,
     HIP_ABDUCTION_RANGE_DEG,
     NARROW_HIP_ABDUCTION_RANGE_DEG,
     WIDE_ARM_DOWN_RANGE_DEG,
     Subject,
     check_arm_range,
+    check_bmi_shift,
     check_leg_range,
     cohort,
     iter_cohort,
@@ -32,6 +34,7 @@ from .template import templates, write_templates
 
 __all__ = [
     "ARM_DOWN_RANGE_DEG",
+    "HEAVY_BMI_SHIFT",
     "HIP_ABDUCTION_RANGE_DEG",
     "NARROW_HIP_ABDUCTION_RANGE_DEG",
     "PALETTE",
@@ -47,6 +50,7 @@ __all__ = [
     "Subject",
     "asset_path",
     "check_arm_range",
+    "check_bmi_shift",
     "check_leg_range",
     "cohort",
     "iter_cohort",

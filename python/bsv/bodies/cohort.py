@@ -55,6 +55,11 @@ HIP_ABDUCTION_RANGE_DEG: tuple[float, float] = (0.0, 6.0)
 #: thighs touch below the crotch and the gap between the legs opens only under them (BENCH.md, round 2
 #: session 30).
 NARROW_HIP_ABDUCTION_RANGE_DEG: tuple[float, float] = (0.0, 1.5)
+#: ``bsv bench synth --bmi-shift``: the BMI added to every subject's draw for a heavier cohort (the standard
+#: draw is 25 +- 4 within 18.5-35; +8 gives 27-43, where the camera path's boundaries drift, BENCH.md round 2
+#: session 30), and the bounds a shift must lie in.
+HEAVY_BMI_SHIFT = 8.0
+_BMI_SHIFT_LIMITS: tuple[float, float] = (-5.0, 15.0)
 #: The lowest angle (degrees below the horizontal) the collision loop raises a colliding arm to: the arm
 #: range's low bound, or this when the bound is higher (a body must come out free; the cohorts before
 #: ``arm_range`` existed used this floor).
@@ -84,6 +89,8 @@ class Subject:
     arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG
     #: The interval the hips' abduction was drawn from (``leg_range`` of :func:`subject`; degrees).
     leg_range: tuple[float, float] = HIP_ABDUCTION_RANGE_DEG
+    #: The BMI added to the drawn one (``bmi_shift`` of :func:`subject`).
+    bmi_shift: float = 0.0
 
     def volumes_l(self) -> dict[str, float]:
         """Ground-truth volumes (litres): 14 segments and aggregates."""
@@ -98,6 +105,7 @@ class Subject:
                 "phenotype": asdict(self.phenotype), "pose": asdict(self.pose),
                 "arm_down_deg": [float(a) for a in self.arm_range],
                 "hip_abduction_deg": [float(a) for a in self.leg_range],
+                "bmi_shift": float(self.bmi_shift),
                 **({"variant": self.variant} if self.variant else {})}
 
 
@@ -173,6 +181,30 @@ def arm_range_arg(text: str) -> tuple[float, float]:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+def check_bmi_shift(shift: float | str) -> float:
+    """``shift`` (kg/m^2, or the command line's text) as a float, or PoseError when it is not a finite number in
+    [-5, 15]."""
+    try:
+        value = float(shift)
+    except (TypeError, ValueError) as exc:
+        raise PoseError(f"BMI shift {shift!r}: give a number of kg/m^2, e.g. {HEAVY_BMI_SHIFT:g}") from exc
+    low, high = _BMI_SHIFT_LIMITS
+    if not (np.isfinite(value) and low <= value <= high):
+        raise PoseError(f"BMI shift {value:g}: need {low:g} <= shift <= {high:g} kg/m^2")
+    return value
+
+
+def bmi_shift_arg(text: str) -> float:
+    """The argparse type of ``--bmi-shift`` (``bsv bench synth``): :func:`check_bmi_shift`, its message as the
+    usage error."""
+    import argparse
+
+    try:
+        return check_bmi_shift(text)
+    except PoseError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def leg_range_arg(text: str) -> tuple[float, float]:
     """The argparse type of ``--hip-abduction LOW,HIGH`` (``bsv bench synth``): :func:`check_leg_range`, its
     message as the usage error."""
@@ -214,7 +246,7 @@ def _free_step(pose: Pose, hits: Iterable[str], arm_floor: float) -> Pose:
 
 def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
             arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG,
-            leg_range: tuple[float, float] = HIP_ABDUCTION_RANGE_DEG) -> Subject:
+            leg_range: tuple[float, float] = HIP_ABDUCTION_RANGE_DEG, bmi_shift: float = 0.0) -> Subject:
     """Subject ``index`` of the cohort of ``seed`` (deterministic). ``arm_range``: the interval (degrees
     below the horizontal, :func:`check_arm_range`) the arms' angle is drawn from; the default keeps the
     cohort as it always was, a wider one (:data:`WIDE_ARM_DOWN_RANGE_DEG`) draws the same random numbers,
@@ -222,9 +254,11 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
     (then down to ``min(low, ARM_FREE_FLOOR_DEG)``); a body that still collides there is a SolveError.
     ``leg_range`` likewise for the hips' abduction (degrees, :func:`check_leg_range`; a narrower stance,
     :data:`NARROW_HIP_ABDUCTION_RANGE_DEG`, draws the same random numbers); a collision spreads the legs past
-    it."""
+    it. ``bmi_shift`` (:func:`check_bmi_shift`) is added to the drawn BMI, every draw the same (a BMI the body
+    cannot reach is brought into its reachable range, as always)."""
     lo, hi = check_arm_range(arm_range)
     llo, lhi = check_leg_range(leg_range)
+    shift = check_bmi_shift(bmi_shift)
     rng = np.random.default_rng([int(seed), int(index)])
     female = index % 2 == 0
     mu, sd = (1.63, 0.065) if female else (1.77, 0.07)
@@ -246,7 +280,7 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
     loc = _draw_local(rng)
     if local:
         ph = ph.with_(local=loc)
-    ph, bmi_used = _solve(ph, stature, bmi, pose)
+    ph, bmi_used = _solve(ph, stature, bmi + shift, pose)
     body = make_body(ph, pose)
     for _ in range(12 if check else 0):
         hits = penetrations(body.vertices, body.faces, body.face_labels)
@@ -264,7 +298,7 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
         if check and penetrations(body.vertices, body.faces, body.face_labels):
             raise SolveError(f"cohort subject {index} (seed {seed}) still self-intersects after pose changes")
     return Subject(index, int(seed), "female" if female else "male", stature, bmi_used, ph, pose, body,
-                   arm_range=(lo, hi), leg_range=(llo, lhi))
+                   arm_range=(lo, hi), leg_range=(llo, lhi), bmi_shift=shift)
 
 
 def cohort(n: int, seed: int = 0, local: bool = True, check: bool = True,
@@ -370,6 +404,7 @@ def main(argv: list[str] | None = None) -> int:
 __all__ = [
     "ARM_DOWN_RANGE_DEG",
     "ARM_FREE_FLOOR_DEG",
+    "HEAVY_BMI_SHIFT",
     "HIP_ABDUCTION_RANGE_DEG",
     "LOCAL_CENTRAL",
     "LOCAL_SIDED",
@@ -378,7 +413,9 @@ __all__ = [
     "Subject",
     "arm_down_help",
     "arm_range_arg",
+    "bmi_shift_arg",
     "check_arm_range",
+    "check_bmi_shift",
     "check_leg_range",
     "cohort",
     "iter_cohort",

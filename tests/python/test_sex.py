@@ -172,6 +172,55 @@ def test_the_sex_moves_the_elbow_and_groin_lines():
     assert set(np.unique(lab[1.0][changed])) <= kinds and set(np.unique(lab[-1.0][changed])) <= kinds
 
 
+def test_a_heavy_build_moves_the_elbow_and_groin_lines():
+    """A build beyond the hinge (build_score > build_hinge) puts the elbow line further towards the wrist and the
+    groin line lower; a build at or below the hinge is the plain rule; only the arms', thighs' and torso's labels
+    change. The build score is the trunk's depth in the cohort's sds, clipped to the sex model's range, 0 when
+    not measured; out-of-range scores and terms are refused."""
+    h, w = 640, 400
+    mask = np.zeros((h, w), bool)
+    mask[55:615, 100:300] = True
+    pose = _standing_pose()
+    base = SegmentParams(elbow_shift_build=0.02, groin_offset_build=0.02, build_hinge=1.0, groin_angle=30.0,
+                         knee_shift_sex=0.0, hip_raise_sex=0.0, sex_score=0.0)
+    crotch = np.array([200.0, 330.0])
+    lab = {b: label_pixels(mask, pose, [None, None], dataclasses.replace(base, build_score=b), crotch=crotch)
+           for b in (4.0, 2.0, 1.0, -2.0)}
+    plain = label_pixels(mask, pose, [None, None], dataclasses.replace(
+        base, elbow_shift_build=0.0, groin_offset_build=0.0, build_score=4.0), crotch=crotch)
+    assert np.array_equal(lab[1.0], plain) and np.array_equal(lab[-2.0], plain)
+
+    def count(v: np.ndarray, *names: str) -> int:
+        return int(np.isin(v, [SEGMENT_IDS[n] for n in names]).sum())
+
+    fore = {b: count(v, "forearm_l", "forearm_r") for b, v in lab.items()}
+    torso = {b: count(v, "torso") for b, v in lab.items()}
+    assert fore[4.0] < fore[2.0] < fore[1.0] and torso[4.0] > torso[2.0] > torso[1.0]
+    kinds = {SEGMENT_IDS[k] for k in ("upper_arm_l", "upper_arm_r", "forearm_l", "forearm_r", "thigh_l", "thigh_r",
+                                      "torso")}
+    changed = lab[4.0] != lab[1.0]
+    assert set(np.unique(lab[4.0][changed])) <= kinds and set(np.unique(lab[1.0][changed])) <= kinds
+    mean, scale = sx.SEX_MODEL["mean"]["depth_to_trunk"], sx.SEX_MODEL["scale"]["depth_to_trunk"]
+    assert sx.build_score({"depth_to_trunk": mean + scale}) == pytest.approx(1.0)
+    assert sx.build_score({"depth_to_trunk": 9.0}) == sx.build_score({"depth_to_trunk": sx.SEX_MODEL["range"]["depth_to_trunk"][1]})
+    assert sx.build_score({}) == 0.0 and sx.build_score({"depth_to_trunk": float("nan")}) == 0.0
+    for bad in ({"build_score": 11.0}, {"elbow_shift_build": 0.2}, {"groin_offset_build": -0.06}, {"build_hinge": 9.0}):
+        with pytest.raises(SegmentationError):
+            SegmentParams(**bad)
+
+
+def test_the_shipped_lines_follow_a_heavy_build():
+    """Both views' defaults move the elbow and groin lines for a build beyond the hinge; the build score goes
+    into the sex record of volumes.json."""
+    from bsv.frontend.segment import DEFAULT_PARAMS
+
+    for p in DEFAULT_PARAMS.values():
+        assert p.elbow_shift_build > 0 and p.groin_offset_build > 0 and p.build_hinge >= 0.5
+    mean, scale = sx.SEX_MODEL["mean"]["depth_to_trunk"], sx.SEX_MODEL["scale"]["depth_to_trunk"]
+    rec = sx.inferred({**sx.SEX_MODEL["mean"], "depth_to_trunk": mean + 2 * scale}).to_json()
+    assert rec["build_score"] == pytest.approx(2.0)
+
+
 def test_a_measurement_far_outside_the_cohort_counts_as_its_edge():
     """A shoulder width three times the hips' (a hip landmark centimetres off) weighs no more than the edge of
     the training range does."""

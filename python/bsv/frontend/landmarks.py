@@ -87,7 +87,7 @@ from .segment import (
     unconfident_landmarks,
     view_params,
 )
-from .sex import SexEstimate, sex_measurements
+from .sex import SexEstimate, build_score, sex_measurements
 from .sex import from_score as sex_from_score
 from .sex import inferred as sex_inferred
 
@@ -750,9 +750,10 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
         place_ankles(dets[v], resolved[v][0], cameras[v], depths[v], stature)
     masks = {v: person_mask(dets[v], depths[v] if use_depth else None, resolved[v][0]) for v in views}
     crotches, crotch_notes = agreeing_crotches(masks, {v: resolved[v][0] for v in views}, sex.score)
+    build = build_score(sex.measurements)
     segs = {v: label_detection(dets[v], depths[v] if use_depth else None, resolved[v][0], resolved[v][1],
                                [*resolved[v][2], *([crotch_notes[v]] if v in crotch_notes else [])], sex=sex,
-                               mask=masks[v], crotch=crotches[v]) for v in views}
+                               mask=masks[v], crotch=crotches[v], build=build) for v in views}
     if crotch_notes:  # a crotch placed at its expected depth: the thighs' intervals widen by its sd
         segs = {v: dataclasses.replace(s, extra_sd={**s.extra_sd, **EXPECTED_CROTCH_SD}) for v, s in segs.items()}
     if not use_depth or not np.isfinite(stature):
@@ -821,12 +822,13 @@ def sex_estimate(dets: Mapping[str, Detection], poses: Mapping[str, np.ndarray],
     lifted to 3-D (:func:`lifted_joints`), the person's points of both views between the shoulders and the
     hips and the ``stature``."""
     fixed = next((d.params.sex_score for d in dets.values() if d.params.sex_score is not None), None)
-    if fixed is not None:
-        return sex_from_score(fixed)
     joints = lifted_joints(dets, poses, cameras, depths, SEX_JOINTS)
     points = {v: _torso_points(dets[v], poses[v], cameras[v], depths[v]) if v in dets and v in poses else np.zeros((0, 3))
               for v in VIEWS}
-    return sex_inferred(sex_measurements(joints, _body_frame(joints), points["front"], points["back"], stature))
+    measured = sex_measurements(joints, _body_frame(joints), points["front"], points["back"], stature)
+    if fixed is not None:  # the measurements still give the build (bsv.frontend.sex.build_score)
+        return dataclasses.replace(sex_from_score(fixed), measurements={k: float(v) for k, v in measured.items()})
+    return sex_inferred(measured)
 
 
 def _unconfident(det: Detection) -> list[tuple[str, str]]:

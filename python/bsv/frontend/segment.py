@@ -886,7 +886,9 @@ def label_detection(det: Detection, depth: np.ndarray | None = None, pose: np.nd
                     crotch: np.ndarray | None = None, build: float | None = None) -> Segmentation:
     """The second half of :func:`segment_image`: the person mask (:func:`person_mask`, unless given as ``mask``)
     and its per-pixel labels from the resolved ``pose`` (default: the detection's own), drawn for ``sex``
-    (default: the detection's ``sex_score``) and the ``crotch`` (default: found in the mask).
+    (default: the detection's ``sex_score``), the ``build`` (:func:`bsv.frontend.sex.build_score`; default: the
+    detection's ``build_score``, which a caller's own setting keeps) and the ``crotch`` (default: found in the
+    mask).
 
     Without ``depth`` the groin line is not drawn (the torso polygon stands): MediaPipe's own mask closes
     the top of the gap between the legs, and puts the crotch 19-45 px low on the rig's renders, where the

@@ -25,7 +25,7 @@ import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -40,6 +40,9 @@ from .interop import as_mesh
 from .keypoints import CAMERA_KEYPOINT_KINDS, camera_joints, confine_cloud_upper_arms
 from .posed_template import camera_template, template_record
 from .types import SEGMENT_IDS, SEXES, TRUNK_LIMBS, Mesh, PointCloud, Registration
+
+if TYPE_CHECKING:
+    from .frontend.segment import Segmentation
 
 PathLike = str | Path
 
@@ -209,13 +212,13 @@ def _intervals(reg: Registration, cameras: Sequence[Any], segmentation: str, den
                      extra_sd=extra_sd)
 
 
-def segmentation_extra_sd(segmentations: Iterable[Any]) -> dict[str, float]:
+def segmentation_extra_sd(segmentations: Iterable[Segmentation]) -> dict[str, float]:
     """The sd the views' degraded boundaries add to each quantity
     (:attr:`bsv.frontend.segment.Segmentation.extra_sd`): the largest of the views' per quantity (the two views
     of one capture describe the same boundary)."""
     out: dict[str, float] = {}
     for seg in segmentations:
-        for name, sd in (getattr(seg, "extra_sd", None) or {}).items():
+        for name, sd in seg.extra_sd.items():
             out[name] = max(out.get(name, 0.0), float(sd))
     return out
 

@@ -17,9 +17,10 @@ free before (:data:`ARM_FREE_FLOOR_DEG`; none of the default cohorts of seeds 0-
 from __future__ import annotations
 
 import json
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
@@ -56,7 +57,7 @@ HIP_ABDUCTION_RANGE_DEG: tuple[float, float] = (0.0, 6.0)
 #: session 30).
 NARROW_HIP_ABDUCTION_RANGE_DEG: tuple[float, float] = (0.0, 1.5)
 #: ``bsv bench synth --bmi-shift``: the BMI added to every subject's draw for a heavier cohort (the standard
-#: draw is 25 +- 4 within 18.5-35; +8 gives 27-43, where the camera path's boundaries drift, BENCH.md round 2
+#: draw is 25 +- 4 within 18.5-35; +8 gives about 27-41, where the camera path's boundaries drift, BENCH.md round 2
 #: session 30), and the bounds a shift must lie in.
 HEAVY_BMI_SHIFT = 8.0
 _BMI_SHIFT_LIMITS: tuple[float, float] = (-5.0, 15.0)
@@ -142,16 +143,22 @@ def check_arm_range(arm_range: Sequence[float] | str) -> tuple[float, float]:
     :meth:`Pose.validate`'s [-10, 85], which bounds any pose the skinning accepts: a cohort subject is in
     an A-pose (no arm above the horizontal), and beyond 80 deg a collision-free A-pose cannot be kept (the
     arm meets the torso)."""
-    parts = arm_range.split(",") if isinstance(arm_range, str) else arm_range
+    return _angle_range(arm_range, "arm range", "two angles in degrees below the horizontal, LOW < HIGH, e.g. 15,60",
+                        _ARM_DOWN_LIMITS_DEG, " (degrees below the horizontal)")
+
+
+def _angle_range(value: Sequence[float] | str, name: str, give: str, limits: tuple[float, float],
+                 unit_note: str = "") -> tuple[float, float]:
+    """``value`` (two angles, or ``"LOW,HIGH"``) as an increasing pair of floats inside ``limits``, or PoseError
+    naming ``name`` and, for a value that is not two numbers, what to ``give``."""
+    parts = value.split(",") if isinstance(value, str) else value
     try:
         lo, hi = (float(x) for x in parts)
     except (TypeError, ValueError) as exc:
-        raise PoseError(f"arm range {arm_range!r}: give two angles in degrees below the horizontal, LOW < HIGH, "
-                        "e.g. 15,60") from exc
-    low, high = _ARM_DOWN_LIMITS_DEG
+        raise PoseError(f"{name} {value!r}: give {give}") from exc
+    low, high = limits
     if not (low <= lo < hi <= high):
-        raise PoseError(f"arm range ({lo:g}, {hi:g}) deg: need {low:g} <= low < high <= {high:g} "
-                        "(degrees below the horizontal)")
+        raise PoseError(f"{name} ({lo:g}, {hi:g}) deg: need {low:g} <= low < high <= {high:g}{unit_note}")
     return lo, hi
 
 
@@ -159,26 +166,27 @@ def check_leg_range(leg_range: Sequence[float] | str) -> tuple[float, float]:
     """``leg_range`` (two hip abduction angles, or the command line's ``"LOW,HIGH"``) as floats, or PoseError
     when it is not an increasing pair inside [0, 20] degrees (each thigh outward of the vertical: from feet
     together to a wide stance; the collision loop may spread the legs further)."""
-    parts = leg_range.split(",") if isinstance(leg_range, str) else leg_range
+    return _angle_range(leg_range, "hip abduction range", "two angles in degrees, LOW < HIGH, e.g. 0,1.5",
+                        _HIP_ABDUCTION_LIMITS_DEG)
+
+
+T = TypeVar("T")
+
+
+def _usage_checked(check: Callable[[str], T], text: str) -> T:
+    """``check(text)``, its PoseError's message as an argparse usage error."""
+    import argparse
+
     try:
-        lo, hi = (float(x) for x in parts)
-    except (TypeError, ValueError) as exc:
-        raise PoseError(f"hip abduction range {leg_range!r}: give two angles in degrees, LOW < HIGH, e.g. 0,1.5") from exc
-    low, high = _HIP_ABDUCTION_LIMITS_DEG
-    if not (low <= lo < hi <= high):
-        raise PoseError(f"hip abduction range ({lo:g}, {hi:g}) deg: need {low:g} <= low < high <= {high:g}")
-    return lo, hi
+        return check(text)
+    except PoseError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def arm_range_arg(text: str) -> tuple[float, float]:
     """The argparse type of ``--arm-down LOW,HIGH`` (``bsv cohort``, ``bsv bench synth``):
     :func:`check_arm_range`, its message as the usage error."""
-    import argparse
-
-    try:
-        return check_arm_range(text)
-    except PoseError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+    return _usage_checked(check_arm_range, text)
 
 
 def check_bmi_shift(shift: float | str) -> float:
@@ -197,23 +205,13 @@ def check_bmi_shift(shift: float | str) -> float:
 def bmi_shift_arg(text: str) -> float:
     """The argparse type of ``--bmi-shift`` (``bsv bench synth``): :func:`check_bmi_shift`, its message as the
     usage error."""
-    import argparse
-
-    try:
-        return check_bmi_shift(text)
-    except PoseError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+    return _usage_checked(check_bmi_shift, text)
 
 
 def leg_range_arg(text: str) -> tuple[float, float]:
     """The argparse type of ``--hip-abduction LOW,HIGH`` (``bsv bench synth``): :func:`check_leg_range`, its
     message as the usage error."""
-    import argparse
-
-    try:
-        return check_leg_range(text)
-    except PoseError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+    return _usage_checked(check_leg_range, text)
 
 
 def arm_down_help() -> str:

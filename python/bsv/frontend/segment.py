@@ -1191,15 +1191,16 @@ CROTCH_TOUCH_MARGIN = 0.10
 CROTCH_DEPTH_SD = 0.03
 
 
+#: How much a volume changes (natural log) per unit of the crotch's depth (a fraction of the hip-knee distance),
+#: measured when the touching thighs' crotches were moved (BENCH.md, round 2 session 30): a thigh 0.45 % per
+#: 0.01, so the shin-to-thigh ratios as much; a leg (a thigh is about two thirds of it) 0.3 %; the torso 0.12 %.
+#: The left-right asymmetries are left out: the groin line moves both thighs together.
+CROTCH_DEPTH_SENSITIVITY: dict[str, float] = {"thigh_l": 0.45, "thigh_r": 0.45, "shin_to_thigh_l": 0.45,
+                                              "shin_to_thigh_r": 0.45, "leg_l": 0.3, "leg_r": 0.3, "torso": 0.12}
 #: The sd a crotch placed at its expected depth (:func:`agreeing_crotches`) adds to the quantities it moves, in
-#: the error models' comparison space (natural log): :data:`CROTCH_DEPTH_SD` (0.03 of the hip-knee distance)
-#: times the volume's change per 0.01 of it, measured when the touching thighs' crotches were moved (BENCH.md,
-#: round 2 session 30): a thigh 0.45 %, so the thighs and the shin-to-thigh ratios 0.0135; a leg (a thigh is
-#: about two thirds of it) 0.009; the torso 0.12 %, so 0.0036. The left-right asymmetries are left alone: the
-#: groin line moves both thighs together.
-EXPECTED_CROTCH_SD: dict[str, float] = {"thigh_l": 0.0135, "thigh_r": 0.0135, "shin_to_thigh_l": 0.0135,
-                                        "shin_to_thigh_r": 0.0135, "leg_l": 0.009, "leg_r": 0.009,
-                                        "torso": 0.0036}
+#: the error models' comparison space (natural log): :data:`CROTCH_DEPTH_SD` times
+#: :data:`CROTCH_DEPTH_SENSITIVITY` (a thigh 0.0135).
+EXPECTED_CROTCH_SD: dict[str, float] = {k: CROTCH_DEPTH_SD * v for k, v in CROTCH_DEPTH_SENSITIVITY.items()}
 
 
 def _build_excess(params: SegmentParams) -> float:
@@ -1265,7 +1266,8 @@ def agreeing_crotches(masks: Mapping[str, np.ndarray], poses: Mapping[str, np.nd
                 touching[v] = d
     notes = {v: (f"{v} image: the thighs touch below the crotch (the gap between the legs opens {d:.2f} of the "
                  f"hip-knee length below the hips): the crotch placed at its expected depth, {expected[v]:.2f} "
-                 f"(sd {CROTCH_DEPTH_SD:.2f}; the thighs' volumes move about 0.45 % per 0.01 of it)")
+                 f"(sd {CROTCH_DEPTH_SD:.2f}; the thighs' volumes move about "
+                 f"{CROTCH_DEPTH_SENSITIVITY['thigh_l']:.2f} % per 0.01 of it)")
              for v, d in touching.items()}
     if touching or not depth:  # touching thighs (a gap elsewhere may open below them too), or no gap at all
         for v, (h_mid, down, span) in axes.items():
@@ -1583,6 +1585,7 @@ __all__ = [
     "ARM_SECTIONS",
     "CROTCH_DEPTH",
     "CROTCH_DEPTH_SD",
+    "CROTCH_DEPTH_SENSITIVITY",
     "CROTCH_TOUCH_MARGIN",
     "CROTCH_VIEWS_DISAGREE",
     "DEFAULT_PARAMS",

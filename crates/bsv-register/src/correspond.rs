@@ -15,7 +15,9 @@
 //! from being pulled onto it.
 //!
 //! Pruning (per iteration): a correspondence longer than `factor x median` of the iteration's
-//! correspondence lengths (but never below `floor`) is dropped. Normal pruning compares the
+//! correspondence lengths (but never below `floor`) is dropped; with label-aware matching the template's
+//! torso vertices take their own, looser factor (the torso's shape varies most and no articulated
+//! cross-section fits it first, so its gaps close last). Normal pruning compares the
 //! current vertex normal with the cloud normal: the given (oriented) normals, or, when the cloud has
 //! none, unoriented PCA normals of `k` neighbours estimated lazily for the points that m2p actually
 //! matches (and cached); in p2m the normal of the patch of points a vertex collected (PCA of their
@@ -30,6 +32,7 @@ use crate::cotan::CotanWeights;
 use crate::curvature;
 use crate::walk::{walk_to_nearest, Allowed};
 use bsv_core::geometry::{add, dot, normalize, scale, sub};
+use bsv_core::Segment;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
@@ -92,23 +95,56 @@ fn project(n: [f64; 3], d: [f64; 3]) -> [f64; 3] {
 pub struct Pruning {
     /// Drop correspondences longer than `distance_factor` x the median (0 or inf = off).
     pub distance_factor: f64,
+    /// The factor of the correspondences of template torso vertices when matching is label-aware
+    /// (the same median; 0 or inf = off).
+    pub torso_distance_factor: f64,
     /// Never prune below this length, metres.
     pub distance_floor: f64,
     /// Cosine of the largest normal angle (-1 = off).
     pub min_cos: f64,
 }
 
+/// The template's torso label (its correspondences take [`Pruning::torso_distance_factor`]).
+const TORSO: u8 = Segment::Torso as u8;
+
+/// The squared distance limits of one iteration: every vertex's, and the torso vertices' when the
+/// matching is label-aware.
+#[derive(Debug, Clone, Copy)]
+struct Limits<'a> {
+    all: f64,
+    torso: f64,
+    /// The template's vertex labels (label-aware matching only).
+    labels: Option<&'a [u8]>,
+}
+
+impl Limits<'_> {
+    /// The squared limit of a correspondence of vertex `v`.
+    fn of(&self, v: usize) -> f64 {
+        match self.labels {
+            Some(l) if l.get(v) == Some(&TORSO) => self.torso,
+            _ => self.all,
+        }
+    }
+}
+
 impl Pruning {
-    /// The distance limit (squared) for correspondences with squared lengths `d2`.
-    fn limit2(&self, d2: &mut [f64]) -> f64 {
-        if !(self.distance_factor > 0.0 && self.distance_factor.is_finite()) || d2.is_empty() {
-            return f64::INFINITY;
+    /// The distance limits (squared) for correspondences with squared lengths `d2` (`factor` x their
+    /// median, never below the floor; infinite when the factor is 0 or infinite).
+    fn limits2<'a>(&self, d2: &mut [f64], labels: Option<&'a [u8]>) -> Limits<'a> {
+        let on = |f: f64| f > 0.0 && f.is_finite();
+        if d2.is_empty() || !(on(self.distance_factor) || on(self.torso_distance_factor)) {
+            return Limits { all: f64::INFINITY, torso: f64::INFINITY, labels };
         }
         let mid = d2.len() / 2;
         let (_, &mut med2, _) = d2.select_nth_unstable_by(mid, f64::total_cmp);
-        let lim = self.distance_factor * med2.sqrt();
-        let lim = lim.max(self.distance_floor);
-        lim * lim
+        let lim = |f: f64| {
+            if !on(f) {
+                return f64::INFINITY;
+            }
+            let l = (f * med2.sqrt()).max(self.distance_floor);
+            l * l
+        };
+        Limits { all: lim(self.distance_factor), torso: lim(self.torso_distance_factor), labels }
     }
 }
 
@@ -347,6 +383,11 @@ impl CloudIndex {
         Ok(out)
     }
 
+    /// The template's vertex labels when the matching is label-aware (both sides labelled).
+    fn label_aware<'a>(&self, vertex_labels: Option<&'a [u8]>) -> Option<&'a [u8]> {
+        vertex_labels.filter(|_| !self.by_label.is_empty())
+    }
+
     /// Nearest cloud point of each query: (index, squared distance).
     pub fn nearest(&self, queries: &[[f64; 3]]) -> Vec<(u32, f64)> {
         nearest_batch(&self.tree, queries)
@@ -404,13 +445,13 @@ impl CloudIndex {
         let nn = self.nearest_labelled(vertices, vertex_labels);
         let rms = rms_of(nn.iter().map(|r| r.1));
         let mut d2: Vec<f64> = nn.iter().map(|r| r.1).collect();
-        let lim2 = pruning.limit2(&mut d2);
+        let lim2 = pruning.limits2(&mut d2, self.label_aware(vertex_labels));
         let mode = if pruning.min_cos > -1.0 { self.normal_mode() } else { None };
         let targets = nn
             .par_iter()
             .enumerate()
             .map(|(v, &(i, dd))| {
-                if dd > lim2 {
+                if dd > lim2.of(v) {
                     return None;
                 }
                 let cn = if mode.is_some() || self.given_normals.is_some() { self.normal(i as usize) } else { None };
@@ -452,27 +493,27 @@ impl CloudIndex {
         let nn = self.points_to_vertices(vertices, vertex_labels, warm)?;
         let rms = rms_of(nn.iter().map(|r| r.1));
         let mut d2: Vec<f64> = nn.iter().map(|r| r.1).collect();
-        let lim2 = pruning.limit2(&mut d2);
-        let accs = self.accumulate(&nn, vertices, lim2);
+        let lim2 = pruning.limits2(&mut d2, self.label_aware(vertex_labels));
+        let accs = self.accumulate(&nn, vertices, &lim2);
         let assigned = nn.iter().map(|r| r.0).collect();
         Ok((self.patch_targets(&accs, normals, pruning, curvature), rms, assigned))
     }
 
     /// Per vertex, the count, sum, scatter (and with given normals, the sum of the normal parts)
-    /// of the offsets to the cloud points `nn` sends to it, without those longer than `sqrt(lim2)`.
+    /// of the offsets to the cloud points `nn` sends to it, without those longer than its limit.
     ///
     /// Every vertex sums its points in point order (a counting sort groups them first), so the sums
     /// are bit-identical for any thread count.
     #[allow(clippy::neg_cmp_op_on_partial_ord, reason = "a NaN distance is kept, as before")]
-    fn accumulate(&self, nn: &[(u32, f64)], vertices: &[[f64; 3]], lim2: f64) -> Vec<Acc> {
+    fn accumulate(&self, nn: &[(u32, f64)], vertices: &[[f64; 3]], lim2: &Limits<'_>) -> Vec<Acc> {
         let n = vertices.len();
         let zero = Acc { n: 0, s: [0.0; 3], ss: [0.0; 6], np: [0.0; 3] };
         let given = self.given_normals.as_deref();
-        let kept = |dd: f64| !(dd > lim2);
+        let kept = |v: u32, dd: f64| !(dd > lim2.of(v as usize));
         // start[v]..start[v + 1]: the kept points of vertex v in `order`, in point order.
         let mut start = vec![0u32; n + 1];
         for &(v, dd) in nn {
-            if kept(dd) {
+            if kept(v, dd) {
                 start[v as usize + 1] += 1;
             }
         }
@@ -482,7 +523,7 @@ impl CloudIndex {
         let mut next = start.clone();
         let mut order = vec![0u32; start[n] as usize];
         for (i, &(v, dd)) in nn.iter().enumerate() {
-            if kept(dd) {
+            if kept(v, dd) {
                 let at = &mut next[v as usize];
                 order[*at as usize] = i as u32;
                 *at += 1;
@@ -586,5 +627,61 @@ fn rms_of(d2: impl Iterator<Item = f64>) -> f64 {
         0.0
     } else {
         (s / n as f64).sqrt()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const UPPER_ARM: u8 = Segment::UpperArmL as u8;
+
+    /// Two segments of 40 vertices on a line, each with its point 1 mm off; vertex 0 of each segment
+    /// has its point 8 mm off instead (8 x the median: beyond 3 x, within 10 x).
+    fn scene() -> (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<u8>) {
+        let mut vertices = Vec::new();
+        let mut points = Vec::new();
+        let mut labels = Vec::new();
+        for (k, &label) in [TORSO, UPPER_ARM].iter().enumerate() {
+            for i in 0..40 {
+                let v = [i as f64 * 0.05, k as f64, 0.0];
+                let off = if i == 0 { 0.008 } else { 0.001 };
+                vertices.push(v);
+                points.push([v[0], v[1], v[2] + off]);
+                labels.push(label);
+            }
+        }
+        (vertices, points, labels)
+    }
+
+    fn pruning(torso: f64) -> Pruning {
+        Pruning { distance_factor: 3.0, torso_distance_factor: torso, distance_floor: 0.0, min_cos: -1.0 }
+    }
+
+    #[test]
+    fn the_torso_keeps_a_correspondence_the_limbs_prune() {
+        let (vertices, points, labels) = scene();
+        let normals = vec![[0.0, 0.0, 1.0]; vertices.len()];
+        let mut index = CloudIndex::new(&points, None, 0).expect("the tree builds");
+        index.set_label_trees(LabelTrees::build(&points, &labels, &labels).expect("the label trees build"));
+        let (m2p, _) = index.m2p(&vertices, &normals, &pruning(10.0), Some(&labels), None);
+        let (p2m, _, _) = index.p2m(&vertices, &normals, &pruning(10.0), Some(&labels), None, None).expect("p2m runs");
+        for targets in [&m2p, &p2m] {
+            assert!(targets[0].is_some(), "the torso vertex 8 mm off is kept at 10 x the median");
+            assert!(targets[40].is_none(), "the upper-arm vertex 8 mm off is pruned at 3 x the median");
+            assert!(targets[1].is_some() && targets[41].is_some());
+        }
+        // With the torso's factor equal to the limbs', both are pruned.
+        let (m2p, _) = index.m2p(&vertices, &normals, &pruning(3.0), Some(&labels), None);
+        assert!(m2p[0].is_none() && m2p[40].is_none());
+    }
+
+    #[test]
+    fn without_label_aware_matching_every_vertex_takes_the_common_factor() {
+        let (vertices, points, labels) = scene();
+        let normals = vec![[0.0, 0.0, 1.0]; vertices.len()];
+        let index = CloudIndex::new(&points, None, 0).expect("the tree builds");
+        let (m2p, _) = index.m2p(&vertices, &normals, &pruning(10.0), Some(&labels), None);
+        assert!(m2p[0].is_none() && m2p[40].is_none());
     }
 }

@@ -130,6 +130,7 @@ impl Pruning {
     fn of(p: &PruningParams) -> Pruning {
         Pruning {
             distance_factor: p.prune_distance_factor,
+            torso_distance_factor: p.prune_distance_factor_torso,
             distance_floor: p.prune_distance_floor_m,
             min_cos: if p.prune_normal_angle_deg >= 180.0 { -1.0 } else { p.prune_normal_angle_deg.to_radians().cos() },
         }

@@ -452,6 +452,22 @@ def test_the_derivation_names_the_renders_it_came_from(tmp_path):
     assert "renders" not in parts[2]
 
 
+def test_the_derivation_names_a_heavier_cohort(tmp_path):
+    """Runs of `bench synth --bmi-shift` are named by their shift in the derivation's source; the standard
+    cohort's are not."""
+    from bsv.bench.noisemodel import load_runs
+
+    paths = []
+    for name, shift in (("heavy", 8.0), ("standard", 0.0)):
+        p = tmp_path / name / "results.json"
+        p.parent.mkdir()
+        p.write_text(json.dumps({"config": {"seed": 1, "n": 10, "segmentation": "camera", "room": "clinic",
+                                            "bmi_shift": shift}, "runs": []}))
+        paths.append(p)
+    heavy, standard = load_runs(paths)[1].split("; ")
+    assert heavy.endswith("clinic room renders, BMI +8)") and "BMI" not in standard
+
+
 def test_the_files_of_one_seed_are_left_out_together(tmp_path):
     """A seed's room and studio runs hold the same subjects: the self-check leaves them out together, so no
     subject is scored on a model derived from itself."""

@@ -261,8 +261,10 @@ def load_runs(paths: Sequence[str | Path]) -> tuple[list[Run], str]:
         cfg = doc.get("config", {})
         room = cfg.get("room")  # "clinic", "studio", or False: the body alone on grey
         room = f", {'clinic room' if room == 'clinic' else room} renders" if room else ""
+        shift = float(cfg.get("bmi_shift") or 0.0)  # a heavier cohort (bench synth --bmi-shift)
+        heavy = f", BMI {shift:+g}" if shift else ""
         where.append(f"bench synth seed {cfg.get('seed')} n {cfg.get('n')} ({cfg.get('conditions')}, "
-                     f"{cfg.get('segmentation')}, local modifiers {cfg.get('local_modifiers')}{room})")
+                     f"{cfg.get('segmentation')}, local modifiers {cfg.get('local_modifiers')}{room}{heavy})")
     return runs, "; ".join(where)
 
 

@@ -354,7 +354,8 @@ def quality_html(registration: dict[str, Any]) -> str:
             + f'<p class="note">Points near: a measured point within 10 mm. Folded: the fitted surface turned over '
               f"itself. A fit is doubtful with an RMS above {lim['rms_mm']:.0f} mm, more than "
               f"{100 * lim['exposed_uncovered']:.0f} % seen without points near, less than {100 * lim['coverage']:.0f} % "
-              f"with points near, or more than {100 * lim['folded']:.0f} % folded: check the measured points of that "
+              f"with points near, or more than {100 * lim['folded']:.0f} % folded ({100 * lim['folded_torso']:.0f} % for the "
+              "torso, whose fit folds a little at the neck and the crotch, where no point lies): check the measured points of that "
               "segment before using its volume.</p>")
 
 

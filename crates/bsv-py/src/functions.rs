@@ -319,6 +319,7 @@ fn register_quality(m: &Bound<'_, PyModule>) -> PyResult<()> {
     limits.set_item("exposed_uncovered", bsv_register::DOUBT_EXPOSED)?;
     limits.set_item("coverage", bsv_register::DOUBT_COVERAGE)?;
     limits.set_item("folded", bsv_register::DOUBT_FOLDED)?;
+    limits.set_item("folded_torso", bsv_register::DOUBT_FOLDED_TORSO)?;
     m.add("QUALITY_LIMITS", limits)?;
     Ok(())
 }

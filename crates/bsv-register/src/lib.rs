@@ -59,7 +59,7 @@ pub use params::{
 pub use plausible::{check_person, is_human_template};
 pub use prealign::Similarity;
 pub use prepare::{prepare, Prepared};
-pub use quality::{SegmentQuality, DOUBT_COVERAGE, DOUBT_EXPOSED, DOUBT_FOLDED, DOUBT_RMS_MM};
+pub use quality::{SegmentQuality, DOUBT_COVERAGE, DOUBT_EXPOSED, DOUBT_FOLDED, DOUBT_FOLDED_TORSO, DOUBT_RMS_MM};
 pub use registrar::Registrar;
 pub use result::{LimbAlignment, Registration};
 pub use schedule::{CorrespondenceKind, Schedule, Stage, DEFAULT_SCHEDULE, MAX_ITERATIONS};

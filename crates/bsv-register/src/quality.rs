@@ -64,7 +64,7 @@ pub const DOUBT_FOLDED: f64 = 0.08;
 /// [`DOUBT_FOLDED`] of the torso. Its correspondences are pruned at 6 x the median since round 2
 /// session 31 (`prune_distance_factor_torso`), and its good fits then fold 3.4-8.5 % of its vertices
 /// (subjects 0-1 of the cohort, four conditions; 3.2-4.7 % before), near the neck's rim and in the
-/// crotch, where no cloud lies. Its volume is unharmed there (torso -0.5 to +1.3 %, the same as before).
+/// crotch, where no cloud lies. Its volume is unharmed (torso -0.5 to +1.5 %, -0.6 to +1.3 % at 3 x).
 pub const DOUBT_FOLDED_TORSO: f64 = 0.12;
 
 /// The quality figures of one fitted segment (see the module).

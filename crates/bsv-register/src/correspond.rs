@@ -303,7 +303,7 @@ impl CloudIndex {
     /// Nearest cloud point of each vertex, restricted to the vertex's segment when label-aware
     /// matching is on and `vertex_labels` is given: (global point index, squared distance).
     pub fn nearest_labelled(&self, vertices: &[[f64; 3]], vertex_labels: Option<&[u8]>) -> Vec<(u32, f64)> {
-        let Some(vl) = vertex_labels.filter(|_| !self.by_label.is_empty()) else {
+        let Some(vl) = self.label_aware(vertex_labels) else {
             return self.nearest(vertices);
         };
         let groups = group_by_label(vl);
@@ -344,13 +344,13 @@ impl CloudIndex {
     ) -> Result<Vec<(u32, f64)>, String> {
         if let Some((graph, start)) = warm.filter(|(_, s)| s.len() == self.points.len()) {
             let restricted: Vec<bool> = self.by_label.iter().map(Option::is_some).collect();
-            let allowed = match (vertex_labels.filter(|_| !self.by_label.is_empty()), &self.labels) {
+            let allowed = match (self.label_aware(vertex_labels), &self.labels) {
                 (Some(vl), Some(pl)) => Some(Allowed { point_labels: pl, vertex_labels: vl, restricted: &restricted }),
                 _ => None,
             };
             return Ok(walk_to_nearest(graph, vertices, &self.points, start, allowed));
         }
-        let (Some(vl), Some(labels)) = (vertex_labels.filter(|_| !self.by_label.is_empty()), &self.labels) else {
+        let (Some(vl), Some(labels)) = (self.label_aware(vertex_labels), &self.labels) else {
             let tree = build_tree(vertices)?;
             return Ok(nearest_batch(&tree, &self.points));
         };

@@ -50,6 +50,29 @@ pub const LIMBS: [u8; 8] = [
 
 /// Fewest vertices/points a segment needs to be aligned.
 const MIN_ITEMS: usize = 30;
+/// Smallest ratio of the largest to the middle eigenvalue of a template limb's vertices, and of a
+/// cloud limb's points except the upper arms': below it the axis is not clear. Thighs often fall
+/// under it (the upper thigh's wide surface dominates) and stay unarticulated: articulating them at
+/// 1.2 made thighs and shins worse (round 2 session 4), and at 1.3 the heavier cohort's shins went
+/// +1.1 points (session 32).
+pub const MIN_ELONGATION: f64 = 2.0;
+/// The same ratio for a cloud upper arm. The camera path's upper arm runs from the armpit line to the
+/// elbow, short, and the cameras see only its front and back, which adds to the spread in depth: a
+/// plain arm reads 3.3, a deep one 1.5-2.0, a heavy one (BMI 35-41) 1.6-2.0. At 2 such an arm was
+/// skipped (no turn, no axial scale, no cross-section sizing), and the fit recruited the torso's
+/// shoulder vertices to cover it: upper arms -7 to -11 %, the shoulder loop 7-13 mm distal (round 2
+/// session 32). Below [`MIN_TURN_ELONGATION`] it is sized but not turned.
+pub const MIN_UPPER_ARM_ELONGATION: f64 = 1.3;
+/// Smallest elongation of a cloud upper arm whose axis the limb is turned onto; a less elongated one
+/// (from [`MIN_UPPER_ARM_ELONGATION`]) is sized along the template's own axis. Under 1.6 the cloud's
+/// axis lay up to 12 degrees off the bone (a deep arm at 1.5: turned 20 degrees, upper arm -9.5 to
+/// -11.8 %); turned, such arms of the hard cohort came out 4.35 % off on average, unturned 1.58 %. From
+/// 1.6 to 2 the turn pays: heavier bodies' arms (turned by 13 degrees, median) 1.97 % against 4.23 %
+/// unturned (round 2 session 32).
+pub const MIN_TURN_ELONGATION: f64 = 1.6;
+/// Largest angle (degrees) between the template's and the cloud's limb axes: a cloud axis farther
+/// off is a cross-section's, not the limb's, and the limb is skipped.
+pub const MAX_AXIS_ANGLE_DEG: f64 = 45.0;
 
 /// The per-limb map found by [`segment_poses`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -70,6 +93,8 @@ pub struct SegmentPose {
     pub angle_deg: f64,
     /// The cross-section sizing applied after the rotation (see `section.rs`).
     pub section: Section,
+    /// The cloud limb's elongation: the largest over the middle eigenvalue of its points' covariance.
+    pub elongation: f64,
 }
 
 impl SegmentPose {
@@ -136,7 +161,9 @@ fn axial_range(pts: &[[f64; 3]], c: [f64; 3], axis: [f64; 3], q: f64) -> (f64, f
 }
 
 /// The per-limb poses of the template (`rest`, `vertex_labels`) onto the cloud (`points`,
-/// `labels`). Segments absent on either side, too small, or not elongated are skipped.
+/// `labels`). Segments absent on either side, too small, not elongated
+/// ([`MIN_ELONGATION`], [`MIN_UPPER_ARM_ELONGATION`]) or whose cloud axis lies more than
+/// [`MAX_AXIS_ANGLE_DEG`] off the template's are skipped.
 pub fn segment_poses(
     rest: &[[f64; 3]],
     vertex_labels: &[u8],
@@ -156,7 +183,8 @@ pub fn segment_poses(
         let (at, rt) = principal_axis(&mt);
         let (cc0, mc) = moments(&cp);
         let (ac0, rc) = principal_axis(&mc);
-        if rt < 2.0 || rc < 2.0 {
+        let min_cloud = if UPPER_ARMS.contains(&l) { MIN_UPPER_ARM_ELONGATION } else { MIN_ELONGATION };
+        if rt < MIN_ELONGATION || rc < min_cloud {
             continue;
         }
         // Refine the cloud axis on the 90 % of points nearest to the first axis line.
@@ -174,6 +202,13 @@ pub fn segment_poses(
         let (mut ac, _) = principal_axis(&mc);
         if dot(ac, at) < 0.0 {
             ac = ac.map(|v| -v);
+        }
+        if dot(ac, at) < MAX_AXIS_ANGLE_DEG.to_radians().cos() {
+            continue;
+        }
+        if rc < MIN_TURN_ELONGATION {
+            // Clear enough to size the limb along, not to turn it by (see MIN_TURN_ELONGATION).
+            ac = at;
         }
         // Along the axis, map the template's segment interval onto the cloud's (1 % / 99 %
         // quantiles of the projections): ends aligned, not centroids (the template's cap
@@ -198,6 +233,7 @@ pub fn segment_poses(
             axial_scale: scale,
             angle_deg: dot(at, ac).clamp(-1.0, 1.0).acos().to_degrees(),
             section: Section::identity(),
+            elongation: rc,
         };
         if cross_section {
             let posed: Vec<[f64; 3]> = tv.iter().map(|&x| sub(pose.apply(x), cc)).collect();
@@ -354,6 +390,7 @@ mod tests {
             axial_scale: 1.0,
             angle_deg: 0.0,
             section: Section::identity(),
+            elongation: 3.0,
         }
     }
 
@@ -408,5 +445,70 @@ mod tests {
         // Only the other side's forearm: not this arm's elbow.
         let other_side: Vec<u8> = l.iter().map(|&x| if x == 5 { 6 } else { x }).collect();
         assert!(none(shoulder_halves(&other_side, &w, &[arm_up()])));
+    }
+
+    /// An elliptic tube along `axis` (unit, in the x-y plane) through the origin: `len` long, semi-axes
+    /// `rw` (in the x-y plane) and `rd` (along z); with `front_back` only the points the two cameras on
+    /// z see (|n_z| > 0.3).
+    fn tube(axis: [f64; 3], len: f64, rw: f64, rd: f64, front_back: bool) -> Vec<[f64; 3]> {
+        let w = [-axis[1], axis[0], 0.0];
+        let mut out = Vec::new();
+        for i in 0..60 {
+            let t = len * (i as f64 / 59.0 - 0.5);
+            for j in 0..48 {
+                let phi = j as f64 / 48.0 * std::f64::consts::TAU;
+                let (u, z) = (rw * phi.cos(), rd * phi.sin());
+                let nz = phi.sin() / rd / ((phi.cos() / rw).powi(2) + (phi.sin() / rd).powi(2)).sqrt();
+                if front_back && nz.abs() < 0.3 {
+                    continue;
+                }
+                out.push([axis[0] * t + w[0] * u, axis[1] * t + w[1] * u, z]);
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn a_short_deep_upper_arm_is_still_sized_and_turned_once_its_axis_is_clear() {
+        // The template's upper arm: 28 cm long, 4 cm round, hanging straight down.
+        let template = tube([0.0, -1.0, 0.0], 0.28, 0.04, 0.04, false);
+        let tl = vec![3u8; template.len()];
+        // The cloud's: 25 cm between the armpit line and the elbow, turned 8 degrees, 1.9 and 2.1 x
+        // deeper than wide, seen from the front and the back only.
+        let a = 8f64.to_radians();
+        for (depth, turned) in [(0.064, true), (0.070, false)] {
+            let cloud = tube([a.sin(), -a.cos(), 0.0], 0.25, 0.034, depth, true);
+            let (_, m) = moments(&cloud);
+            let (_, ratio) = principal_axis(&m);
+            let band = if turned {
+                MIN_TURN_ELONGATION..MIN_ELONGATION
+            } else {
+                MIN_UPPER_ARM_ELONGATION..MIN_TURN_ELONGATION
+            };
+            assert!(band.contains(&ratio), "the cloud's elongation {ratio}");
+            let poses = segment_poses(&template, &tl, &cloud, &vec![3u8; cloud.len()], true, true);
+            assert_eq!(poses.len(), 1, "the short, deep arm is aligned (elongation {ratio})");
+            let p = poses[0];
+            let angle = if turned { 8.0 } else { 0.0 };
+            assert!((p.angle_deg - angle).abs() < 1.0, "elongation {ratio}: turned by {}", p.angle_deg);
+            assert!(p.section.depth_scale > 1.4, "depth scale {}", p.section.depth_scale);
+            assert!(p.axial_scale < 0.95, "axial scale {}", p.axial_scale);
+            assert!((p.elongation - ratio).abs() < 0.2, "elongation {} against {ratio}", p.elongation);
+            // A thigh as round as that is left to the fit.
+            let (t9, c9) = (vec![9u8; template.len()], vec![9u8; cloud.len()]);
+            assert!(segment_poses(&template, &t9, &cloud, &c9, true, true).is_empty());
+        }
+    }
+
+    #[test]
+    fn a_cloud_limb_without_a_clear_or_plausible_axis_is_skipped() {
+        let template = tube([0.0, -1.0, 0.0], 0.28, 0.04, 0.04, false);
+        let tl = vec![3u8; template.len()];
+        // As long as it is wide: no axis to turn the limb onto.
+        let blob = tube([0.0, -1.0, 0.0], 0.1, 0.06, 0.06, false);
+        assert!(segment_poses(&template, &tl, &blob, &vec![3u8; blob.len()], true, true).is_empty());
+        // Long across the template's axis: a cross-section's axis, not the limb's.
+        let across = tube([1.0, 0.0, 0.0], 0.28, 0.04, 0.04, false);
+        assert!(segment_poses(&template, &tl, &across, &vec![3u8; across.len()], true, true).is_empty());
     }
 }

@@ -317,6 +317,7 @@ fn articulate_limbs(
             depth_scale: p.section.depth_scale,
             width_scale: p.section.width_scale,
             shift_mm: bsv_core::geometry::dist2(p.cloud_centroid, p.template_centroid).sqrt() * 1e3,
+            elongation: p.elongation,
         })
         .collect();
     (rest, limbs)

@@ -59,4 +59,7 @@ pub struct LimbAlignment {
     /// Distance between the template's and the cloud's segment centroids (after the global
     /// pre-alignment), mm.
     pub shift_mm: f64,
+    /// The cloud limb's elongation (largest over middle eigenvalue of its points' covariance; see
+    /// `articulate::MIN_ELONGATION`).
+    pub elongation: f64,
 }

@@ -142,8 +142,8 @@ def register_bsv(cloud: PointCloud, template: Mesh, params: Mapping[str, Any] | 
     reg = register(cloud, None, template, label_source=label_source, keypoints=keypoints, **kw)  # as bsv process
     wall = time.perf_counter() - t0
     summary = dict(reg.volumes.get("registration", {}) or {})
-    info = {k: summary[k] for k in ("rms_mesh_to_points_mm", "rms_points_to_mesh_mm", "iterations", "prealign")
-            if k in summary}
+    kept = ("rms_mesh_to_points_mm", "rms_points_to_mesh_mm", "iterations", "prealign", "articulation")
+    info = {k: summary[k] for k in kept if k in summary}
     return Fit("bsv", reg.mesh, dict(reg.volumes["volumes_l"]), wall, info)
 
 

@@ -447,25 +447,11 @@ mod tests {
         assert!(none(shoulder_halves(&other_side, &w, &[arm_up()])));
     }
 
-    /// An elliptic tube along `axis` (unit, in the x-y plane) through the origin: `len` long, semi-axes
-    /// `rw` (in the x-y plane) and `rd` (along z); with `front_back` only the points the two cameras on
-    /// z see (|n_z| > 0.3).
+    /// An elliptic tube along `axis` (unit, in the x-y plane) through the origin, `len` long (60 rings of 48):
+    /// with `front_back` only the points the two cameras on z see (|n_z| > 0.3).
     fn tube(axis: [f64; 3], len: f64, rw: f64, rd: f64, front_back: bool) -> Vec<[f64; 3]> {
-        let w = [-axis[1], axis[0], 0.0];
-        let mut out = Vec::new();
-        for i in 0..60 {
-            let t = len * (i as f64 / 59.0 - 0.5);
-            for j in 0..48 {
-                let phi = j as f64 / 48.0 * std::f64::consts::TAU;
-                let (u, z) = (rw * phi.cos(), rd * phi.sin());
-                let nz = phi.sin() / rd / ((phi.cos() / rw).powi(2) + (phi.sin() / rd).powi(2)).sqrt();
-                if front_back && nz.abs() < 0.3 {
-                    continue;
-                }
-                out.push([axis[0] * t + w[0] * u, axis[1] * t + w[1] * u, z]);
-            }
-        }
-        out
+        let along = (0..60).map(|i| len * (i as f64 / 59.0 - 0.5));
+        crate::testshapes::elliptic_tube(axis, along, 48, rw, rd, if front_back { 0.3 } else { 0.0 })
     }
 
     #[test]

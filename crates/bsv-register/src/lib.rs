@@ -46,6 +46,8 @@ mod section;
 mod solver;
 mod surface;
 mod sym3;
+#[cfg(test)]
+mod testshapes;
 mod voxels;
 mod walk;
 

@@ -237,19 +237,8 @@ mod tests {
     /// An elliptic cylinder along y with semi-axes `rx` (width, x) and `rz` (depth, z), sampled on
     /// its surface; `front_back_only` drops the grazing |nz| < 0.05 band (what two cameras on z miss).
     fn cylinder(rx: f64, rz: f64, n: usize, front_back_only: bool) -> Vec<[f64; 3]> {
-        let mut out = Vec::new();
-        for i in 0..n {
-            for j in 0..72 {
-                let phi = j as f64 / 72.0 * std::f64::consts::TAU;
-                let (x, z) = (rx * phi.cos(), rz * phi.sin());
-                let nz = phi.sin() / rz / ((phi.cos() / rx).powi(2) + (phi.sin() / rz).powi(2)).sqrt();
-                if front_back_only && nz.abs() < 0.05 {
-                    continue;
-                }
-                out.push([x, -0.15 + 0.3 * i as f64 / n as f64, z]);
-            }
-        }
-        out
+        let along = (0..n).map(|i| -0.15 + 0.3 * i as f64 / n as f64);
+        crate::testshapes::elliptic_tube([0.0, 1.0, 0.0], along, 72, rx, rz, if front_back_only { 0.05 } else { 0.0 })
     }
 
     #[test]

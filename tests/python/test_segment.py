@@ -545,6 +545,40 @@ def test_the_two_views_crotches_agree():
     assert all(seg.expected_crotch_depth(v, 0.0, spread) + seg.CROTCH_TOUCH_MARGIN < 0.37 for v in ("front", "back"))
 
 
+def _arms_pose(left_deg: float, right_deg: float) -> np.ndarray:
+    """Pose landmarks (33, 3; a front view: the subject's left on the image right) with each arm's elbow 100 px
+    from its shoulder at the given angle below the horizontal."""
+    pose = np.full((33, 3), np.nan)
+    at = {"left_shoulder": (270.0, 60.0), "right_shoulder": (130.0, 60.0), "left_hip": (250.0, 190.0),
+          "right_hip": (150.0, 190.0)}
+    for side, sign, deg in (("left", 1.0, left_deg), ("right", -1.0, right_deg)):
+        sx, sy = at[f"{side}_shoulder"]
+        a = math.radians(deg)
+        at[f"{side}_elbow"] = (sx + sign * 100.0 * math.cos(a), sy + 100.0 * math.sin(a))
+    for name, xy in at.items():
+        pose[seg.POSE_NAMES.index(name)] = (*xy, 1.0)
+    return pose
+
+
+def test_two_views_that_disagree_on_an_arms_angle_are_warned_about():
+    """A front view whose left arm reads 63 degrees below the horizontal where the back view reads 49 (the
+    bumps subject of round 2 session 32: its front shoulder landmarks lay high) is a warning naming that arm and
+    both angles; views within ARM_ANGLE_VIEWS_DISAGREE_DEG of each other, or a view missing, are not."""
+    front, back = _arms_pose(63.0, 50.0), _arms_pose(49.0, 47.0)
+    assert seg.arm_angle_deg(front[seg.POSE_NAMES.index("left_shoulder"), :2],
+                             front[seg.POSE_NAMES.index("left_elbow"), :2],
+                             np.array([0.0, 1.0]), np.array([1.0, 0.0])) == pytest.approx(63.0)
+    notes = seg.disagreeing_arm_angles({"front": front, "back": back})
+    assert list(notes) == ["front"], notes
+    assert "left arm's angle reads 63 degrees" in notes["front"] and "49 in the back" in notes["front"], notes
+    assert "right arm" not in notes["front"], notes
+    assert seg.disagreeing_arm_angles({"front": _arms_pose(46.0, 52.0), "back": _arms_pose(49.0, 54.0)}) == {}
+    assert seg.disagreeing_arm_angles({"front": front}) == {}
+    hidden = front.copy()
+    hidden[seg.POSE_NAMES.index("left_elbow")] = np.nan
+    assert seg.disagreeing_arm_angles({"front": hidden, "back": back}) == {}
+
+
 def test_the_groin_line_from_the_crotch_labels_the_hips_closer_to_the_truth(scans):
     """On the rig's renders (the default body and two cohort subjects, both views) the groin line from the
     crotch at the defaults' lean, unshifted (the pixel-true line learned from the rig's labels; the defaults

@@ -81,6 +81,7 @@ from .segment import (
     SegmentParams,
     agreeing_crotches,
     detect,
+    disagreeing_arm_angles,
     label_detection,
     person_mask,
     resolve_landmarks,
@@ -750,9 +751,11 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
         place_ankles(dets[v], resolved[v][0], cameras[v], depths[v], stature)
     masks = {v: person_mask(dets[v], depths[v] if use_depth else None, resolved[v][0]) for v in views}
     crotches, crotch_notes = agreeing_crotches(masks, {v: resolved[v][0] for v in views}, sex.score)
+    arm_notes = disagreeing_arm_angles({v: resolved[v][0] for v in views})
     build = build_score(sex.measurements)
     segs = {v: label_detection(dets[v], depths[v] if use_depth else None, resolved[v][0], resolved[v][1],
-                               [*resolved[v][2], *([crotch_notes[v]] if v in crotch_notes else [])], sex=sex,
+                               [*resolved[v][2], *([crotch_notes[v]] if v in crotch_notes else []),
+                                *([arm_notes[v]] if v in arm_notes else [])], sex=sex,
                                mask=masks[v], crotch=crotches[v], build=build) for v in views}
     if crotch_notes:  # a crotch placed at its expected depth: the thighs' intervals widen by its sd
         segs = {v: dataclasses.replace(s, extra_sd={**s.extra_sd, **EXPECTED_CROTCH_SD}) for v, s in segs.items()}

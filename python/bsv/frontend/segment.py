@@ -1108,6 +1108,42 @@ def arm_angle_deg(shoulder: np.ndarray, elbow: np.ndarray, down: np.ndarray, out
     return math.degrees(math.atan2(float(bone @ down), abs(float(bone @ outward))))
 
 
+#: Two views' angles of one arm (:func:`arm_angle_deg`) farther apart than this (degrees) cannot both be right
+#: (:func:`disagreeing_arm_angles`). Over 40 captures (room seeds 0-1, heavier and hard seed 0, noer) they differ
+#: by at most 6.3 (the back's read 3.9 more on average); on the 41st a front view's shoulder landmarks lay high, its
+#: arm angles read 63 / 65 degrees against the back's 49 / 49 (truth 45), and its shoulder lines stood upright:
+#: that subject's upper arms came out -12 to -16 % (benchmarks/BENCH.md, round 2 session 32).
+ARM_ANGLE_VIEWS_DISAGREE_DEG = 10.0
+
+
+def disagreeing_arm_angles(poses: Mapping[str, np.ndarray]) -> dict[str, str]:
+    """``{view: warning}`` for each arm whose angle below the horizontal (:func:`arm_angle_deg` in each view's
+    :func:`body_axes`) differs between the front and the back view's resolved ``poses`` (subject-oriented, 33 x
+    >=2 pixels) by more than :data:`ARM_ANGLE_VIEWS_DISAGREE_DEG`. Which view is wrong is not known, so nothing
+    is moved: the warning (on the front view's segmentation) says that arm's upper arm may be off. Empty without
+    both views or where a landmark is not finite."""
+    if set(poses) != set(VIEWS):
+        return {}
+    angles: dict[str, dict[str, float]] = {}
+    for v in VIEWS:
+        P = {n: np.asarray(poses[v][i, :2], dtype=np.float64) for i, n in enumerate(POSE_NAMES)}
+        if not all(np.all(np.isfinite(P[n])) for n in ("left_shoulder", "right_shoulder", "left_hip", "right_hip",
+                                                            "left_elbow", "right_elbow")):
+            return {}
+        _, _, down, lat = body_axes(P)
+        angles[v] = {side: arm_angle_deg(P[f"{side}_shoulder"], P[f"{side}_elbow"], down, lat if side == "left" else -lat)
+                     for side in ("left", "right")}
+    parts = [f"the {side} arm's angle reads {angles['front'][side]:.0f} degrees below the horizontal in the front "
+             f"image and {angles['back'][side]:.0f} in the back"
+             for side in ("left", "right")
+             if abs(angles["front"][side] - angles["back"][side]) > ARM_ANGLE_VIEWS_DISAGREE_DEG]
+    if not parts:
+        return {}
+    return {"front": (f"{'; '.join(parts)} (two views that agree differ by a few degrees): one view's shoulder or "
+                      f"elbow landmark is off, and with it that view's shoulder boundary; that upper arm's volume may "
+                      f"be several percent off")}
+
+
 #: The arm angle (degrees below the horizontal) at which :attr:`SegmentParams.armpit_angle` applies as it is.
 ARMPIT_REF_ARM_DEG = 40.0
 
@@ -1581,6 +1617,7 @@ def label_accuracy(pred: np.ndarray, truth: np.ndarray) -> dict[str, Any]:
 
 __all__ = [
     "ARMPIT_REF_ARM_DEG",
+    "ARM_ANGLE_VIEWS_DISAGREE_DEG",
     "ARM_MAX_WIDTH",
     "ARM_SECTIONS",
     "CROTCH_DEPTH",
@@ -1606,6 +1643,7 @@ __all__ = [
     "body_axes",
     "crotch_point",
     "detect",
+    "disagreeing_arm_angles",
     "expected_crotch_depth",
     "label_accuracy",
     "label_detection",

@@ -1109,8 +1109,8 @@ def arm_angle_deg(shoulder: np.ndarray, elbow: np.ndarray, down: np.ndarray, out
 
 
 #: Two views' angles of one arm (:func:`arm_angle_deg`) farther apart than this (degrees) cannot both be right
-#: (:func:`disagreeing_arm_angles`). Over 40 captures (room seeds 0-1, heavier and hard seed 0, noer) they differ
-#: by at most 6.3 (the back's read 3.9 more on average); on the 41st a front view's shoulder landmarks lay high, its
+#: (:func:`disagreeing_arm_angles`). Over 39 captures (room seeds 0-1, heavier and hard seed 0, noer) they differ
+#: by at most 6.3 (the back's read 3.9 more on average); on a 40th a front view's shoulder landmarks lay high, its
 #: arm angles read 63 / 65 degrees against the back's 49 / 49 (truth 45), and its shoulder lines stood upright:
 #: that subject's upper arms came out -12 to -16 % (benchmarks/BENCH.md, round 2 session 32).
 ARM_ANGLE_VIEWS_DISAGREE_DEG = 10.0

@@ -196,10 +196,11 @@ def _calibration(calibration: PathLike | None, capture_dir: Path, cameras: Seque
 
 
 def _intervals(reg: Registration, cameras: Sequence[Any], segmentation: str, density: float,
-               extra_sd: Mapping[str, float] | None = None) -> Any:
+               extra_sd: Mapping[str, float] | None = None, build_score: float | None = None) -> Any:
     """The 95 % intervals (:func:`bsv.uncertainty.intervals`) with the error model of an L515 and this
-    segmentation, widened by ``extra_sd`` (:func:`segmentation_extra_sd`); without a packaged model for the
-    segmentation, the true-label model, saying so."""
+    segmentation, widened by ``extra_sd`` (:func:`segmentation_extra_sd`) and, where the model follows the
+    build, at the subject's ``build_score`` (:func:`segmentation_build_score`); without a packaged model for
+    the segmentation, the true-label model, saying so."""
     from .uncertainty import error_models, intervals, model_for
 
     name = model_for("l515", segmentation)
@@ -209,7 +210,19 @@ def _intervals(reg: Registration, cameras: Sequence[Any], segmentation: str, den
         name, note = "l515", (f"not included: the error of the {segmentation} segmentation (no packaged model; the "
                               "true-label model is used), so the intervals are too narrow for it")
     return intervals(reg.mesh, reg.volumes, cameras, model=models[name], density=density, note=note,
-                     extra_sd=extra_sd)
+                     extra_sd=extra_sd, build_score=build_score)
+
+
+def segmentation_build_score(segmentations: Iterable[Segmentation]) -> float | None:
+    """The subject's build score (:func:`bsv.frontend.sex.build_score`) as the camera segmentation read it from
+    the capture (both views share one estimate); None when no view measured it (a sex given by the user
+    measures nothing)."""
+    from .frontend.sex import build_score
+
+    for seg in segmentations:
+        if seg.sex is not None and seg.sex.measurements:
+            return build_score(seg.sex.measurements)
+    return None
 
 
 def segmentation_extra_sd(segmentations: Iterable[Segmentation]) -> dict[str, float]:
@@ -591,7 +604,8 @@ def process(
         vols["intervals"] = steps.run(
             "intervals", "95 % intervals (calibration Monte Carlo + error model)",
             lambda: _intervals(reg, [_camera_spread(c, extrinsics[c]) for c in cameras], segmentation, density,
-                               segmentation_extra_sd(camera_segs.values()))).to_json()
+                               segmentation_extra_sd(camera_segs.values()),
+                               segmentation_build_score(camera_segs.values()))).to_json()
         if refined:
             vols["calibration_refinement"] = {"method": "floor plane (pitch, roll, height)", "cameras": refined}
         vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report,
@@ -939,5 +953,6 @@ __all__ = [
     "main_process",
     "output_files",
     "process",
+    "segmentation_build_score",
     "segmentation_extra_sd",
 ]

@@ -25,6 +25,11 @@ Quantities are compared in a transformed space where errors are close to additiv
 natural log of volumes, masses and ratios, the asymmetry itself (percentage points). With ``est`` the
 measured value, the truth lies in ``T^-1(T(est) - bias +- 1.96 sqrt(sd_model^2 + sd_calibration^2))``.
 An asymmetry whose interval contains 0 is "not distinguishable from symmetric" (:func:`asymmetry_text`).
+
+On the camera path the error grows with the subject's build (:func:`bsv.frontend.sex.build_score`: the
+heavier the body, the further its cut lines drift and the less of its hidden sides the fit sees): a camera
+model may carry a :class:`BuildTerm`: per unit of the build beyond its ``hinge``, a bias per quantity and a
+growth of the variance, for a capture whose build is known (:func:`combine`'s ``build_score``).
 """
 
 from __future__ import annotations
@@ -278,16 +283,72 @@ def moved_vertices(vertices: np.ndarray, weights: np.ndarray, cameras: Sequence[
 
 
 @dataclass(frozen=True)
+class BuildTerm:
+    """How a camera-path model's error drifts with the subject's build (:func:`bsv.frontend.sex.build_score`):
+    for a build ``b``, with ``e = max(b - hinge, 0)``, a quantity's bias is the model's plus ``bias[name] * e``
+    and its sd the model's times ``sqrt(1 + variance_per_unit * e)`` (comparison space). Quantities without a
+    bias slope keep the model's bias."""
+
+    #: The build score from which the error drifts (:data:`bsv.bench.noisemodel.BUILD_HINGE`).
+    hinge: float
+    #: Per quantity: the bias per unit of the build beyond the hinge.
+    bias: dict[str, float]
+    #: The variance's growth per unit of the build beyond the hinge, as a fraction of the model's (one for
+    #: every quantity, >= 0).
+    variance_per_unit: float
+
+    def excess(self, build_score: float | None) -> float:
+        """The build beyond the hinge (0 for an unknown or non-finite build)."""
+        if build_score is None or not math.isfinite(build_score):
+            return 0.0
+        return max(float(build_score) - self.hinge, 0.0)
+
+    def to_json(self) -> dict[str, Any]:
+        """The model document's ``"build"`` record."""
+        return {"hinge": self.hinge, "bias_per_unit": dict(self.bias), "variance_per_unit": self.variance_per_unit}
+
+    @staticmethod
+    def from_json(doc: Mapping[str, Any], where: str = "error model") -> BuildTerm:
+        """The inverse of :meth:`to_json`; :class:`UncertaintyError` naming ``where`` on a malformed record."""
+        try:
+            term = BuildTerm(float(doc["hinge"]), {str(k): float(v) for k, v in doc["bias_per_unit"].items()},
+                             float(doc["variance_per_unit"]))
+        except (KeyError, TypeError, ValueError, AttributeError) as exc:
+            raise UncertaintyError(f"{where}: expected a build record {{'hinge', 'bias_per_unit', "
+                                   f"'variance_per_unit'}} ({exc})") from exc
+        bad = [k for k, v in term.bias.items() if not math.isfinite(v)]
+        if bad or not (math.isfinite(term.hinge) and math.isfinite(term.variance_per_unit)
+                       and term.variance_per_unit >= 0):
+            raise UncertaintyError(f"{where}: the build record has a non-finite hinge or bias, or a negative "
+                                   f"variance growth ({', '.join(bad) or 'hinge, variance_per_unit'})")
+        return term
+
+
+@dataclass(frozen=True)
 class ErrorModel:
-    """Per quantity ``bias`` and prediction ``sd`` of ``T(estimate) - T(truth)`` (comparison space)."""
+    """Per quantity ``bias`` and prediction ``sd`` of ``T(estimate) - T(truth)`` (comparison space), and for
+    a camera-path model how they drift with the subject's build (``build``, None: they do not)."""
 
     entries: dict[str, tuple[float, float]]
     description: str = ""
     derivation: dict[str, Any] = field(default_factory=dict)
+    build: BuildTerm | None = None
+
+    def at(self, name: str, build_score: float | None = None) -> tuple[float, float] | None:
+        """The (bias, sd) of quantity ``name`` for a subject of build ``build_score`` (None: unknown, the
+        model's own); None when the model does not cover the quantity."""
+        if name not in self.entries:
+            return None
+        bias, sd = self.entries[name]
+        if self.build is None:
+            return bias, sd
+        e = self.build.excess(build_score)
+        return bias + self.build.bias.get(name, 0.0) * e, sd * math.sqrt(1.0 + self.build.variance_per_unit * e)
 
     @staticmethod
     def from_json(doc: Mapping[str, Any], where: str = "error model") -> ErrorModel:
-        """The model from its JSON form ``{"quantities": {name: {"bias": b, "sd": s, ...}}, ...}``."""
+        """The model from its JSON form ``{"quantities": {name: {"bias": b, "sd": s, ...}}, "build": {...}}``
+        (``build`` optional, :meth:`BuildTerm.to_json`)."""
         try:
             entries = {str(k): (float(v["bias"]), float(v["sd"])) for k, v in doc["quantities"].items()}
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
@@ -295,7 +356,8 @@ class ErrorModel:
         bad = [k for k, (b, s) in entries.items() if not (math.isfinite(b) and math.isfinite(s) and s >= 0)]
         if bad:
             raise UncertaintyError(f"{where}: non-finite bias or negative sd for {', '.join(bad)}")
-        return ErrorModel(entries, str(doc.get("description", "")), dict(doc.get("derivation", {})))
+        build = BuildTerm.from_json(doc["build"], where) if doc.get("build") is not None else None
+        return ErrorModel(entries, str(doc.get("description", "")), dict(doc.get("derivation", {})), build)
 
 
 @lru_cache(maxsize=1)
@@ -369,17 +431,20 @@ class Intervals:
 
 
 def combine(estimate: Mapping[str, float], model: ErrorModel, calibration_sd: Mapping[str, float] | None = None,
-            extra_sd: Mapping[str, float] | None = None) -> dict[str, tuple[float, float]]:
+            extra_sd: Mapping[str, float] | None = None, build_score: float | None = None) -> dict[str, tuple[float, float]]:
     """Per quantity of ``estimate`` that the model covers: the 95 % interval of the truth (see module doc).
     ``extra_sd``: more sd per quantity in the comparison space (a degraded boundary of the capture's
-    segmentation, :attr:`bsv.frontend.segment.Segmentation.extra_sd`), in quadrature with the others."""
+    segmentation, :attr:`bsv.frontend.segment.Segmentation.extra_sd`), in quadrature with the others.
+    ``build_score``: the subject's build (:func:`bsv.frontend.sex.build_score`), for a model with a
+    :class:`BuildTerm` (None: the model's own bias and sd)."""
     cal = calibration_sd or {}
     extra = extra_sd or {}
     out: dict[str, tuple[float, float]] = {}
     for name, value in estimate.items():
-        if name not in model.entries:
+        entry = model.at(name, build_score)
+        if entry is None:
             continue
-        bias, sd = model.entries[name]
+        bias, sd = entry
         centre = transform(name, value) - bias
         if not math.isfinite(centre):
             continue
@@ -390,16 +455,19 @@ def combine(estimate: Mapping[str, float], model: ErrorModel, calibration_sd: Ma
 
 def intervals(mesh: Mesh, volumes: Mapping[str, Any], cameras: Sequence[CameraSpread], *,
               model: ErrorModel | None = None, samples: int = DEFAULT_SAMPLES, seed: int = DEFAULT_SEED,
-              density: float = 1000.0, note: str = "", extra_sd: Mapping[str, float] | None = None) -> Intervals:
+              density: float = 1000.0, note: str = "", extra_sd: Mapping[str, float] | None = None,
+              build_score: float | None = None) -> Intervals:
     """The 95 % intervals of the fitted ``mesh``'s ``volumes`` report (as :func:`bsv.register` returns it),
     combining the calibration Monte Carlo over ``cameras`` and the error ``model`` (default: packaged), and
-    ``extra_sd`` per quantity where the capture's segmentation was degraded (:func:`combine`).
-    ``note`` is appended to the method text (what the intervals do not cover)."""
+    ``extra_sd`` per quantity where the capture's segmentation was degraded, at the subject's ``build_score``
+    when the model follows the build (:func:`combine`). ``note`` is appended to the method text (what the
+    intervals do not cover)."""
     t0 = time.perf_counter()
     m = model or default_error_model()
     cal = calibration_spread(mesh, cameras, samples=samples, seed=seed, density=density)
     est = quantities(volumes)
-    both = combine(est, m, cal, extra_sd)
+    both = combine(est, m, cal, extra_sd, build_score)
+    excess = m.build.excess(build_score) if m.build is not None else 0.0
     vol_keys = set((volumes.get("volumes_l") or {}).keys())
     sources = sorted({c.source for c in cameras})
     method = (f"calibration Monte Carlo ({samples} draws, seed {seed}, covariance: {', '.join(sources) or 'none'}) "
@@ -409,7 +477,11 @@ def intervals(mesh: Mesh, volumes: Mapping[str, Any], cameras: Sequence[CameraSp
               "its own interval); the error model leaves out gross registration failures (a "
               "segment missed by tens of percent), which the intervals do not cover"
               + (f"; widened where the segmentation was degraded (sd added for {', '.join(sorted(extra_sd))})"
-                 if extra_sd else "") + (f"; {note}" if note else ""))
+                 if extra_sd else "")
+              + (f"; widened for the subject's build ({build_score:.1f}, {excess:.1f} beyond the model's "
+                 f"{m.build.hinge:g}: the camera path's error grows with it)" if m.build is not None and excess > 0
+                 and build_score is not None else "")
+              + (f"; {note}" if note else ""))
     tl = both.get("trunk_limbs")
     mass = {} if tl is None else {"mass_trunk_limbs_kg": (tl[0] * density / 1000.0, tl[1] * density / 1000.0)}
     return Intervals(LEVEL, method, {k: v for k, v in both.items() if k in vol_keys},
@@ -436,6 +508,7 @@ __all__ = [
     "LEVEL",
     "PAPER_STD",
     "PARAMETERS",
+    "BuildTerm",
     "CameraSpread",
     "ErrorModel",
     "Intervals",

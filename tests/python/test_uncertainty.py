@@ -511,3 +511,88 @@ def test_a_gross_failure_is_listed_not_spread_over_every_interval():
     normal = [(f"s{i}", {"a": float(x), "b": float(y)}) for i, (x, y) in enumerate(rng.normal(0.0, 1.0, (20_000, 2)))]
     assert gross_failures(normal) == {}
     assert gross_failures([("s", {"a": 1.0}), ("t", {"a": 1.0}), ("u", {"a": 1.0})]) == {}  # no spread: no flag
+
+
+def test_a_build_term_moves_and_widens_only_beyond_its_hinge():
+    """A camera model's build term (bsv.uncertainty.BuildTerm) adds its bias per unit of the build beyond the
+    hinge and grows the variance by its fraction per unit; at or under the hinge, or with the build unknown,
+    the interval is the model's own."""
+    term = unc.BuildTerm(1.0, {"forearm_l": 0.01}, 0.5)
+    model = unc.ErrorModel({"forearm_l": (0.0, 0.02), "torso": (0.0, 0.01)}, "test", build=term)
+    est = {"forearm_l": 1.2, "torso": 30.0}
+    own = unc.combine(est, unc.ErrorModel(model.entries, "test"))
+    for build in (None, float("nan"), -2.0, 0.5, 1.0):
+        assert unc.combine(est, model, build_score=build) == own
+    heavy = unc.combine(est, model, build_score=3.0)  # 2 units beyond the hinge: variance x 2, bias +0.02
+    centre, half = math.log(1.2) - 0.02, 1.959963984540054 * 0.02 * math.sqrt(2.0)
+    assert heavy["forearm_l"] == pytest.approx((math.exp(centre - half), math.exp(centre + half)))
+    torso_half = 1.959963984540054 * 0.01 * math.sqrt(2.0)  # no bias slope: only wider
+    assert heavy["torso"] == pytest.approx((30.0 * math.exp(-torso_half), 30.0 * math.exp(torso_half)))
+    assert model.at("forearm_l", 3.0) == pytest.approx((0.02, 0.02 * math.sqrt(2.0)))
+    assert model.at("hand_l", 3.0) is None
+    doc = {"quantities": {"forearm_l": {"bias": 0.0, "sd": 0.02}}, "build": term.to_json()}
+    assert unc.ErrorModel.from_json(doc).build == term
+    with pytest.raises(UncertaintyError, match="build record"):
+        unc.ErrorModel.from_json({**doc, "build": {"hinge": 1.0}})
+    with pytest.raises(UncertaintyError, match="negative variance"):
+        unc.ErrorModel.from_json({**doc, "build": {**term.to_json(), "variance_per_unit": -0.1}})
+    iv = unc.intervals(bsv.default_template(), bsv.volumes(bsv.default_template()), [], model=model, samples=2,
+                       build_score=3.0)
+    assert "widened for the subject's build (3.0, 2.0 beyond" in iv.method
+
+
+def test_the_derivation_recovers_a_known_drift_with_the_build():
+    """Camera fits whose forearm error drifts by +2 % per unit of the build beyond the hinge and whose variance
+    grows by 0.8 of the model's per unit: the model's bias and sd come from the fits at or under the hinge, the
+    build term recovers the drift and the growth; held-out heavy fits are covered with it and not without it;
+    the oracle model gets no build term, nor a camera model with too few fits beyond the hinge."""
+    from bsv.bench.coverage import coverage_rows
+    from bsv.bench.noisemodel import BUILD_HINGE, MIN_BUILD_FITS, derive
+
+    rng = np.random.default_rng(3)
+
+    def run(i: int, build: float, seg: str = "camera") -> Run:
+        e = max(build - BUILD_HINGE, 0.0)
+        err = float(rng.normal(0.02 * e, 0.02 * math.sqrt(1 + 0.8 * e)))
+        info: dict = {"uncertainty": {"estimate": {"forearm_l": 1.2 * math.exp(err)}, "truth": {"forearm_l": 1.2},
+                                      "segmentation": seg, "calibration_sd": {}}}
+        if seg == "camera":
+            info["sex"] = {"build_score": build}
+        return Run(f"s{i}", "noer", "bsv", True, info=info)
+
+    h = BUILD_HINGE
+    builds = [*rng.uniform(h - 2.5, h, 400), *rng.uniform(h, h + 3.0, 1500)]
+    doc = derive([run(i, b) for i, b in enumerate(builds)] + [run(i, 3.0, "oracle") for i in range(40)])
+    cam = doc["depth_models"]["exact_camera"]
+    assert cam["quantities"]["forearm_l"]["n"] == 400 and cam["build"]["fits"] == 1500
+    assert cam["quantities"]["forearm_l"]["bias"] == pytest.approx(0.0, abs=0.003)
+    assert cam["quantities"]["forearm_l"]["raw_sd"] == pytest.approx(0.02, rel=0.1)
+    assert cam["build"]["hinge"] == h
+    assert cam["build"]["bias_per_unit"]["forearm_l"] == pytest.approx(0.02, abs=0.003)
+    assert cam["build"]["variance_per_unit"] == pytest.approx(0.8, rel=0.25)
+    assert "build" not in doc["depth_models"]["exact"]
+    held = [run(i, b) for i, b in enumerate(rng.uniform(h + 2.0, h + 3.0, 300))]
+    with_term = unc.ErrorModel.from_json(cam)
+    without = unc.ErrorModel(with_term.entries, "no build term")
+    inside = coverage_rows(held, {"exact_camera": with_term}, ("paper",))[0]["segment_coverage_pct"]
+    outside = coverage_rows(held, {"exact_camera": without}, ("paper",))[0]["segment_coverage_pct"]
+    assert inside is not None and outside is not None
+    assert inside >= 92.0 and outside < 50.0
+    few = derive([run(i, b) for i, b in enumerate([*builds[:400], *builds[400:400 + MIN_BUILD_FITS - 1]])])
+    assert "build" not in few["depth_models"]["exact_camera"]
+
+
+def test_the_pipeline_takes_the_build_the_segmentation_measured():
+    """bsv process widens the intervals at the build score the camera segmentation read from the capture
+    (bsv.frontend.sex.build_score of its measurements); a sex given by the user measures nothing: no build."""
+    from bsv.frontend.segment import Segmentation
+    from bsv.frontend.sex import SexEstimate, build_score, given
+    from bsv.pipeline import segmentation_build_score
+
+    z = np.zeros((2, 2), dtype=np.uint8)
+    deep = SexEstimate(0.2, "inferred", None, 0.6, {"depth_to_trunk": 0.62})
+    views = [Segmentation(z, z > 0, np.zeros((71, 3)), sex=deep), Segmentation(z, z > 0, np.zeros((71, 3)), view="back")]
+    assert segmentation_build_score(views) == pytest.approx(build_score({"depth_to_trunk": 0.62}))
+    assert segmentation_build_score(views) > 1.0
+    assert segmentation_build_score([Segmentation(z, z > 0, np.zeros((71, 3)), sex=given("female"))]) is None
+    assert segmentation_build_score([]) is None

@@ -111,27 +111,35 @@ def interval_record(run: Run, calibration: str = "paper") -> dict[str, Any] | No
     return run.info.get("uncertainty")
 
 
+def run_build_score(r: Run) -> float | None:
+    """The subject's build score a camera run read from its capture (``info["sex"]["build_score"]``,
+    :func:`bsv.frontend.sex.build_score`); None when it has none (the oracle path, an older run)."""
+    v = (r.info.get("sex") or {}).get("build_score")
+    return float(v) if isinstance(v, (int, float)) and np.isfinite(v) else None
+
+
 def coverage_rows(runs: Iterable[Run], models: Mapping[str, ErrorModel],
                   calibrations: Sequence[str] = CALIBRATIONS) -> list[dict[str, Any]]:
     """One row per condition and calibration covariance (see the module doc; ``calibration`` "paper" or
     "refined", :func:`interval_record`) with the model of its depth sensor (``models`` by
-    :data:`DEPTH_OF_CONDITION`); runs without the ingredients are skipped."""
-    by: dict[tuple[str, str, str], list[dict[str, Any]]] = {}
+    :data:`DEPTH_OF_CONDITION`), at the run's build score when the model follows the build
+    (:func:`run_build_score`); runs without the ingredients are skipped."""
+    by: dict[tuple[str, str, str], list[tuple[dict[str, Any], float | None]]] = {}
     for cal in calibrations:
         for r in runs:
             u = interval_record(r, cal)
             if u:
                 by.setdefault((r.condition, model_name(r.condition, u.get("segmentation", "oracle")), cal),
-                              []).append(u)
+                              []).append((u, run_build_score(r)))
     rows = []
     for (cond, name, cal), recs in by.items():
         if name not in models:
             continue
         model = models[name]
         inside_v, inside_a, hw_tl, hw_a, sym = [], [], [], [], []
-        for u in recs:
+        for u, build in recs:
             est, truth = u["estimate"], u["truth"]
-            iv = combine(est, model, u.get("calibration_sd"))
+            iv = combine(est, model, u.get("calibration_sd"), build_score=build)
             for n in SCORED_VOLUMES:
                 if n in iv and n in truth:
                     inside_v.append(iv[n][0] <= truth[n] <= iv[n][1])

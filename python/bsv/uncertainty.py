@@ -28,8 +28,8 @@ An asymmetry whose interval contains 0 is "not distinguishable from symmetric" (
 
 On the camera path the error grows with the subject's build (:func:`bsv.frontend.sex.build_score`: the
 heavier the body, the further its cut lines drift and the less of its hidden sides the fit sees): a camera
-model may carry a :class:`BuildTerm`: per unit of the build beyond its ``hinge``, a bias per quantity and a
-growth of the variance, for a capture whose build is known (:func:`combine`'s ``build_score``).
+model may carry a :class:`BuildTerm`: per quantity a bias per unit of the build and a growth of the variance
+per unit beyond its ``hinge``, for a capture whose build is known (:func:`combine`'s ``build_score``).
 """
 
 from __future__ import annotations
@@ -285,42 +285,47 @@ def moved_vertices(vertices: np.ndarray, weights: np.ndarray, cameras: Sequence[
 @dataclass(frozen=True)
 class BuildTerm:
     """How a camera-path model's error drifts with the subject's build (:func:`bsv.frontend.sex.build_score`):
-    for a build ``b``, with ``e = max(b - hinge, 0)``, a quantity's bias is the model's plus ``bias[name] * e``
-    and its sd the model's times ``sqrt(1 + variance_per_unit * e)`` (comparison space). Quantities without a
-    bias slope keep the model's bias."""
+    for a build ``b``, a quantity's bias is the model's (its value at the hinge) plus ``bias[name] * (b -
+    hinge)``, and its sd the model's times ``sqrt(1 + variance[name] * max(b - hinge, 0))`` (comparison
+    space). An unknown build, or a quantity the term does not name, keeps the model's bias and sd."""
 
-    #: The build score from which the error drifts (:data:`bsv.bench.noisemodel.BUILD_HINGE`).
+    #: The build score at which the model's own bias holds and beyond which its variance grows
+    #: (:data:`bsv.bench.noisemodel.BUILD_HINGE`).
     hinge: float
-    #: Per quantity: the bias per unit of the build beyond the hinge.
+    #: Per quantity: the bias per unit of the build (either side of the hinge).
     bias: dict[str, float]
-    #: The variance's growth per unit of the build beyond the hinge, as a fraction of the model's (one for
-    #: every quantity, >= 0).
-    variance_per_unit: float
+    #: Per quantity: the variance's growth per unit of the build beyond the hinge, as a fraction of the
+    #: model's (>= 0).
+    variance: dict[str, float]
 
-    def excess(self, build_score: float | None) -> float:
-        """The build beyond the hinge (0 for an unknown or non-finite build)."""
+    def offset(self, build_score: float | None) -> float:
+        """The build less the hinge (0 for an unknown or non-finite build)."""
         if build_score is None or not math.isfinite(build_score):
             return 0.0
-        return max(float(build_score) - self.hinge, 0.0)
+        return float(build_score) - self.hinge
+
+    def excess(self, build_score: float | None) -> float:
+        """The build beyond the hinge (0 at or under it, or for an unknown or non-finite build)."""
+        return max(self.offset(build_score), 0.0)
 
     def to_json(self) -> dict[str, Any]:
         """The model document's ``"build"`` record."""
-        return {"hinge": self.hinge, "bias_per_unit": dict(self.bias), "variance_per_unit": self.variance_per_unit}
+        return {"hinge": self.hinge, "bias_per_unit": dict(self.bias), "variance_per_unit": dict(self.variance)}
 
     @staticmethod
     def from_json(doc: Mapping[str, Any], where: str = "error model") -> BuildTerm:
         """The inverse of :meth:`to_json`; :class:`UncertaintyError` naming ``where`` on a malformed record."""
         try:
             term = BuildTerm(float(doc["hinge"]), {str(k): float(v) for k, v in doc["bias_per_unit"].items()},
-                             float(doc["variance_per_unit"]))
+                             {str(k): float(v) for k, v in doc["variance_per_unit"].items()})
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise UncertaintyError(f"{where}: expected a build record {{'hinge', 'bias_per_unit', "
                                    f"'variance_per_unit'}} ({exc})") from exc
         bad = [k for k, v in term.bias.items() if not math.isfinite(v)]
-        if bad or not (math.isfinite(term.hinge) and math.isfinite(term.variance_per_unit)
-                       and term.variance_per_unit >= 0):
+        bad += [k for k, v in term.variance.items() if not (math.isfinite(v) and v >= 0)]
+        if bad or not math.isfinite(term.hinge):
             raise UncertaintyError(f"{where}: the build record has a non-finite hinge or bias, or a negative "
-                                   f"variance growth ({', '.join(bad) or 'hinge, variance_per_unit'})")
+                                   f"variance growth ({', '.join(bad) or 'hinge'})")
         return term
 
 
@@ -342,8 +347,9 @@ class ErrorModel:
         bias, sd = self.entries[name]
         if self.build is None:
             return bias, sd
-        e = self.build.excess(build_score)
-        return bias + self.build.bias.get(name, 0.0) * e, sd * math.sqrt(1.0 + self.build.variance_per_unit * e)
+        d = self.build.offset(build_score)
+        return (bias + self.build.bias.get(name, 0.0) * d,
+                sd * math.sqrt(1.0 + self.build.variance.get(name, 0.0) * max(d, 0.0)))
 
     @staticmethod
     def from_json(doc: Mapping[str, Any], where: str = "error model") -> ErrorModel:
@@ -478,9 +484,9 @@ def intervals(mesh: Mesh, volumes: Mapping[str, Any], cameras: Sequence[CameraSp
               "segment missed by tens of percent), which the intervals do not cover"
               + (f"; widened where the segmentation was degraded (sd added for {', '.join(sorted(extra_sd))})"
                  if extra_sd else "")
-              + (f"; widened for the subject's build ({build_score:.1f}, {excess:.1f} beyond the model's "
-                 f"{m.build.hinge:g}: the camera path's error grows with it)" if m.build is not None and excess > 0
-                 and build_score is not None else "")
+              + (f"; moved for the subject's build ({build_score:.1f}) and widened by {excess:.1f} beyond the "
+                 f"model's {m.build.hinge:g} (the camera path's error grows with the build)" if m.build is not None
+                 and build_score is not None and math.isfinite(build_score) else "")
               + (f"; {note}" if note else ""))
     tl = both.get("trunk_limbs")
     mass = {} if tl is None else {"mass_trunk_limbs_kg": (tl[0] * density / 1000.0, tl[1] * density / 1000.0)}

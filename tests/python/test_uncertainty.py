@@ -514,15 +514,18 @@ def test_a_gross_failure_is_listed_not_spread_over_every_interval():
 
 
 def test_a_build_term_moves_and_widens_only_beyond_its_hinge():
-    """A camera model's build term (bsv.uncertainty.BuildTerm) adds its bias per unit of the build beyond the
-    hinge and grows the variance by its fraction per unit; at or under the hinge, or with the build unknown,
-    the interval is the model's own."""
-    term = unc.BuildTerm(1.0, {"forearm_l": 0.01}, 0.5)
+    """A camera model's build term (bsv.uncertainty.BuildTerm) moves the bias by its slope per unit of the build
+    either side of the hinge and grows the variance by its fraction per unit beyond it; at the hinge, or with
+    the build unknown, the interval is the model's own."""
+    term = unc.BuildTerm(1.0, {"forearm_l": 0.01}, {"forearm_l": 0.5, "torso": 0.5})
     model = unc.ErrorModel({"forearm_l": (0.0, 0.02), "torso": (0.0, 0.01)}, "test", build=term)
     est = {"forearm_l": 1.2, "torso": 30.0}
     own = unc.combine(est, unc.ErrorModel(model.entries, "test"))
-    for build in (None, float("nan"), -2.0, 0.5, 1.0):
+    for build in (None, float("nan"), 1.0):
         assert unc.combine(est, model, build_score=build) == own
+    lean = unc.combine(est, model, build_score=0.0)  # 1 under the hinge: bias -0.01, the width kept
+    assert lean["torso"] == own["torso"]
+    assert lean["forearm_l"] == pytest.approx(tuple(x * math.exp(0.01) for x in own["forearm_l"]))
     heavy = unc.combine(est, model, build_score=3.0)  # 2 units beyond the hinge: variance x 2, bias +0.02
     centre, half = math.log(1.2) - 0.02, 1.959963984540054 * 0.02 * math.sqrt(2.0)
     assert heavy["forearm_l"] == pytest.approx((math.exp(centre - half), math.exp(centre + half)))
@@ -535,25 +538,25 @@ def test_a_build_term_moves_and_widens_only_beyond_its_hinge():
     with pytest.raises(UncertaintyError, match="build record"):
         unc.ErrorModel.from_json({**doc, "build": {"hinge": 1.0}})
     with pytest.raises(UncertaintyError, match="negative variance"):
-        unc.ErrorModel.from_json({**doc, "build": {**term.to_json(), "variance_per_unit": -0.1}})
+        unc.ErrorModel.from_json({**doc, "build": {**term.to_json(), "variance_per_unit": {"torso": -0.1}}})
     iv = unc.intervals(bsv.default_template(), bsv.volumes(bsv.default_template()), [], model=model, samples=2,
                        build_score=3.0)
-    assert "widened for the subject's build (3.0, 2.0 beyond" in iv.method
+    assert "moved for the subject's build (3.0) and widened by 2.0 beyond" in iv.method
 
 
 def test_the_derivation_recovers_a_known_drift_with_the_build():
-    """Camera fits whose forearm error drifts by +2 % per unit of the build beyond the hinge and whose variance
-    grows by 0.8 of the model's per unit: the model's bias and sd come from the fits at or under the hinge, the
-    build term recovers the drift and the growth; held-out heavy fits are covered with it and not without it;
-    the oracle model gets no build term, nor a camera model with too few fits beyond the hinge."""
+    """Camera fits whose forearm error drifts by +2 % per unit of the build and whose variance grows by 0.8 of
+    the model's per unit beyond the hinge: the model's bias (at the hinge) and sd (under it) and the build term
+    recover them; held-out heavy fits are covered with the term and not without it; the oracle model gets no
+    build term, nor a camera model with too few fits beyond the hinge."""
     from bsv.bench.coverage import coverage_rows
     from bsv.bench.noisemodel import BUILD_HINGE, MIN_BUILD_FITS, derive
 
     rng = np.random.default_rng(3)
 
     def run(i: int, build: float, seg: str = "camera") -> Run:
-        e = max(build - BUILD_HINGE, 0.0)
-        err = float(rng.normal(0.02 * e, 0.02 * math.sqrt(1 + 0.8 * e)))
+        d = build - BUILD_HINGE
+        err = float(rng.normal(0.02 * d, 0.02 * math.sqrt(1 + 0.8 * max(d, 0.0))))
         info: dict = {"uncertainty": {"estimate": {"forearm_l": 1.2 * math.exp(err)}, "truth": {"forearm_l": 1.2},
                                       "segmentation": seg, "calibration_sd": {}}}
         if seg == "camera":
@@ -564,12 +567,12 @@ def test_the_derivation_recovers_a_known_drift_with_the_build():
     builds = [*rng.uniform(h - 2.5, h, 400), *rng.uniform(h, h + 3.0, 1500)]
     doc = derive([run(i, b) for i, b in enumerate(builds)] + [run(i, 3.0, "oracle") for i in range(40)])
     cam = doc["depth_models"]["exact_camera"]
-    assert cam["quantities"]["forearm_l"]["n"] == 400 and cam["build"]["fits"] == 1500
+    assert cam["quantities"]["forearm_l"]["n"] == 1900 and cam["build"]["fits"] == 1500 and cam["fits"] == 1900
     assert cam["quantities"]["forearm_l"]["bias"] == pytest.approx(0.0, abs=0.003)
     assert cam["quantities"]["forearm_l"]["raw_sd"] == pytest.approx(0.02, rel=0.1)
     assert cam["build"]["hinge"] == h
     assert cam["build"]["bias_per_unit"]["forearm_l"] == pytest.approx(0.02, abs=0.003)
-    assert cam["build"]["variance_per_unit"] == pytest.approx(0.8, rel=0.25)
+    assert cam["build"]["variance_per_unit"]["forearm_l"] == pytest.approx(0.8, rel=0.25)
     assert "build" not in doc["depth_models"]["exact"]
     held = [run(i, b) for i, b in enumerate(rng.uniform(h + 2.0, h + 3.0, 300))]
     with_term = unc.ErrorModel.from_json(cam)

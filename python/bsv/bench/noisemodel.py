@@ -28,9 +28,9 @@ The camera path's error drifts with the subject's build (:func:`bsv.frontend.sex
 every camera run's ``info["sex"]``): a camera model's bias and sd come from the fits whose build lies at or
 under :data:`BUILD_HINGE`, and the fits beyond it (the heavier cohort's, ``bench synth
 --bmi-shift 8``) give its :class:`bsv.uncertainty.BuildTerm` (:func:`build_term`): per quantity, the bias per
-unit of the build beyond the hinge (least squares through the model's bias at the hinge), and for all
-quantities together the growth of the variance per unit (the fits' mean squared standardised residual, less
-1, against the excess; never below 0). With fewer than :data:`MIN_BUILD_FITS` fits beyond the hinge the model
+unit of the build beyond the hinge (least squares through the model's bias at the hinge) and the growth of
+its variance per unit (its squared standardised residual, less 1, against the excess; never below 0). With
+fewer than :data:`MIN_BUILD_FITS` fits beyond the hinge the model
 has no build term.
 """
 
@@ -162,32 +162,35 @@ def _widening(n: int) -> float:
     return math.sqrt(1 + 1 / n) * t975(n - 1) / Z95
 
 
-def build_term(quantities: Mapping[str, Mapping[str, Any]], drifting: Sequence[tuple[float, Mapping[str, float]]],
-               hinge: float) -> BuildTerm:
-    """The build term of a model whose ``quantities`` (bias, raw_sd) come from the fits at or under the
-    ``hinge``, from the fits beyond it (``drifting``: (build excess ``e`` > 0, residuals per quantity)): per
-    quantity, the bias slope ``b = sum(r e) / sum(e^2)`` of its residuals ``r`` (less the model's bias); and
-    one variance growth for all, ``c = max(0, sum((z^2 - 1) e) / sum(e^2))``, ``z^2`` a fit's mean over its
-    quantities of ``((r - b e) / raw_sd)^2`` (pooled: each quantity's own would rest on a few dozen fits)."""
+def build_term(per_run: Sequence[tuple[float, Mapping[str, float]]], hinge: float
+               ) -> tuple[dict[str, dict[str, Any]], BuildTerm]:
+    """The quantities and the build term of a camera model from its fits (``per_run``: (build score,
+    residuals per quantity), gross failures left out). Per quantity, over every fit: least squares of its
+    residual ``r`` against the build, ``r = bias + slope (b - hinge)``; then of the squared remainder ``u^2``
+    against the build beyond the hinge ``e = max(b - hinge, 0)``, ``u^2 = s^2 (1 + c e)``: the model's sd is
+    ``s`` (widened for a new subject with the number of fits) and ``c`` the variance's growth per unit (never
+    below 0)."""
+    q: dict[str, dict[str, Any]] = {}
     bias: dict[str, float] = {}
-    for name, q in quantities.items():
-        pts = [(e, res[name] - float(q["bias"])) for e, res in drifting if name in res]
-        if len(pts) < 3:
-            continue
-        ex = np.array([p[0] for p in pts])
+    variance: dict[str, float] = {}
+    for name in sorted({n for _, res in per_run for n in res}):
+        pts = [(b - hinge, res[name]) for b, res in per_run if name in res]
+        d = np.array([p[0] for p in pts])
         r = np.array([p[1] for p in pts])
-        bias[name] = float((r * ex).sum() / (ex * ex).sum())
-    es: list[float] = []
-    z2: list[float] = []
-    for e, res in drifting:
-        zs = [((x - float(quantities[n]["bias"]) - bias[n] * e) / float(quantities[n]["raw_sd"])) ** 2
-              for n, x in res.items() if n in bias and float(quantities[n]["raw_sd"]) > 0]
-        if zs:
-            es.append(e)
-            z2.append(float(np.mean(zs)))
-    ea, za = np.asarray(es), np.asarray(z2)
-    growth = float(((za - 1.0) * ea).sum() / (ea * ea).sum()) if ea.size else 0.0
-    return BuildTerm(hinge, bias, max(growth, 0.0))
+        e = np.maximum(d, 0.0)
+        n = len(pts)
+        if n < 4 or (d <= 0).sum() < 2 or (e > 0).sum() < 2:
+            continue
+        (b0, b1), *_ = np.linalg.lstsq(np.column_stack([np.ones(n), d]), r, rcond=None)
+        u2 = (r - b0 - b1 * d) ** 2 * n / (n - 2)  # unbiased for the two fitted coefficients
+        (v0, v1), *_ = np.linalg.lstsq(np.column_stack([np.ones(n), e]), u2, rcond=None)
+        s2 = float(v0) if v0 > 0 else float(u2[d <= 0].mean())
+        s = math.sqrt(s2)
+        q[name] = {"bias": float(b0), "sd": s * _widening(n), "raw_sd": s, "n": n,
+                   "space": "points" if name.startswith("asymmetry_") else "log"}
+        bias[name] = float(b1)
+        variance[name] = max(float(v1) / s2, 0.0) if s2 > 0 else 0.0
+    return q, BuildTerm(hinge, bias, variance)
 
 
 def derive_one(runs: Sequence[Run], condition: str, segmentation: str = "oracle") -> dict[str, Any]:
@@ -199,18 +202,21 @@ def derive_one(runs: Sequence[Run], condition: str, segmentation: str = "oracle"
         raise BenchError(f"no bsv run of {condition} ({segmentation} segmentation) with interval ingredients "
                          "(info['uncertainty']); run `bsv bench synth` with this version first")
     gross = gross_failures(per_run)
-    hinge = BUILD_HINGE
     builds = run_build_scores(runs, (condition,), segmentation)
-    excess = [max(b - hinge, 0.0) if (b is not None and segmentation == "camera") else 0.0 for b in builds]
-    drifting = [(excess[i], r) for i, (_, r) in enumerate(per_run) if i not in gross and excess[i] > 0]
-    if len(drifting) < MIN_BUILD_FITS:
-        drifting = []
+    kept = [(builds[i], r) for i, (_, r) in enumerate(per_run) if i not in gross]
+    with_build = [(b, r) for b, r in kept if b is not None] if segmentation == "camera" else []
+    beyond = sum(b > BUILD_HINGE for b, _ in with_build)
+    out: dict[str, Any] = {"condition": condition, "segmentation": segmentation,
+                           "description": f"synthetic cohort, {condition}, {segmentation} segmentation, default template"}
+    if beyond >= MIN_BUILD_FITS and len(with_build) == len(kept):
+        q, term = build_term(with_build, BUILD_HINGE)
+        return {**out, "quantities": q, "build": {**term.to_json(), "fits": beyond}, "fits": len(per_run),
+                "gross_failures": list(gross.values())}
     res: dict[str, list[float]] = {}
-    for i, (_, r) in enumerate(per_run):
-        if i not in gross and not (drifting and excess[i] > 0):
-            for name, x in r.items():
-                res.setdefault(name, []).append(x)
-    q: dict[str, Any] = {}
+    for _, r in kept:
+        for name, x in r.items():
+            res.setdefault(name, []).append(x)
+    q = {}
     for name, xs in sorted(res.items()):
         n = len(xs)
         if n < 3:
@@ -219,12 +225,7 @@ def derive_one(runs: Sequence[Run], condition: str, segmentation: str = "oracle"
         s = float(np.std(a, ddof=1))
         q[name] = {"bias": float(a.mean()), "sd": s * _widening(n), "raw_sd": s, "n": n,
                    "space": "points" if name.startswith("asymmetry_") else "log"}
-    out: dict[str, Any] = {"condition": condition, "segmentation": segmentation,
-                           "description": f"synthetic cohort, {condition}, {segmentation} segmentation, default template",
-                           "quantities": q, "fits": len(per_run), "gross_failures": list(gross.values())}
-    if drifting:
-        out["build"] = {**build_term(q, drifting, hinge).to_json(), "fits": len(drifting)}
-    return out
+    return {**out, "quantities": q, "fits": len(per_run), "gross_failures": list(gross.values())}
 
 
 def derive(runs: Sequence[Run], models: dict[str, tuple[str, str]] | None = None, source: str = "") -> dict[str, Any]:
@@ -244,10 +245,10 @@ def derive(runs: Sequence[Run], models: dict[str, tuple[str, str]] | None = None
                                    "for a new subject); T = log, or the value for asymmetries (points); "
                                    f"a fit with a residual beyond {GROSS_SIGMAS:g} robust SDs of its quantity's "
                                    "median is a gross failure, left out and listed (gross_failures): the "
-                                   "intervals hold for fits without one; a camera model's bias and sd come "
-                                   "from the fits at or under the build hinge and its build term from those "
-                                   f"beyond it (at least {MIN_BUILD_FITS}; a bias per quantity and one growth of "
-                                   "the variance per unit of the build beyond the hinge)"},
+                                   "intervals hold for fits without one; a camera model's bias follows the "
+                                   "subject's build (a line over its fits, the bias at the hinge), its "
+                                   "variance is constant up to the hinge and grows linearly beyond it (the "
+                                   f"build term, with at least {MIN_BUILD_FITS} fits beyond the hinge)"},
             "depth_models": {name: derive_one(runs, cond, seg) for name, (cond, seg) in m.items()}}
 
 

@@ -4,7 +4,8 @@
 # 3 and 4-10 (10 subjects each: 90; seeds 11-18 trained the joint offsets), each in the clinic room and in the
 # studio (`--studio`: 180 captures per depth sensor), and on the heavier cohort (`--bmi-shift 8`, BMI 27-41,
 # clinic room) seeds 1 and 3 (20 subjects: the camera path's boundaries drift with the build, BENCH.md round 2
-# session 31), never on seeds 0 and 2, on which `bsv bench synth` scores the coverage. Writes
+# session 31; with the standard cohort's heavier members they give the camera models' build terms, session 33),
+# never on seeds 0 and 2, on which `bsv bench synth` scores the coverage. Writes
 # OUT/noise_model.json (default OUT=/tmp/bsv_noise_model) and prints the leave-one-seed-out check; copy the file
 # into python/bsv/data/ when it is right. About 35 minutes on 2 cores.
 # usage: bash benchmarks/derive_noise_model.sh [OUT]

@@ -76,8 +76,9 @@ MIN_BUILD_FITS: int = 20
 #: body (0). The cut lines move only beyond ``SegmentParams.build_hinge`` (1), but the errors grow from the
 #: average body up: over the 200 camera fits per sensor of the derivation (clinic room, studio and the heavier
 #: cohort) the mean squared standardised residual is 1.0 at builds under 1 and 1.1-1.4 just above it, rising
-#: to 1.8-2.2 beyond 3. With the hinge at 1, held-out heavier bodies (seeds 0 and 2) were covered 92 %, the
-#: studio's l515 captures 93.5 %; at 0, 93.5-94.5 % and 95.5 % (benchmarks/BENCH.md, round 2 session 33).
+#: to 1.8-2.2 beyond 3. The held-out heavier bodies (seeds 0 and 2) are covered 91.5 % with the hinge at 1,
+#: 92.5 % at 0.5 and 92.5-93 % at 0; the room and the studio 95-99 % at all three (benchmarks/BENCH.md, round 2
+#: session 33).
 BUILD_HINGE: float = 0.0
 
 

@@ -215,8 +215,8 @@ def _intervals(reg: Registration, cameras: Sequence[Any], segmentation: str, den
 
 def segmentation_build_score(segmentations: Iterable[Segmentation]) -> float | None:
     """The subject's build score (:func:`bsv.frontend.sex.build_score`) as the camera segmentation read it from
-    the capture (both views share one estimate); None when no view measured it (a sex given by the user
-    measures nothing)."""
+    the capture (both views share one estimate; a sex the user gives is still measured); None when no view
+    measured it."""
     from .frontend.sex import build_score
 
     for seg in segmentations:

@@ -587,7 +587,7 @@ def test_the_derivation_recovers_a_known_drift_with_the_build():
 
 def test_the_pipeline_takes_the_build_the_segmentation_measured():
     """bsv process widens the intervals at the build score the camera segmentation read from the capture
-    (bsv.frontend.sex.build_score of its measurements); a sex given by the user measures nothing: no build."""
+    (bsv.frontend.sex.build_score of its measurements); an estimate without measurements gives no build."""
     from bsv.frontend.segment import Segmentation
     from bsv.frontend.sex import SexEstimate, build_score, given
     from bsv.pipeline import segmentation_build_score

@@ -25,13 +25,12 @@ false "distinguishable" rate of :func:`bsv.bench.coverage.coverage_rows`) and th
 ``derivation.cross_validation``: a self-check of the derivation on subjects it did not see.
 
 The camera path's error drifts with the subject's build (:func:`bsv.frontend.sex.build_score`, recorded in
-every camera run's ``info["sex"]``): a camera model's bias and sd come from the fits whose build lies at or
-under :data:`BUILD_HINGE`, and the fits beyond it (the heavier cohort's, ``bench synth
---bmi-shift 8``) give its :class:`bsv.uncertainty.BuildTerm` (:func:`build_term`): per quantity, the bias per
-unit of the build beyond the hinge (least squares through the model's bias at the hinge) and the growth of
-its variance per unit (its squared standardised residual, less 1, against the excess; never below 0). With
-fewer than :data:`MIN_BUILD_FITS` fits beyond the hinge the model
-has no build term.
+every camera run's ``info["sex"]``): when every fit of a camera model has its build and at least
+:data:`MIN_BUILD_FITS` lie beyond :data:`BUILD_HINGE` (the heavier cohort's, ``bench synth --bmi-shift 8``, and
+the heavier of the standard cohort), the model gets a :class:`bsv.uncertainty.BuildTerm` (:func:`build_term`):
+per quantity, a straight line of the residual against the build over every fit (the model's bias is its value
+at the hinge), and a straight line of what it leaves, squared, against the build beyond the hinge (the model's
+variance at or under the hinge and its growth per unit beyond it, never below 0).
 """
 
 from __future__ import annotations

@@ -347,9 +347,8 @@ class ErrorModel:
         bias, sd = self.entries[name]
         if self.build is None:
             return bias, sd
-        d = self.build.offset(build_score)
-        return (bias + self.build.bias.get(name, 0.0) * d,
-                sd * math.sqrt(1.0 + self.build.variance.get(name, 0.0) * max(d, 0.0)))
+        return (bias + self.build.bias.get(name, 0.0) * self.build.offset(build_score),
+                sd * math.sqrt(1.0 + self.build.variance.get(name, 0.0) * self.build.excess(build_score)))
 
     @staticmethod
     def from_json(doc: Mapping[str, Any], where: str = "error model") -> ErrorModel:

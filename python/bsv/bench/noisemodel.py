@@ -95,7 +95,7 @@ def _ingredients(r: Run, conditions: Sequence[str], segmentation: str) -> dict[s
     u = r.info.get("uncertainty") if (r.ok and r.method == "bsv" and r.condition in conditions) else None
     if not u or u.get("segmentation", "oracle") != segmentation:
         return None
-    return dict(u)
+    return u
 
 
 def run_build_scores(runs: Sequence[Run], conditions: Sequence[str], segmentation: str = "oracle") -> list[float | None]:
@@ -162,6 +162,13 @@ def _widening(n: int) -> float:
     return math.sqrt(1 + 1 / n) * t975(n - 1) / Z95
 
 
+def _quantity(name: str, bias: float, raw_sd: float, n: int) -> dict[str, Any]:
+    """One quantity's record of a model: its bias, its sd widened for a new subject (:func:`_widening`),
+    the sample sd, the number of fits and the comparison space."""
+    return {"bias": bias, "sd": raw_sd * _widening(n), "raw_sd": raw_sd, "n": n,
+            "space": "points" if name.startswith("asymmetry_") else "log"}
+
+
 def build_term(per_run: Sequence[tuple[float, Mapping[str, float]]], hinge: float
                ) -> tuple[dict[str, dict[str, Any]], BuildTerm]:
     """The quantities and the build term of a camera model from its fits (``per_run``: (build score,
@@ -186,8 +193,7 @@ def build_term(per_run: Sequence[tuple[float, Mapping[str, float]]], hinge: floa
         (v0, v1), *_ = np.linalg.lstsq(np.column_stack([np.ones(n), e]), u2, rcond=None)
         s2 = float(v0) if v0 > 0 else float(u2[d <= 0].mean())
         s = math.sqrt(s2)
-        q[name] = {"bias": float(b0), "sd": s * _widening(n), "raw_sd": s, "n": n,
-                   "space": "points" if name.startswith("asymmetry_") else "log"}
+        q[name] = _quantity(name, float(b0), s, n)
         bias[name] = float(b1)
         variance[name] = max(float(v1) / s2, 0.0) if s2 > 0 else 0.0
     return q, BuildTerm(hinge, bias, variance)
@@ -222,9 +228,7 @@ def derive_one(runs: Sequence[Run], condition: str, segmentation: str = "oracle"
         if n < 3:
             continue
         a = np.asarray(xs)
-        s = float(np.std(a, ddof=1))
-        q[name] = {"bias": float(a.mean()), "sd": s * _widening(n), "raw_sd": s, "n": n,
-                   "space": "points" if name.startswith("asymmetry_") else "log"}
+        q[name] = _quantity(name, float(a.mean()), float(np.std(a, ddof=1)), n)
     return {**out, "quantities": q, "fits": len(per_run), "gross_failures": list(gross.values())}
 
 

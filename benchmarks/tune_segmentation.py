@@ -46,6 +46,7 @@ def prepared(cache: Path, seed: int, index: int) -> dict[str, Any]:
     from bsv import bodies
     from bsv.frontend import segment as sg
     from bsv.frontend.capture import read_capture
+    from bsv.frontend.landmarks import Camera
     from bsv.pipeline import _calibration, _read_label_png
 
     subj = bodies.subject(index, seed)
@@ -57,7 +58,9 @@ def prepared(cache: Path, seed: int, index: int) -> dict[str, Any]:
     for cam in CAMERAS:
         d = data[cam]
         prm = sg.DEFAULT_PARAMS[cam]
-        det = sg.detect(d["colour"], cam, prm)  # oriented; averaged with the mirror image (flip_average)
+        camera = Camera.from_json(d["intrinsics"], ext[cam])
+        # oriented; averaged with the mirror image (flip_average); on the neutral background, as bsv process does
+        det = sg.detect(d["colour"], cam, prm, depth=d["depth_m"], camera=camera)
         pose, hands = det.pose, det.hands
         if det.mask_soft is None:
             raise SystemExit(f"{cap / cam}: MediaPipe returned no person mask")

@@ -49,16 +49,36 @@ def capture(tmp_path_factory):
     return folder, data, cams, s
 
 
+def _key(img) -> str:
+    return hashlib.sha1(np.ascontiguousarray(img).tobytes()).hexdigest()
+
+
+def _shown(data, v: str) -> list[np.ndarray]:
+    """Every image of view ``v`` MediaPipe may be shown (before mirroring): the colour image as captured and
+    brightened, and the subject on the rig's empty room (bsv.frontend.background) with and without the
+    floor removed (with and without the camera), as it is and brightened."""
+    from bsv.frontend.background import backdrop, on_background, subject_region
+
+    img = np.ascontiguousarray(data[v]["colour"])
+    out = [img, seg.stretch_contrast(img)[0]]
+    fill = backdrop(v, img.shape[:2])
+    for camera in (lm.Camera.from_json(data[v]["intrinsics"], data[v]["meta"]["camera_to_world"]), None):
+        region = subject_region(data[v]["depth_m"], camera)
+        out += [on_background(img, region, fill), on_background(seg.stretch_contrast(img, region)[0], region, fill)]
+    return out
+
+
 def _lower(monkeypatch, data, where: dict[tuple[str, str], float]) -> None:
     """MediaPipe's result with the visibility of (view, subject landmark) set as given. The view is told by
-    the image (front and back differ, and so do their mirror images, which ``flip_average`` detects too);
+    the image (front and back differ, and so do their mirror images, which ``flip_average`` detects too; as
+    captured and on the backdrop it is shown on);
     the subject's left is on the image right from the front, left from the back (the rule of
     segment._orient), and the other way round in a mirror image."""
     views = {}
     for v in seg.VIEWS:
-        img = np.ascontiguousarray(data[v]["colour"])
-        views[hashlib.sha1(img.tobytes()).hexdigest()] = (v, False)
-        views[hashlib.sha1(np.ascontiguousarray(img[:, ::-1]).tobytes()).hexdigest()] = (v, True)
+        for img in _shown(data, v):
+            views[_key(img)] = (v, False)
+            views[_key(img[:, ::-1])] = (v, True)
 
     def fake(rgb, params=None):
         r = _cached(rgb, params)
@@ -214,12 +234,12 @@ def test_a_landmark_one_view_does_not_repeat_is_labelled_from_the_other(capture,
     _, data, cams, _ = capture
     _lower(monkeypatch, data, {})
     clean = lm.segment_views(_images(data), cams)
-    mirrored_back = hashlib.sha1(np.ascontiguousarray(data["back"]["colour"][:, ::-1]).tobytes()).hexdigest()
+    mirrored_back = {_key(x[:, ::-1]) for x in _shown(data, "back")}
     elbows = [seg.POSE_NAMES.index("left_elbow"), seg.POSE_NAMES.index("right_elbow")]
 
     def fake(rgb, params=None):
         r = _cached(rgb, params)
-        if hashlib.sha1(np.ascontiguousarray(rgb).tobytes()).hexdigest() == mirrored_back:
+        if _key(rgb) in mirrored_back:
             r["pose"][elbows, 1] += 60.0
         return r
 
@@ -237,8 +257,7 @@ def test_a_leg_landmark_the_views_place_at_different_heights_is_taken_from_the_p
     _, data, cams, _ = capture
     _lower(monkeypatch, data, {})
     clean = lm.segment_views(_images(data), cams)
-    back = {hashlib.sha1(np.ascontiguousarray(im).tobytes()).hexdigest()
-            for im in (data["back"]["colour"], data["back"]["colour"][:, ::-1])}
+    back = {_key(im) for x in _shown(data, "back") for im in (x, x[:, ::-1])}
     knees = [seg.POSE_NAMES.index("left_knee"), seg.POSE_NAMES.index("right_knee")]
 
     def fake(rgb, params=None):
@@ -283,8 +302,8 @@ def test_ankles_are_placed_at_the_height_the_stature_gives(capture, monkeypatch)
     for v in seg.VIEWS:
         for name in ("left_ankle", "right_ankle"):
             got, own = raw[v].landmark(name), clean[v].landmark(name)
-            # left 20 px up (and not placed); the clean ankle is itself placed, by up to about 10 px
-            assert 8.0 < own[1] - got[1] < 30.0, (v, name, got, own)
+            # left 20 px up (and not placed); the clean ankle is itself placed, by up to about 12 px
+            assert 8.0 < own[1] - got[1] < 34.0, (v, name, got, own)
 
 
 def test_the_stature_is_read_from_the_depth_of_the_person(capture, monkeypatch):
@@ -300,12 +319,7 @@ def test_the_stature_is_read_from_the_depth_of_the_person(capture, monkeypatch):
 
 def _lose(monkeypatch, data, views) -> None:
     """MediaPipe finds nobody in any image of ``views``: the image, its mirror image and both brightened."""
-    lost = set()
-    for v in views:
-        img = np.ascontiguousarray(data[v]["colour"])
-        bright = seg.stretch_contrast(img)[0]
-        lost |= {hashlib.sha1(np.ascontiguousarray(x).tobytes()).hexdigest()
-                 for x in (img, img[:, ::-1], bright, bright[:, ::-1])}
+    lost = {_key(im) for v in views for x in _shown(data, v) for im in (x, x[:, ::-1])}
 
     def fake(rgb, params=None):
         if hashlib.sha1(np.ascontiguousarray(rgb).tobytes()).hexdigest() in lost:

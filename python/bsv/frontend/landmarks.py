@@ -715,7 +715,7 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
     lost: dict[str, PersonNotFoundError] = {}
     for v in views:
         try:
-            dets[v] = detect(images[v]["colour"], v, **params)
+            dets[v] = detect(images[v]["colour"], v, depth=depths[v], camera=cameras[v], **params)
         except PersonNotFoundError as e:
             lost[v] = e
     if len(lost) == len(views):

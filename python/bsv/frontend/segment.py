@@ -57,7 +57,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -68,6 +68,9 @@ from ..types import SEGMENT_NAMES as _SEGMENT_NAMES
 from .errors import LandmarkMissingError, PersonNotFoundError, SegmentationError
 from .pose_model import check_complexity, require_pose_model
 from .sex import SexEstimate
+
+if TYPE_CHECKING:
+    from .landmarks import Camera
 
 PathLike = str | Path
 
@@ -111,6 +114,8 @@ HAND_BONES: tuple[tuple[int, int], ...] = (
     (9, 13), (13, 14), (14, 15), (15, 16), (13, 17), (0, 17), (17, 18), (18, 19), (19, 20),
 )
 VIEWS = ("front", "back")
+#: The values of :attr:`SegmentParams.background`.
+BACKGROUNDS: tuple[str, ...] = ("auto", "room", "grey", "as_captured")
 
 
 @dataclass(frozen=True)
@@ -143,6 +148,16 @@ class SegmentParams:
     #: 2.56 / 3.39 / 3.49 %, the arms 0.3-0.6 points better; benchmarks/BENCH.md, round 2 session 9).
     #: Costs one more MediaPipe run per view (about 0.15 s).
     flip_average: bool = True
+    #: What MediaPipe sees around the subject, where the depth says the subject is not
+    #: (:mod:`bsv.frontend.background`; with the depth image only): ``"room"``, the rig's empty clinic room
+    #: (:func:`bsv.frontend.background.backdrop`), ``"grey"``, a uniform grey, ``"as_captured"``, the image's
+    #: own, or ``"auto"``: the empty room where the depth around the subject is a void (a black studio, a
+    #: background out of range: :func:`bsv.frontend.background.void_around`), the image's own where the sensor
+    #: sees a room. MediaPipe's knees, hips and shoulders move by several millimetres with the background (the
+    #: knee lies 9 mm lower against black than in the room); the joint offsets and cut lines were learned on the
+    #: rig's room as captured, and with ``"room"`` everywhere the heavier cohort's forearms lost 1 point until
+    #: they are re-learned (benchmarks/BENCH.md, round 2 session 34).
+    background: str = "auto"
     #: Neck line: this fraction of the way from the shoulders' midpoint to the ears' midpoint.
     neck_fraction: float = 0.35
     #: Head half-width around the head axis, as a fraction of the shoulder width.
@@ -264,6 +279,9 @@ class SegmentParams:
 
     def __post_init__(self) -> None:
         check_complexity(self.model_complexity)
+        if self.background not in BACKGROUNDS:
+            raise SegmentationError(f"segmentation parameter background must be one of {', '.join(BACKGROUNDS)}, got "
+                                    f"{self.background!r}")
         for name in ("min_detection_confidence", "min_visibility", "fallback_visibility", "mask_threshold"):
             v = getattr(self, name)
             if not (0.0 <= v <= 1.0):
@@ -707,34 +725,53 @@ def view_params(view: str, params: SegmentParams | None = None, **overrides: Any
         raise SegmentationError(f"unknown segmentation parameter ({e}); see SegmentParams") from e
 
 
-def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | None = None,
-           **overrides: Any) -> Detection:
+def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | None = None, *,
+           depth: np.ndarray | None = None, camera: Camera | None = None, **overrides: Any) -> Detection:
     """MediaPipe Holistic on one RGB uint8 (H, W, 3) image of the ``view`` camera, oriented to the subject's
-    left/right (the first half of :func:`segment_image`; no landmark check). PersonNotFoundError when
-    no person is found."""
+    left/right (the first half of :func:`segment_image`; no landmark check). With ``depth`` (metres, aligned
+    to the colour, 0 = none), MediaPipe sees the subject (:func:`bsv.frontend.background.subject_region`;
+    ``camera``, the calibrated :class:`bsv.frontend.landmarks.Camera`, lets it remove the floor too) on the
+    background of :attr:`SegmentParams.background` (by default the rig's empty room where the depth around
+    the subject is a void, the image's own where it shows a room). PersonNotFoundError when no person is
+    found."""
+    from .background import backdrop, on_background, subject_region, void_around
+
     prm = view_params(view, params, **overrides)
     img = np.asarray(colour_rgb)
     if img.ndim != 3 or img.shape[2] != 3 or img.dtype != np.uint8:
         raise SegmentationError(f"colour image must be RGB uint8 (H, W, 3), got {img.dtype} {img.shape}")
     h, w = img.shape[:2]
-    flip = view == "back" and prm.flip_back
     notes: tuple[str, ...] = ()
-    first = _detect_once(img, view, prm, flip)
+    region = fill = None
+    if prm.background != "as_captured" and depth is not None:
+        region = subject_region(depth, camera)
+        if region is None or region.shape != (h, w):
+            region = None
+            notes = ((f"{view} image: the depth does not set the subject apart from the room, so MediaPipe saw the "
+                      "image as captured (its landmarks then move with the background: check the depth image)"),)
+        elif prm.background == "auto" and not void_around(depth, region):
+            region = None  # the sensor sees a room: MediaPipe sees it too, as the cut lines were learned
+        elif prm.background in ("room", "auto"):
+            fill = backdrop(view, (h, w))
+    shown = on_background(img, region, fill)
+    flip = view == "back" and prm.flip_back
+    first = _detect_once(shown, view, prm, flip)
     if first is None and prm.flip_average:  # the mirror image is detected anyway: it may find the person
-        first = _detect_once(img, view, prm, not flip)
+        first = _detect_once(shown, view, prm, not flip)
         flip = not flip
     if first is None:  # a dim subject against a dark background: MediaPipe's detector wants contrast
-        img, gain = stretch_contrast(img)
+        stretched, gain = stretch_contrast(img, region)
         if gain > 1.0:
+            shown = on_background(stretched, region, fill)
             flips = (flip, not flip) if prm.flip_average else (flip,)
             for f in flips:
-                first = _detect_once(img, view, prm, f)
+                first = _detect_once(shown, view, prm, f)
                 if first is not None:
                     flip = f
                     note = (f"{view} image: the person was found only with the image's brightness scaled "
                             f"{gain:.1f}x (the subject is dimly lit: more light on the subject from this side "
                             "makes the segmentation more reliable)")
-                    notes = (note,)
+                    notes = (*notes, note)
                     break
     if first is None:
         raise PersonNotFoundError(f"no person found in the {view} image ({w} x {h}), even with its contrast "
@@ -743,7 +780,7 @@ def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | 
     pose, hands, mask_soft, swapped = first
     spread = None
     if prm.flip_average:
-        other = _detect_once(img, view, prm, not flip)
+        other = _detect_once(shown, view, prm, not flip)
         if other is not None:
             spread = np.hypot(*(pose[:, :2] - other[0][:, :2]).T)
             pose, hands, mask_soft = _average_detections((pose, hands, mask_soft), other[:3])
@@ -756,12 +793,15 @@ STRETCH_PERCENTILE = 99.5
 STRETCH_MAX_GAIN = 12.0
 
 
-def stretch_contrast(img: np.ndarray) -> tuple[np.ndarray, float]:
+def stretch_contrast(img: np.ndarray, region: np.ndarray | None = None) -> tuple[np.ndarray, float]:
     """``img`` (RGB uint8) with its brightness scaled so that the :data:`STRETCH_PERCENTILE` of its pixels'
-    brightest channel becomes white (gain at most :data:`STRETCH_MAX_GAIN`, never below 1), and the gain.
-    MediaPipe's person detector misses a dimly lit subject against a dark background that it finds once
-    the image is brightened; the hue is kept."""
-    top = float(np.percentile(img.max(axis=2), STRETCH_PERCENTILE))
+    brightest channel (those of ``region`` only, when given: the subject's) becomes white (gain at most
+    :data:`STRETCH_MAX_GAIN`, never below 1), and the gain. MediaPipe's person detector misses a dimly lit
+    subject against a dark background that it finds once the image is brightened; the hue is kept."""
+    bright = img.max(axis=2)
+    if region is not None and region.any():
+        bright = bright[region]
+    top = float(np.percentile(bright, STRETCH_PERCENTILE))
     gain = min(STRETCH_MAX_GAIN, 255.0 / max(top, 1.0))
     if gain <= 1.0:
         return img, 1.0
@@ -1517,16 +1557,20 @@ def complete_limbs_with_depth(mask: np.ndarray, depth_m: np.ndarray, pose: np.nd
 
 
 def segment_image(colour_rgb: np.ndarray, view: str = "front", depth: np.ndarray | None = None,
-                  params: SegmentParams | None = None, **overrides: Any) -> Segmentation:
+                  params: SegmentParams | None = None, *, camera: Camera | None = None,
+                  **overrides: Any) -> Segmentation:
     """Segments one RGB uint8 (H, W, 3) image of a standing subject seen from the ``view`` ("front" or
-    "back") camera. ``depth`` (metres, aligned to the colour image, 0 = none) refines the person mask.
+    "back") camera. ``depth`` (metres, aligned to the colour image, 0 = none) refines the person mask and
+    sets the subject on the background of :attr:`SegmentParams.background` for MediaPipe (:func:`detect`;
+    ``camera``, the calibrated
+    :class:`bsv.frontend.landmarks.Camera`, removes the floor from it too).
     ``params`` defaults to :data:`DEFAULT_PARAMS` of the view; keyword overrides set fields of
     :class:`SegmentParams` on top. A required landmark under ``min_visibility`` is taken from the hand
     model (wrists) or accepted down to ``fallback_visibility``, with a warning (:attr:`Segmentation.warnings`);
     both views together also use each other (:func:`bsv.frontend.landmarks.segment_views`). Raises
     PersonNotFoundError when no person is found and LandmarkMissingError naming the required landmarks
     still missing."""
-    det = detect(colour_rgb, view, params, **overrides)
+    det = detect(colour_rgb, view, params, depth=depth, camera=camera, **overrides)
     pose, sources, warnings, missing = resolve_landmarks(det)
     if missing:
         raise missing_error(view, missing)
@@ -1549,7 +1593,14 @@ def segment_capture(folder: PathLike, cameras: Sequence[str] = ("front", "back")
         if cam not in VIEWS:
             raise SegmentationError(f"camera {cam!r} in {root}: the view must be 'front' or 'back'")
         data = read_capture(root / cam)
-        seg = segment_image(data["colour"], view=cam, depth=data["depth_m"] if use_depth else None, **params)
+        pose = data["meta"].get("camera_to_world")  # a virtual scan's; a real capture's comes from its calibration
+        camera = None
+        if use_depth and isinstance(pose, Mapping):
+            from .landmarks import Camera
+
+            camera = Camera.from_json(data["intrinsics"], pose)
+        seg = segment_image(data["colour"], view=cam, depth=data["depth_m"] if use_depth else None, camera=camera,
+                            **params)
         if write:
             write_segmentation(seg, (Path(out_dir) if out_dir is not None else root) / cam, overwrite=overwrite)
         out[cam] = seg

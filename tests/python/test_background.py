@@ -170,8 +170,9 @@ def test_auto_shows_the_room_only_where_the_depth_sees_none():
     a void around the subject (a black studio) is shown on the rig's empty room."""
     cam, depth, box, _ = _scene()
     region = bg.subject_region(depth, cam)
-    assert region is not None and not bg.void_around(depth, region)
+    assert region is not None and not bg.void_around(depth, region) and bg.sees_room(depth)
     studio = np.where(box, depth, 0.0)
+    assert not bg.sees_room(studio)
     region = bg.subject_region(studio, cam)
     assert region is not None and bg.void_around(studio, region)
     assert bg.void_around(np.zeros_like(depth), np.ones_like(box))

@@ -64,6 +64,8 @@ GROW_PX = 0
 #: the sensor's range) when fewer than this share of the pixels outside the subject's region have depth; a
 #: room the sensor sees (its walls and floor return depth nearly everywhere) is left as captured.
 VOID_DEPTH_FRACTION = 0.1
+#: More than this share of an image with depth is a room whatever the subject covers (:func:`sees_room`).
+ROOM_DEPTH_FRACTION = 0.5
 #: The smallest share of the image the subject's region must cover to be used: less means the depth does not
 #: show the subject (no depth, a wrong calibration) and the image is shown as captured.
 MIN_REGION_FRACTION = 0.01
@@ -151,6 +153,13 @@ def backdrop(view: str, shape: tuple[int, int]) -> np.ndarray:
     return big[y0:y0 + h, x0:x0 + w]
 
 
+def sees_room(depth_m: np.ndarray) -> bool:
+    """Whether the depth surely shows a room (more than :data:`ROOM_DEPTH_FRACTION` of all pixels have depth,
+    more than a standing subject covers): the cheap test ``"auto"`` makes before looking for the subject."""
+    d = np.asarray(depth_m)
+    return float(np.count_nonzero(d > 0)) > ROOM_DEPTH_FRACTION * d.size
+
+
 def void_around(depth_m: np.ndarray, region: np.ndarray) -> bool:
     """Whether the depth around the subject's ``region`` is a void: fewer than :data:`VOID_DEPTH_FRACTION` of
     the other pixels have depth (nothing behind or under the subject returns it)."""
@@ -184,5 +193,5 @@ def neutral_background(colour_rgb: np.ndarray, depth_m: np.ndarray, camera: Came
 
 
 __all__ = ["BACKDROP_FILES", "BACKGROUND_GREY", "CENTRAL_COLUMNS", "CENTRAL_ROWS", "FLOOR_MARGIN_M", "GROW_PX", "MAX_HOLE_FRACTION",
-           "MIN_PART_FRACTION", "MIN_REGION_FRACTION", "NEAREST_PERCENTILE", "SUBJECT_DEPTH_M", "VOID_DEPTH_FRACTION",
-           "backdrop", "neutral_background", "on_background", "subject_region", "void_around"]
+           "MIN_PART_FRACTION", "MIN_REGION_FRACTION", "NEAREST_PERCENTILE", "ROOM_DEPTH_FRACTION", "SUBJECT_DEPTH_M", "VOID_DEPTH_FRACTION",
+           "backdrop", "neutral_background", "on_background", "sees_room", "subject_region", "void_around"]

@@ -734,7 +734,7 @@ def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | 
     background of :attr:`SegmentParams.background` (by default the rig's empty room where the depth around
     the subject is a void, the image's own where it shows a room). PersonNotFoundError when no person is
     found."""
-    from .background import backdrop, on_background, subject_region, void_around
+    from .background import backdrop, on_background, sees_room, subject_region, void_around
 
     prm = view_params(view, params, **overrides)
     img = np.asarray(colour_rgb)
@@ -743,7 +743,7 @@ def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | 
     h, w = img.shape[:2]
     notes: tuple[str, ...] = ()
     region = fill = None
-    if prm.background != "as_captured" and depth is not None:
+    if prm.background != "as_captured" and depth is not None and not (prm.background == "auto" and sees_room(depth)):
         region = subject_region(depth, camera)
         if region is None or region.shape != (h, w):
             region = None

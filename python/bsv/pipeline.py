@@ -289,7 +289,8 @@ def _segment(cam: str, data: dict[str, Any], folder: Path, mode: str, params: di
         labels = seg.labels
         summary = {"source": "camera (MediaPipe Holistic)", "labelled_pixels": int((labels > 0).sum()),
                    "hands_found": list(seg.hands_found), "counts": seg.counts(), "files": str(seg_out),
-                   "landmark_sources": dict(seg.sources), "warnings": list(seg.warnings)}
+                   "landmark_sources": dict(seg.sources), "warnings": list(seg.warnings),
+                   "mediapipe_background": seg.background}
     if labels.shape != data["depth_m"].shape:
         raise SegmentationError(
             f"{cam}: label image {labels.shape} and depth image {data['depth_m'].shape} differ in size; the depth must "

@@ -126,11 +126,13 @@ def test_mediapipe_sees_the_same_subject_in_the_room_and_in_the_studio(tmp_path)
         c = looks["studio"][v]
         cam = Camera.from_json(c["intrinsics"], c["meta"]["camera_to_world"])
         auto = seg.detect(c["colour"], v, depth=c["depth_m"], camera=cam)
-        assert np.array_equal(auto.pose, dets["studio"].pose)
+        assert np.array_equal(auto.pose, dets["studio"].pose) and auto.background == "room"
         c = looks["room"][v]
         cam = Camera.from_json(c["intrinsics"], c["meta"]["camera_to_world"])
         auto = seg.detect(c["colour"], v, depth=c["depth_m"], camera=cam)
-        assert np.array_equal(auto.pose, seg.detect(c["colour"], v).pose)
+        assert np.array_equal(auto.pose, seg.detect(c["colour"], v).pose) and auto.background == "as_captured"
+        grey = seg.detect(c["colour"], v, depth=c["depth_m"], camera=cam, background="grey")
+        assert grey.background == "grey" and not np.array_equal(grey.pose, auto.pose)
 
 
 def test_the_contrast_stretch_reads_the_subject_not_the_grey_around_it():

@@ -460,6 +460,8 @@ class Segmentation:
     #: comparison space (:func:`bsv.uncertainty.transform`: natural log for volumes and ratios), e.g.
     #: :data:`EXPECTED_CROTCH_SD` when the crotch was placed at its expected depth; empty for a plain view.
     extra_sd: dict[str, float] = field(default_factory=dict)
+    #: What MediaPipe saw around the subject (:attr:`Detection.background`).
+    background: str = "as_captured"
 
     def landmark(self, name: str) -> np.ndarray:
         """(x, y, visibility) of one landmark by name (KeyError naming it if unknown)."""
@@ -712,6 +714,9 @@ class Detection:
     #: How the image had to be helped for MediaPipe to find the person (e.g. its contrast stretched), one
     #: sentence each; they become the segmentation's first warnings. Empty for a plain detection.
     notes: tuple[str, ...] = ()
+    #: What MediaPipe saw around the subject: "as_captured", "room" (the rig's empty clinic room) or "grey"
+    #: (:attr:`SegmentParams.background`, :mod:`bsv.frontend.background`).
+    background: str = "as_captured"
 
 
 def view_params(view: str, params: SegmentParams | None = None, **overrides: Any) -> SegmentParams:
@@ -784,7 +789,8 @@ def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | 
         if other is not None:
             spread = np.hypot(*(pose[:, :2] - other[0][:, :2]).T)
             pose, hands, mask_soft = _average_detections((pose, hands, mask_soft), other[:3])
-    return Detection(view, (h, w), pose, hands, mask_soft, swapped, prm, spread, notes)
+    shown_on = "as_captured" if region is None else "room" if fill is not None else "grey"
+    return Detection(view, (h, w), pose, hands, mask_soft, swapped, prm, spread, notes, shown_on)
 
 
 #: The brightness percentile :func:`stretch_contrast` maps to white, and the largest gain it applies: the
@@ -946,7 +952,7 @@ def label_detection(det: Detection, depth: np.ndarray | None = None, pose: np.nd
     return Segmentation(labels=labels, mask=mask, landmarks=_landmarks71(pose, hands), view=det.view,
                         hands_found=(hands[0] is not None, hands[1] is not None), swapped=det.swapped, pose=pose,
                         sources=dict(sources or {}), warnings=(*det.notes, *warnings), pose_spread=det.spread,
-                        sex=sex)
+                        sex=sex, background=det.background)
 
 
 def missing_error(view: str, missing: Sequence[tuple[str, str]]) -> LandmarkMissingError:
@@ -1638,7 +1644,7 @@ def write_segmentation(seg: Segmentation, folder: PathLike, overwrite: bool = Fa
           for n, r in zip(seg.names, seg.landmarks, strict=False)}
     meta = {"view": seg.view, "segments": dict(SEGMENT_IDS), "hands_found": list(seg.hands_found),
             "swapped_pairs": list(seg.swapped), "counts": seg.counts(), "landmarks_px": lm,
-            "landmark_sources": dict(seg.sources), "warnings": list(seg.warnings)}
+            "landmark_sources": dict(seg.sources), "warnings": list(seg.warnings), "background": seg.background}
     if seg.sex is not None:
         meta["sex"] = seg.sex.to_json()
     (d / "landmarks.json").write_text(json.dumps(meta, indent=1))

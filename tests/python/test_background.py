@@ -178,3 +178,23 @@ def test_auto_shows_the_room_only_where_the_depth_sees_none():
     region = bg.subject_region(studio, cam)
     assert region is not None and bg.void_around(studio, region)
     assert bg.void_around(np.zeros_like(depth), np.ones_like(box))
+
+
+def test_what_mediapipe_is_shown_for_each_setting():
+    """``showing``: nothing changes as captured or without depth; a depth that shows no subject keeps the image
+    as captured with a note; grey and the backdrop fill around the subject's region."""
+    cam, depth, box, _ = _scene()
+    shape = depth.shape
+    assert bg.showing("as_captured", "front", shape, depth, cam).background == "as_captured"
+    assert bg.showing("room", "front", shape, None, cam).background == "as_captured"
+    lost = bg.showing("room", "front", shape, np.zeros_like(depth), cam)
+    assert lost.region is None and lost.note is not None and "check the depth image" in lost.note
+    assert bg.showing("auto", "front", shape, depth, cam).background == "as_captured"  # a room in view
+    studio = np.where(box, depth, 0.0)
+    img = np.full((*shape, 3), 30, dtype=np.uint8)
+    for setting, shown in (("auto", "room"), ("room", "room"), ("grey", "grey")):
+        s = bg.showing(setting, "front", shape, studio, cam)
+        assert s.background == shown and s.note is None
+        out = s.image(img)
+        assert (out[s.region] == 30).all() and (out[~s.region] != 30).any()
+    assert (bg.showing("grey", "front", shape, studio, cam).image(img)[~box] == bg.BACKGROUND_GREY).all()

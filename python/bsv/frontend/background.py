@@ -21,6 +21,7 @@ a one-pixel rim of the room).
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass
 from importlib import resources
 from typing import TYPE_CHECKING
 
@@ -180,6 +181,43 @@ def on_background(colour_rgb: np.ndarray, region: np.ndarray | None, fill: np.nd
     return out
 
 
+@dataclass(frozen=True)
+class Showing:
+    """What MediaPipe is shown of one view: the subject's ``region`` (None: the image as captured), the
+    ``fill`` outside it (a :func:`backdrop`; None: :data:`BACKGROUND_GREY`) and, when the requested background
+    could not be made, a ``note`` saying why (a warning of the segmentation)."""
+
+    region: np.ndarray | None = None
+    fill: np.ndarray | None = None
+    note: str | None = None
+
+    @property
+    def background(self) -> str:
+        """What surrounds the subject in :meth:`image`: "as_captured", "room" or "grey"."""
+        return "as_captured" if self.region is None else "grey" if self.fill is None else "room"
+
+    def image(self, colour_rgb: np.ndarray) -> np.ndarray:
+        """``colour_rgb`` as MediaPipe is shown it (:func:`on_background`)."""
+        return on_background(colour_rgb, self.region, self.fill)
+
+
+def showing(background: str, view: str, shape: tuple[int, int], depth_m: np.ndarray | None,
+            camera: Camera | None = None) -> Showing:
+    """What MediaPipe is shown of the ``view`` image of ``shape`` for the ``background`` setting
+    (:attr:`bsv.frontend.segment.SegmentParams.background`): nothing changes without depth or
+    ``"as_captured"``, nor with ``"auto"`` where the depth shows a room (:func:`sees_room`,
+    :func:`void_around`); otherwise the subject's region on the backdrop (``"room"``, ``"auto"``) or grey."""
+    if background == "as_captured" or depth_m is None or (background == "auto" and sees_room(depth_m)):
+        return Showing()
+    region = subject_region(depth_m, camera)
+    if region is None or region.shape != shape:
+        return Showing(note="the depth does not set the subject apart from the room, so MediaPipe saw the image as "
+                            "captured (its landmarks then move with the background: check the depth image)")
+    if background == "auto" and not void_around(depth_m, region):
+        return Showing()  # the sensor sees a room: MediaPipe sees it too, as the cut lines were learned
+    return Showing(region, backdrop(view, shape) if background in ("room", "auto") else None)
+
+
 def neutral_background(colour_rgb: np.ndarray, depth_m: np.ndarray, camera: Camera | None = None,
                        view: str | None = None) -> np.ndarray | None:
     """``colour_rgb`` outside :func:`subject_region` replaced by the ``view`` camera's :func:`backdrop` (without
@@ -192,6 +230,26 @@ def neutral_background(colour_rgb: np.ndarray, depth_m: np.ndarray, camera: Came
     return on_background(colour_rgb, region, None if view is None else backdrop(view, shape))
 
 
-__all__ = ["BACKDROP_FILES", "BACKGROUND_GREY", "CENTRAL_COLUMNS", "CENTRAL_ROWS", "FLOOR_MARGIN_M", "GROW_PX", "MAX_HOLE_FRACTION",
-           "MIN_PART_FRACTION", "MIN_REGION_FRACTION", "NEAREST_PERCENTILE", "ROOM_DEPTH_FRACTION", "SUBJECT_DEPTH_M", "VOID_DEPTH_FRACTION",
-           "backdrop", "neutral_background", "on_background", "sees_room", "subject_region", "void_around"]
+__all__ = [
+    "BACKDROP_FILES",
+    "BACKGROUND_GREY",
+    "CENTRAL_COLUMNS",
+    "CENTRAL_ROWS",
+    "FLOOR_MARGIN_M",
+    "GROW_PX",
+    "MAX_HOLE_FRACTION",
+    "MIN_PART_FRACTION",
+    "MIN_REGION_FRACTION",
+    "NEAREST_PERCENTILE",
+    "ROOM_DEPTH_FRACTION",
+    "SUBJECT_DEPTH_M",
+    "VOID_DEPTH_FRACTION",
+    "Showing",
+    "backdrop",
+    "neutral_background",
+    "on_background",
+    "sees_room",
+    "showing",
+    "subject_region",
+    "void_around",
+]

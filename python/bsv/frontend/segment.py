@@ -65,6 +65,7 @@ from .. import _bsv
 from ..extras import require
 from ..types import SEGMENT_IDS as _SEGMENT_IDS
 from ..types import SEGMENT_NAMES as _SEGMENT_NAMES
+from .background import showing
 from .errors import LandmarkMissingError, PersonNotFoundError, SegmentationError
 from .pose_model import check_complexity, require_pose_model
 from .sex import SexEstimate
@@ -739,35 +740,23 @@ def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | 
     background of :attr:`SegmentParams.background` (by default the rig's empty room where the depth around
     the subject is a void, the image's own where it shows a room). PersonNotFoundError when no person is
     found."""
-    from .background import backdrop, on_background, sees_room, subject_region, void_around
-
     prm = view_params(view, params, **overrides)
     img = np.asarray(colour_rgb)
     if img.ndim != 3 or img.shape[2] != 3 or img.dtype != np.uint8:
         raise SegmentationError(f"colour image must be RGB uint8 (H, W, 3), got {img.dtype} {img.shape}")
     h, w = img.shape[:2]
-    notes: tuple[str, ...] = ()
-    region = fill = None
-    if prm.background != "as_captured" and depth is not None and not (prm.background == "auto" and sees_room(depth)):
-        region = subject_region(depth, camera)
-        if region is None or region.shape != (h, w):
-            region = None
-            notes = ((f"{view} image: the depth does not set the subject apart from the room, so MediaPipe saw the "
-                      "image as captured (its landmarks then move with the background: check the depth image)"),)
-        elif prm.background == "auto" and not void_around(depth, region):
-            region = None  # the sensor sees a room: MediaPipe sees it too, as the cut lines were learned
-        elif prm.background in ("room", "auto"):
-            fill = backdrop(view, (h, w))
-    shown = on_background(img, region, fill)
+    show = showing(prm.background, view, (h, w), depth, camera)
+    notes: tuple[str, ...] = () if show.note is None else (f"{view} image: {show.note}",)
+    shown = show.image(img)
     flip = view == "back" and prm.flip_back
     first = _detect_once(shown, view, prm, flip)
     if first is None and prm.flip_average:  # the mirror image is detected anyway: it may find the person
         first = _detect_once(shown, view, prm, not flip)
         flip = not flip
     if first is None:  # a dim subject against a dark background: MediaPipe's detector wants contrast
-        stretched, gain = stretch_contrast(img, region)
+        stretched, gain = stretch_contrast(img, show.region)
         if gain > 1.0:
-            shown = on_background(stretched, region, fill)
+            shown = show.image(stretched)
             flips = (flip, not flip) if prm.flip_average else (flip,)
             for f in flips:
                 first = _detect_once(shown, view, prm, f)
@@ -789,8 +778,7 @@ def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | 
         if other is not None:
             spread = np.hypot(*(pose[:, :2] - other[0][:, :2]).T)
             pose, hands, mask_soft = _average_detections((pose, hands, mask_soft), other[:3])
-    shown_on = "as_captured" if region is None else "room" if fill is not None else "grey"
-    return Detection(view, (h, w), pose, hands, mask_soft, swapped, prm, spread, notes, shown_on)
+    return Detection(view, (h, w), pose, hands, mask_soft, swapped, prm, spread, notes, show.background)
 
 
 #: The brightness percentile :func:`stretch_contrast` maps to white, and the largest gain it applies: the

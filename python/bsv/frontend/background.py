@@ -223,11 +223,9 @@ def neutral_background(colour_rgb: np.ndarray, depth_m: np.ndarray, camera: Came
     """``colour_rgb`` outside :func:`subject_region` replaced by the ``view`` camera's :func:`backdrop` (without
     a view: :data:`BACKGROUND_GREY`), or None when the depth does not show the subject (the caller then uses
     the image as captured)."""
-    region = subject_region(depth_m, camera)
     shape = np.asarray(colour_rgb).shape[:2]
-    if region is None or region.shape != shape:
-        return None
-    return on_background(colour_rgb, region, None if view is None else backdrop(view, shape))
+    show = showing("grey" if view is None else "room", view or "front", (shape[0], shape[1]), depth_m, camera)
+    return None if show.region is None else show.image(colour_rgb)
 
 
 __all__ = [

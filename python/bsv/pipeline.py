@@ -471,7 +471,7 @@ def process(
     from .frontend.capture import read_capture
     from .frontend.segment import warming_up
     from .pdf import PdfRenderer
-    from .report import render_report, write_rendered
+    from .report import prepare_figures, render_report, write_rendered
     from .staging import staged_outputs
 
     if segmentation not in SEGMENTATIONS:
@@ -509,7 +509,8 @@ def process(
     # this one and the capture is read (the worker first: MediaPipe's thread redirects stderr while it runs).
     steps = _Steps(progress)
     pdf_renderer = PdfRenderer()
-    warm = warming_up(**(segment_params or {})) if segmentation == "camera" else contextlib.nullcontext()
+    warm = (warming_up(then=prepare_figures, **(segment_params or {})) if segmentation == "camera"
+            else contextlib.nullcontext())
     with contextlib.closing(pdf_renderer), contextlib.ExitStack() as stack:
         steps.run("prepare", "starting the PDF renderer (report.pdf) in a worker process" if pdf_renderer.worker
                   else "loading the PDF renderer (report.pdf)", pdf_renderer.start)

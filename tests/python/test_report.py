@@ -417,3 +417,11 @@ def test_render_mesh_refuses_an_alpha_outside_0_to_1(alpha):
     verts = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     with pytest.raises(ValueError, match="alpha"):
         report.render_mesh(fig.add_subplot(), verts, np.array([[0, 1, 2]]), np.array([1], dtype=np.uint8), alpha=alpha)
+
+
+def test_prepare_figures_draws_what_the_report_draws_first():
+    # bsv process runs it on MediaPipe's warm-up thread; it must go through, not fail silently.
+    import sys
+
+    assert report.prepare_figures() is True
+    assert "matplotlib.backends.backend_agg" in sys.modules

@@ -55,3 +55,19 @@ def test_captured_stderr_is_replayed_without_mediapipes_log(capfd) -> None:
     assert capfd.readouterr().err == ""  # nothing reached the real stderr meanwhile
     seg._replay(captured)
     assert capfd.readouterr().err == "a warning of the main thread\n"
+
+
+def test_then_runs_on_the_thread_once_the_graph_is_ready() -> None:
+    import threading
+
+    seen: list[tuple[str, bool]] = []
+    prm = seg.DEFAULT_PARAMS["front"]
+    key = (prm.model_complexity, float(prm.min_detection_confidence))
+
+    def then() -> None:
+        seen.append((threading.current_thread().name, key in seg._MODELS))
+        raise RuntimeError("a failing warm-up step is not the body's error")
+
+    with seg.warming_up(then=then) as wait:
+        wait()
+    assert seen == [("bsv-mediapipe-warm-up", True)]

@@ -485,7 +485,12 @@ def _mediapipe_holistic() -> ModuleType:
     # MediaPipe's C++ logging (glog/absl, TFLite) prints several lines per image: keep warnings out.
     os.environ.setdefault("GLOG_minloglevel", "2")
     os.environ.setdefault("TF_CPP_MIN_LOG_LEVEL", "2")
-    return require("mediapipe.python.solutions.holistic")
+    from .mediapipe_loader import HOLISTIC_MODULE, holistic
+
+    try:
+        return holistic()
+    except ImportError:  # the plain import again, which names the extra to install
+        return require(HOLISTIC_MODULE)
 
 
 #: The MediaPipe Holistic graphs of this process, by (model complexity, detection confidence), with the
@@ -519,17 +524,20 @@ _NATIVE_LOG_LINE = re.compile(
 )
 
 
-def _warm_up(prm: SegmentParams, captured: list[str]) -> None:
+def _warm_up(prm: SegmentParams, captured: list[str], then: Callable[[], None] | None = None) -> None:
     """Builds this process's graph for ``prm`` and runs it once on a small blank image (the first
-    ``process`` call loads the models: about 0.5 s, the graph 0.6 s more); what reaches stderr meanwhile
-    is appended to ``captured``. Errors are left to the real call, which reports them with its own
-    message."""
+    ``process`` call loads the models: about 0.3 s, the import before it 0.3 s more); what reaches stderr
+    meanwhile is appended to ``captured``. Errors are left to the real call, which reports them with its own
+    message. Then ``then()``, with the graph free for the segmentation (its errors are ignored: a warm-up)."""
     try:
         with _MODELS_LOCK, _native_stderr_captured(captured):
             _holistic_model(prm.model_complexity, prm.min_detection_confidence).process(
                 np.zeros((64, 64, 3), dtype=np.uint8))
     except Exception:  # the segmentation step that follows raises it with its own message
         pass
+    if then is not None:
+        with contextlib.suppress(Exception):  # a warm-up: what ``then`` prepares reports its own errors later
+            then()
 
 
 def _replay(captured: Sequence[str]) -> None:
@@ -543,11 +551,12 @@ def _replay(captured: Sequence[str]) -> None:
 
 
 @contextlib.contextmanager
-def warming_up(**overrides: Any) -> Iterator[Callable[[], None]]:
+def warming_up(then: Callable[[], None] | None = None, **overrides: Any) -> Iterator[Callable[[], None]]:
     """Prepares MediaPipe (:func:`_warm_up`, with :class:`SegmentParams` ``overrides``) on a background
     thread while the body of the ``with`` runs: a fresh ``bsv process`` reads the capture meanwhile (its PDF
     renderer loads in a worker process, :mod:`bsv.pdf`). The segmentation waits for it through the graph
-    lock.
+    lock. ``then``: more to prepare on the same thread once the graph is ready (``bsv process`` loads what
+    the report's figures need while MediaPipe detects).
 
     The ``with`` target is a function that waits for the thread (for a caller that must import a package
     the thread may be importing). While the thread runs, file
@@ -561,7 +570,8 @@ def warming_up(**overrides: Any) -> Iterator[Callable[[], None]]:
         yield lambda: None
         return
     captured: list[str] = []
-    thread = threading.Thread(target=_warm_up, args=(prm, captured), name="bsv-mediapipe-warm-up", daemon=True)
+    thread = threading.Thread(target=_warm_up, args=(prm, captured, then), name="bsv-mediapipe-warm-up",
+                              daemon=True)
     try:
         thread.start()
     except RuntimeError:  # no thread to be had: the segmentation builds the graph itself

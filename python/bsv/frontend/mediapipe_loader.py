@@ -1,0 +1,114 @@
+"""MediaPipe's Holistic solution, imported without the drawing helpers that BSV does not use.
+
+``import mediapipe`` runs ``mediapipe.python.solutions``, which imports ``drawing_utils`` and ``drawing_styles``;
+``drawing_utils`` imports ``matplotlib.pyplot``. In a fresh ``bsv process`` that is 0.5-0.7 s of the 0.8-0.9 s
+the import costs, on the path to the first detection (the report draws later, without pyplot).
+:func:`holistic` first puts a stand-in for each of the two modules in ``sys.modules``: a module that loads
+the real one the first time one of its names is read. The Holistic graph never reads them; a caller who does
+(``mediapipe.solutions.drawing_utils.draw_landmarks``) gets the real module, only later.
+
+With MediaPipe imported already, or a wheel laid out otherwise (other versions), the import is the plain one.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import sys
+import threading
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+#: The solution BSV runs.
+HOLISTIC_MODULE = "mediapipe.python.solutions.holistic"
+#: The modules :func:`holistic` defers, with their files in the mediapipe wheel.
+DEFERRED: dict[str, str] = {
+    "mediapipe.python.solutions.drawing_utils": "python/solutions/drawing_utils.py",
+    "mediapipe.python.solutions.drawing_styles": "python/solutions/drawing_styles.py",
+}
+
+_LOAD_LOCK = threading.Lock()
+
+
+def _load_real(name: str, path: Path) -> ModuleType:
+    """Imports module ``name`` from ``path`` in place of its stand-in (once) and returns it."""
+    with _LOAD_LOCK:
+        current = sys.modules.get(name)
+        if current is not None and not getattr(current, "__bsv_deferred__", False):
+            return current
+        spec = importlib.util.spec_from_file_location(name, path)
+        if spec is None or spec.loader is None:  # not a Python file any more: the plain import
+            sys.modules.pop(name, None)
+            return importlib.import_module(name)
+        real = importlib.util.module_from_spec(spec)
+        sys.modules[name] = real
+        try:
+            spec.loader.exec_module(real)
+        except BaseException:
+            sys.modules.pop(name, None)
+            raise
+        parent, _, child = name.rpartition(".")
+        if parent in sys.modules:
+            setattr(sys.modules[parent], child, real)
+        return real
+
+
+def _stand_in(name: str, path: Path) -> ModuleType:
+    """A module named ``name`` whose every other name is read from the real module, loaded on first use."""
+    mod = ModuleType(name, f"Stand-in for {name}, loaded from {path} on first use (bsv.frontend.mediapipe_loader).")
+    mod.__file__ = str(path)
+
+    def __getattr__(attr: str) -> Any:  # PEP 562's module __getattr__
+        if attr == "__path__":  # the import system asking whether it is a package: it is not
+            raise AttributeError(attr)
+        return getattr(_load_real(name, path), attr)
+
+    def __dir__() -> list[str]:  # PEP 562's module __getattr__
+        return dir(_load_real(name, path))
+
+    mod.__getattr__ = __getattr__  # type: ignore[method-assign]
+    mod.__dir__ = __dir__  # type: ignore[method-assign]
+    mod.__bsv_deferred__ = True  # type: ignore[attr-defined]
+    return mod
+
+
+def _defer_drawing() -> dict[str, ModuleType]:
+    """Puts the stand-ins of :data:`DEFERRED` in ``sys.modules`` when mediapipe is not imported yet and its
+    wheel has the files; returns them (empty otherwise)."""
+    if "mediapipe" in sys.modules:
+        return {}
+    try:
+        spec = importlib.util.find_spec("mediapipe")  # finds the package without running it
+    except (ImportError, ValueError):
+        return {}
+    if spec is None or not spec.submodule_search_locations:
+        return {}
+    root = Path(next(iter(spec.submodule_search_locations)))
+    paths = {name: root / rel for name, rel in DEFERRED.items()}
+    if not all(p.is_file() for p in paths.values()):
+        return {}
+    stand_ins = {name: _stand_in(name, p) for name, p in paths.items() if name not in sys.modules}
+    sys.modules.update(stand_ins)
+    return stand_ins
+
+
+def holistic() -> ModuleType:
+    """``mediapipe.python.solutions.holistic``, imported with the drawing helpers deferred (module doc).
+    ImportError as the plain import raises it."""
+    stand_ins = _defer_drawing()
+    try:
+        module = importlib.import_module(HOLISTIC_MODULE)
+    except BaseException:
+        for name, mod in stand_ins.items():  # leave nothing of ours behind a failed import
+            if sys.modules.get(name) is mod:
+                del sys.modules[name]
+        raise
+    for name, mod in stand_ins.items():  # ``mediapipe.solutions.drawing_utils`` as the plain import gives it
+        parent, _, child = name.rpartition(".")
+        if parent in sys.modules and sys.modules.get(name) is mod and not hasattr(sys.modules[parent], child):
+            setattr(sys.modules[parent], child, mod)
+    return module
+
+
+__all__ = ["DEFERRED", "HOLISTIC_MODULE", "holistic"]

@@ -528,6 +528,29 @@ summary{cursor:pointer;font-weight:bold}
 @page{size:A4;margin:14mm}"""
 
 
+#: A 1-pixel PNG and JPEG (white): the image decoders a report's layout uses.
+_PIXEL_PNG = ("iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAIAAACQd1PeAAAADElEQVR4nGP4//8/AAX+Av4N70a4AAAAAElFTkSuQmCC")
+
+
+def warm_up_document() -> str:
+    """A small document shaped like report.pdf's (:data:`CSS`, headings, a table, figures with a PNG and a
+    JPEG, notes, a warning, the legend): the PDF worker lays it out while it waits for the report, so that
+    the report's first layout finds WeasyPrint's style cascade, fonts, table layout and image decoders warm
+    (:func:`bsv.pdf.main`)."""
+    jpeg = base64.b64encode(_encode(np.full((8, 8, 3), 255, np.uint8), "JPEG")).decode("ascii")
+    figs = (f'<figure class="body"><img src="data:image/png;base64,{_PIXEL_PNG}" alt="png"><figcaption>front'
+            f'</figcaption></figure><figure class="seg"><img src="data:image/jpeg;base64,{jpeg}" alt="jpeg">'
+            "<figcaption>side</figcaption></figure>")
+    return (f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>BSV</title><style>{CSS}</style>'
+            f'</head><body><main><h1>BSV report</h1><p class="note">Volumes in litres.</p>'
+            f'<p class="warn">warning</p><h2>Segments</h2><div class="figs">{figs}</div>'
+            '<ul class="legend"><li><span class="sw" style="background:#4477aa"></span>torso</li></ul>'
+            "<h2>Volumes</h2><table><tr><th>segment</th><th>volume (L)</th><th>95 % interval</th></tr>"
+            "<tr><td>torso</td><td>34.874</td><td>33.934 to 36.048</td></tr></table>"
+            '<h3>Left / right</h3><table class="prose"><tr><td>upper arm</td><td>not distinguishable</td></tr>'
+            '</table><p class="key"><b>60.4</b> L</p></main></body></html>')
+
+
 def _figure(img: _Image, target: _Target, alt: str, caption: str, cls: str = "") -> str:
     """A ``<figure>`` with the image inlined as a data: URI, in its format for ``target`` (:meth:`_Image.src`)."""
     return (f'<figure class="{cls}"><img src="{img.src(target)}" alt="{html.escape(alt)}">'

@@ -42,6 +42,15 @@ def test_the_worker_lays_out_the_same_pdf_as_this_process():
     assert abs(len(from_worker) - len(here)) < 0.05 * len(here)  # the same layout (dates and ids differ)
 
 
+def test_the_workers_warm_up_is_shaped_like_the_report():
+    from bsv import report
+
+    doc = pdf._warm_up_document()
+    assert doc == report.warm_up_document()
+    assert report.CSS in doc and "data:image/png;base64," in doc and "data:image/jpeg;base64," in doc
+    assert pdf.render_pdf(doc).startswith(b"%PDF-")
+
+
 def test_a_document_is_submitted_once():
     r = pdf.PdfRenderer(worker=False).start()
     with pytest.raises(RuntimeError, match="submit a document first"):

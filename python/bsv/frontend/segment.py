@@ -524,7 +524,7 @@ _NATIVE_LOG_LINE = re.compile(
 )
 
 
-def _warm_up(prm: SegmentParams, captured: list[str], then: Callable[[], None] | None = None) -> None:
+def _warm_up(prm: SegmentParams, captured: list[str], then: Callable[[], object] | None = None) -> None:
     """Builds this process's graph for ``prm`` and runs it once on a small blank image (the first
     ``process`` call loads the models: about 0.3 s, the import before it 0.3 s more); what reaches stderr
     meanwhile is appended to ``captured``. Errors are left to the real call, which reports them with its own
@@ -551,7 +551,7 @@ def _replay(captured: Sequence[str]) -> None:
 
 
 @contextlib.contextmanager
-def warming_up(then: Callable[[], None] | None = None, **overrides: Any) -> Iterator[Callable[[], None]]:
+def warming_up(then: Callable[[], object] | None = None, **overrides: Any) -> Iterator[Callable[[], None]]:
     """Prepares MediaPipe (:func:`_warm_up`, with :class:`SegmentParams` ``overrides``) on a background
     thread while the body of the ``with`` runs: a fresh ``bsv process`` reads the capture meanwhile (its PDF
     renderer loads in a worker process, :mod:`bsv.pdf`). The segmentation waits for it through the graph

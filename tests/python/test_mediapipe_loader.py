@@ -42,6 +42,30 @@ def test_holistic_imports_without_pyplot_and_the_drawing_helpers_still_work() ->
     assert "pyplot after use: True" in out
 
 
+def test_the_tasks_api_is_deferred_and_imports_as_usual_afterwards() -> None:
+    out = _run("""
+        import sys
+        from bsv.frontend.mediapipe_loader import holistic
+        holistic()
+        print("audio after import:", "mediapipe.tasks.python.audio" in sys.modules)
+        import importlib
+        vision_direct = importlib.import_module("mediapipe.tasks.python.vision")  # (`import ... as` fails in
+        # plain MediaPipe too: its __init__ binds mediapipe.tasks to the Tasks package)
+        from mediapipe.tasks.python import vision as vision_from
+        import mediapipe as mp
+        assert vision_direct is vision_from is sys.modules["mediapipe.tasks.python.vision"]
+        assert mp.tasks.vision is vision_direct  # MediaPipe's own spelling, once the package is loaded
+        assert mp.tasks.BaseOptions is sys.modules["mediapipe.tasks.python.core.base_options"].BaseOptions
+        options = mp.tasks.vision.PoseLandmarkerOptions(base_options=mp.tasks.BaseOptions(model_asset_path="x"))
+        assert options.base_options.model_asset_path == "x"
+        real = sys.modules["mediapipe.tasks.python"]
+        assert not getattr(real, "__bsv_deferred__", False) and real.vision is vision_direct
+        print("audio after use:", "mediapipe.tasks.python.audio" in sys.modules)
+    """)
+    assert "audio after import: False" in out
+    assert "audio after use: True" in out
+
+
 def test_mediapipe_imported_before_is_left_as_it_is() -> None:
     out = _run("""
         import sys

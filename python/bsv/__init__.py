@@ -286,6 +286,7 @@ def scan(
     images: PathLike | None = None,
     overwrite: bool = False,
     room: bool | Mapping[str, Any] = False,
+    look: Mapping[str, Any] | None = None,
 ) -> PointCloud:
     """Virtual two-camera capture (DESIGN.md rig) of a labelled mesh: a merged, labelled cloud.
 
@@ -302,12 +303,18 @@ def scan(
     colour); the returned cloud holds the body's points only. A bad value raises
     :class:`bsv.ScanError` whose ``parameter`` names it (``"room.back_wall_z"``); an unknown key or a
     wrong type raises :class:`bsv.InputError`.
+
+    ``look`` (with a room): looks beyond what ``seed`` draws, keeping its other draws: ``{"long_hair": True}``
+    hangs a subject's hair (not a bald one's) 0.30-0.45 m below the top of the head, over the neck and the
+    upper back (the back camera's view). Unknown keys raise :class:`bsv.InputError`.
     """
     m = as_mesh(mesh)
     if not 0 <= int(seed) < 2**64:
         raise InputError(f"seed must be a whole number in 0 .. 2**64 - 1, got {seed}")
     if not isinstance(room, (bool, Mapping)):
         raise InputError(f"room must be True, False or a dict of room keys, got {type(room).__name__}")
+    if look is not None and not isinstance(look, Mapping):
+        raise InputError(f"look must be None or a dict of look keys (long_hair), got {type(look).__name__}")
     img = None if images is None else str(images)
     if img is not None and Path(img).exists():
         if not Path(img).is_dir():
@@ -315,7 +322,8 @@ def scan(
         if any(Path(img).iterdir()) and not overwrite:
             raise OutputExistsError(f"{img} is not empty; pass overwrite=True to write into it")
     rm: bool | dict[str, Any] = dict(room) if isinstance(room, Mapping) else bool(room)
-    p, n, c, lab = _bsv.scan(m.vertices, m.faces, m.vertex_labels, m.face_labels, condition, int(seed), img, rm)
+    lk = None if look is None else dict(look)
+    p, n, c, lab = _bsv.scan(m.vertices, m.faces, m.vertex_labels, m.face_labels, condition, int(seed), img, rm, lk)
     return PointCloud(p, n, c, lab)
 
 

@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import pytest
 
 import bsv
@@ -19,7 +21,7 @@ def test_a_room_scan_records_its_look_and_a_plain_one_does_not(tmp_path: Path) -
     bsv.scan(body, "noer", 3, images=tmp_path / "room", room=True)
     bsv.scan(body, "noer", 3, images=tmp_path / "plain")
     look = read_look(tmp_path / "room")
-    assert look is not None and set(look) == {"lights", "light_colour", "skin", "underwear"}
+    assert look is not None and set(look) == {"lights", "light_colour", "skin", "underwear", "hair"}
     assert look["lights"] in {"key_front_left", "key_front_right", "overhead", "side"}
     assert read_look(tmp_path / "plain") is None
     assert read_look(tmp_path / "nowhere") is None
@@ -30,11 +32,43 @@ def test_a_room_scan_records_its_look_and_a_plain_one_does_not(tmp_path: Path) -
 
 def test_look_of_names_the_levels() -> None:
     rec = {"skin": [80, 52, 36], "tint": [1.0, 0.92, 0.78], "light_setup": "side", "underwear_style": "trunks"}
-    assert look_of(rec) == {"lights": "side", "light_colour": "warm", "skin": "darker", "underwear": "trunks"}
+    assert look_of(rec) == {"lights": "side", "light_colour": "warm", "skin": "darker", "underwear": "trunks",
+                            "hair": "none"}
     rec = {"skin": [255, 224, 196], "tint": [0.88, 0.95, 1.05], "light_setup": "overhead", "underwear_style": "briefs"}
     assert look_of(rec)["light_colour"] == "cool" and look_of(rec)["skin"] == "lighter"
     rec["tint"] = [1.0, 1.0, 1.0]
     assert look_of(rec)["light_colour"] == "neutral"
+    assert look_of(rec | {"hair_length_m": 0.06})["hair"] == "short"
+    assert look_of(rec | {"hair_length_m": 0.06, "hair_down_m": 0.35})["hair"] == "long"
+
+
+def test_long_hair_is_drawn_on_the_back_view_only_when_asked(tmp_path: Path) -> None:
+    body = bsv.bodies.make_body().mesh()
+    seed = next(s for s in range(40) if _has_hair(tmp_path, body, s))
+    bsv.scan(body, "noer", seed, images=tmp_path / "long", room=True, look={"long_hair": True})
+    short, long = (json.loads((tmp_path / d / "scan.json").read_text())["appearance"] for d in (f"s{seed}", "long"))
+    assert read_look(tmp_path / "long")["hair"] == "long" and read_look(tmp_path / f"s{seed}")["hair"] == "short"
+    assert 0.30 <= long["hair_down_m"] <= 0.45 and short["hair_down_m"] == 0.0
+    assert {k: v for k, v in long.items() if k != "hair_down_m"} == {k: v for k, v in short.items() if k != "hair_down_m"}
+    # The back camera's image changes (hair over the neck and the upper back), the front camera's does not.
+    from PIL import Image
+
+    def pixels(folder: str, cam: str) -> np.ndarray:
+        return np.asarray(Image.open(tmp_path / folder / cam / "color.png"))
+
+    assert np.array_equal(pixels("long", "front"), pixels(f"s{seed}", "front"))
+    changed = np.any(pixels("long", "back") != pixels(f"s{seed}", "back"), axis=2)
+    assert changed.sum() > 500
+    rows = np.nonzero(changed.any(axis=1))[0]
+    assert rows.max() < pixels("long", "back").shape[0] * 0.45  # the upper body only
+    with pytest.raises(bsv.InputError, match="look"):
+        bsv.scan(body, "noer", seed, room=True, look={"long_hiar": True})
+
+
+def _has_hair(tmp_path: Path, body: Any, seed: int) -> bool:
+    """Scans ``body`` in the room with seed ``seed`` into tmp_path/s<seed>; whether the subject has hair."""
+    bsv.scan(body, "noer", seed, images=tmp_path / f"s{seed}", room=True)
+    return json.loads((tmp_path / f"s{seed}" / "scan.json").read_text())["appearance"]["hair_length_m"] > 0
 
 
 def _run(subject: str, error_pct: float, lights: str) -> Run:

@@ -20,7 +20,10 @@ mod noise;
 mod rig;
 mod room;
 
-pub use appearance::{Appearance, BodyHeights, Light, LightSetup, SurfacePixel, UnderwearStyle, SKIN_TONES};
+pub use appearance::{
+    Appearance, BodyHeights, Light, LightSetup, Look, SurfacePixel, UnderwearStyle, LONG_HAIR_DOWN_M,
+    LONG_HAIR_HALF_WIDTH_M, SKIN_TONES,
+};
 pub use capture::{write_capture, CaptureCamera, ExtrinsicsCovariance, DEPTH_SCALE};
 pub use cast::SurfaceImage;
 pub use rig::{
@@ -373,6 +376,7 @@ pub fn scan(mesh: &TriMesh, rig: &Rig, condition: Condition, seed: u64) -> Resul
     cloud.colors =
         Some(cloud_labels.iter().map(|&l| Segment::from_id(l).unwrap_or(Segment::Unlabelled).color()).collect());
     cloud.labels = Some(cloud_labels);
-    let appearance = rig.room.as_ref().map(|_| (Appearance::from_seed(seed), BodyHeights::of(mesh, &labels)));
+    let appearance =
+        rig.room.as_ref().map(|_| (Appearance::from_seed_with(seed, &rig.look), BodyHeights::of(mesh, &labels)));
     Ok(Scan { condition, seed, cloud, views, appearance })
 }

@@ -5,9 +5,10 @@
 
 use bsv_capture::distance::surface_distances;
 use bsv_capture::scanner::{
-    scan, write_capture, Appearance, Condition, Rig, Room, RoomObject, ScanError, SurfaceKind, SKIN_TONES,
+    scan, write_capture, Appearance, BodyHeights, Condition, Look, Rig, Room, RoomObject, ScanError, SurfaceKind,
+    SurfacePixel, LONG_HAIR_DOWN_M, LONG_HAIR_HALF_WIDTH_M, SKIN_TONES,
 };
-use bsv_core::shapes;
+use bsv_core::{shapes, Segment};
 use std::collections::HashSet;
 
 fn kinds_seen(s: &bsv_capture::scanner::Scan, view: usize) -> HashSet<u8> {
@@ -139,4 +140,43 @@ fn bad_room_parameters_name_the_parameter_and_the_remedy() {
     let json: Room = serde_json::from_str(r#"{"back_wall_z": -3.0}"#).unwrap();
     assert_eq!(json, Room { back_wall_z: -3.0, ..Room::clinic() });
     assert!(serde_json::from_str::<Room>(r#"{"bak_wall_z": -3.0}"#).is_err());
+}
+
+#[test]
+fn long_hair_keeps_the_seeds_other_draws_and_hangs_over_the_upper_back() {
+    let long = Look { long_hair: true };
+    let mut seen_long = false;
+    for seed in 0..64 {
+        let plain = Appearance::from_seed(seed);
+        let with = Appearance::from_seed_with(seed, &long);
+        assert_eq!(plain.hair_down_m, 0.0);
+        assert_eq!(Appearance { hair_down_m: 0.0, ..with.clone() }, plain, "seed {seed}: other draws changed");
+        if plain.hair_length_m == 0.0 {
+            assert_eq!(with.hair_down_m, 0.0, "seed {seed}: a bald subject stays bald");
+        } else {
+            let (lo, hi) = LONG_HAIR_DOWN_M;
+            assert!((lo..=hi).contains(&with.hair_down_m), "seed {seed}: {}", with.hair_down_m);
+            seen_long = true;
+        }
+        assert_eq!(Appearance::from_seed_with(seed, &Look::default()), plain);
+    }
+    assert!(seen_long);
+    // A torso pixel on the upper back, seen by the back camera, is hair with long hair and skin without;
+    // the same pixel seen from the front, or beside the hair's width, is skin either way.
+    let seed = (0..64).find(|&s| Appearance::from_seed(s).hair_length_m > 0.0).unwrap();
+    let (plain, with) = (Appearance::from_seed(seed), Appearance::from_seed_with(seed, &long));
+    let heights = BodyHeights { crotch_y: 0.85, top_y: 1.75, head_x: 0.01 };
+    let px = |x: f64, nz: f64| SurfacePixel {
+        kind: SurfaceKind::Body,
+        label: Segment::Torso as u8,
+        point: [x, heights.top_y - 0.28, -0.1],
+        normal: [0.0, 0.0, nz],
+    };
+    let hair_top =
+        SurfacePixel { label: Segment::Head as u8, point: [0.0, heights.top_y - 0.01, -0.05], ..px(0.0, -1.0) };
+    assert_eq!(with.shade(&heights, &px(0.01, -1.0)), with.shade(&heights, &hair_top));
+    assert_ne!(plain.shade(&heights, &px(0.01, -1.0)), plain.shade(&heights, &hair_top));
+    assert_eq!(with.shade(&heights, &px(0.01, 1.0)), plain.shade(&heights, &px(0.01, 1.0)));
+    let beside = 0.01 + LONG_HAIR_HALF_WIDTH_M + 0.02;
+    assert_eq!(with.shade(&heights, &px(beside, -1.0)), plain.shade(&heights, &px(beside, -1.0)));
 }

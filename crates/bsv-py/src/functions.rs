@@ -6,7 +6,7 @@ use crate::convert::{
     planar_segments_from, points_from, triangles_from,
 };
 use crate::errors::{input_error, py_err};
-use bsv_capture::scanner::{self, Condition, Rig, Room};
+use bsv_capture::scanner::{self, Condition, Look, Rig, Room};
 use bsv_core::io::{self, PlyEncoding};
 use bsv_core::template::{template, TemplateKind};
 use bsv_core::TriMesh;
@@ -165,11 +165,21 @@ fn room_from(room: Option<&Bound<'_, PyAny>>, seed: u64) -> PyResult<Option<Room
     Ok(Some(room))
 }
 
+/// The looks asked for from the `look` argument: absent or `None`: none; a dict of `Look` keys.
+fn look_from(look: Option<&Bound<'_, PyAny>>) -> PyResult<Look> {
+    let Some(l) = look.filter(|l| !l.is_none()) else { return Ok(Look::default()) };
+    let Ok(d) = l.cast::<PyDict>() else {
+        return Err(input_error("look", None, "look must be None or a dict of Look keys (long_hair)".into()));
+    };
+    from_kwargs("look", d)
+}
+
 /// Virtual two-camera capture: the merged labelled cloud (the body's points only); optionally writes
-/// the capture files; `room` puts the rig in a room (see [`room_from`]).
+/// the capture files; `room` puts the rig in a room (see [`room_from`]), `look` asks for looks beyond the
+/// seed's (see [`look_from`]).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (vertices, faces, vertex_labels=None, face_labels=None, condition="noer", seed=0, images_dir=None, room=None))]
+#[pyo3(signature = (vertices, faces, vertex_labels=None, face_labels=None, condition="noer", seed=0, images_dir=None, room=None, look=None))]
 fn scan<'py>(
     py: Python<'py>,
     vertices: &Bound<'py, PyAny>,
@@ -180,11 +190,13 @@ fn scan<'py>(
     seed: u64,
     images_dir: Option<PathBuf>,
     room: Option<&Bound<'py, PyAny>>,
+    look: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let mesh = mesh_from(vertices, faces, vertex_labels, face_labels)?;
     let condition: Condition = condition.parse().map_err(py_err)?;
     let mut rig = Rig::paper_default();
     rig.room = room_from(room, seed)?;
+    rig.look = look_from(look)?;
     let s = py
         .detach(|| {
             let s = scanner::scan(&mesh, &rig, condition, seed)?;

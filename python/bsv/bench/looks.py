@@ -24,7 +24,7 @@ from .reference import ordered_conditions
 INFO_KEY = "look"
 #: The factors of a look, in table order, with their title.
 FACTORS: dict[str, str] = {"lights": "light set-up", "light_colour": "light colour", "skin": "skin tone",
-                           "underwear": "underwear"}
+                           "underwear": "underwear", "hair": "hair"}
 #: A skin albedo with at least this luminance (Rec. 709 Y of the sRGB values) is "lighter": the rig's four
 #: lighter tones (Y 150-228) against its three darker ones (Y 57-114).
 LIGHTER_SKIN_Y = 130.0
@@ -35,8 +35,11 @@ def look_of(appearance: Mapping[str, Any]) -> dict[str, str]:
     skin_y = float(np.dot(np.asarray(appearance["skin"], dtype=np.float64), [0.2126, 0.7152, 0.0722]))
     tint = np.asarray(appearance["tint"], dtype=np.float64)
     colour = "neutral" if np.allclose(tint, 1.0) else ("warm" if tint[2] < tint[0] else "cool")
+    hair = ("long" if float(appearance.get("hair_down_m", 0.0)) > 0.0 else
+            "short" if float(appearance.get("hair_length_m", 0.0)) > 0.0 else "none")
     return {"lights": str(appearance["light_setup"]), "light_colour": colour,
-            "skin": "lighter" if skin_y >= LIGHTER_SKIN_Y else "darker", "underwear": str(appearance["underwear_style"])}
+            "skin": "lighter" if skin_y >= LIGHTER_SKIN_Y else "darker", "underwear": str(appearance["underwear_style"]),
+            "hair": hair}
 
 
 def read_look(capture_dir: str | Path) -> dict[str, str] | None:

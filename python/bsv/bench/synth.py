@@ -83,6 +83,9 @@ class SynthConfig:
     room: bool | None = None
     #: With a room: a studio (:data:`STUDIO`), the room's appearance without its floor, walls or ceiling.
     studio: bool = False
+    #: With a room: every subject with hair wears it long, down over the neck and the upper back
+    #: (``--long-hair``; :func:`bsv.scan`'s ``look``).
+    long_hair: bool = False
     #: ``standard`` or ``hard`` (:data:`COHORTS`).
     cohort: str = "standard"
     #: In cali and l5ca, also refine each capture's calibration as a user would (``--refine-calibration``,
@@ -95,6 +98,10 @@ class SynthConfig:
         if not self.uses_room():
             return False
         return dict(STUDIO) if self.studio else True
+
+    def look_arg(self) -> dict[str, Any] | None:
+        """The ``look`` argument of :func:`bsv.scan` for this configuration."""
+        return {"long_hair": True} if self.long_hair and self.uses_room() else None
 
     def uses_room(self) -> bool:
         """Whether the scans render a room (:attr:`room`, or its default for the path)."""
@@ -145,14 +152,15 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
                       template: Mesh, methods: Iterable[str], segmentation: str = "oracle",
                       params: dict[str, Any] | None = None, truth_mesh: Mesh | None = None,
                       cloud_mode: str = "raw", room: bool | dict[str, Any] = False,
-                      cloud_params: dict[str, Any] | None = None,
+                      look: dict[str, Any] | None = None, cloud_params: dict[str, Any] | None = None,
                       truth_joints: dict[str, Any] | None = None, refine_calibration: bool = False,
                       sex: str | None = None) -> list[Run]:
     """Scan ``mesh`` in one condition, compute the floor if calibrated, register with every method.
 
     ``cloud_mode``: ``raw`` registers the scanner's cloud; ``lab`` (forced by camera segmentation) rebuilds
     it from the capture images like ``bsv process`` (its defaults, or ``cloud_params``).
-    ``room``: scan inside a clinic room, or the room given as a dict (:func:`bsv.scan`). The floor moves ``truth_mesh`` (default ``mesh``:
+    ``room``: scan inside a clinic room, or the room given as a dict (:func:`bsv.scan`); ``look``: looks
+    beyond the seed's (:func:`bsv.scan`). The floor moves ``truth_mesh`` (default ``mesh``:
     it must be closed and labelled like the truth); the cloud's far-point percentages are measured against it.
     ``truth_joints``: the rig's joint centres; with camera segmentation each run's ``info`` records the
     joint-centre errors (:mod:`bsv.bench.joints`).
@@ -175,15 +183,16 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
     lab = cloud_mode == "lab" or segmentation == "camera"
     need_files = condition in CALIBRATED or lab
     refined: Refined | None = None
-    look: dict[str, str] | None = None
+    drawn: dict[str, str] | None = None  # the look the rig drew (scan.json)
     landmark_warnings: list[str] | None = None
     sex_estimate: Any = None
     with tempfile.TemporaryDirectory(prefix="bsv-bench-") as tmp:
-        raw = scan(mesh, condition, seed, images=tmp if need_files else None, overwrite=True, room=room)
+        raw = scan(mesh, condition, seed, images=tmp if need_files else None, overwrite=True, room=room,
+                   look=look)
         if need_files and room:
             from .looks import read_look
 
-            look = read_look(tmp)
+            drawn = read_look(tmp)
         cams = read_camera_poses(tmp) if condition in CALIBRATED else None
         if cams is not None:
             floor = floor_volumes(mesh if truth_mesh is None else truth_mesh, cams)
@@ -264,10 +273,10 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
             run.info[WARNINGS_KEY] = landmark_warnings
         if sex_estimate is not None:
             run.info["sex"] = sex_estimate.to_json()
-        if look is not None:
+        if drawn is not None:
             from .looks import INFO_KEY as LOOK_KEY
 
-            run.info[LOOK_KEY] = look
+            run.info[LOOK_KEY] = drawn
         runs.append(run)
     return runs
 
@@ -421,7 +430,8 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] |
         try:
             runs += measure_condition(name, mesh, truth, cond, scan_seed(cfg.seed, index), template,
                                       cfg.methods, cfg.segmentation, cfg.params, cloud_mode=cfg.cloud,
-                                      room=cfg.room_arg(), cloud_params=cfg.cloud_params, truth_joints=truth_joints,
+                                      room=cfg.room_arg(), look=cfg.look_arg(), cloud_params=cfg.cloud_params,
+                                      truth_joints=truth_joints,
                                       refine_calibration=cfg.refine_calibration,
                                       sex=s.sex if cfg.template == SEX_TEMPLATE else None)
         except Exception as exc:  # a failed scan/floor is reported, the run goes on

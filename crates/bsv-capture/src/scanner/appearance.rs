@@ -74,6 +74,23 @@ pub struct Light {
     pub intensity: f64,
 }
 
+/// How far long hair hangs below the top of the head at the back, metres ([`Look::long_hair`]): from
+/// the shoulders' height to the shoulder blades'.
+pub const LONG_HAIR_DOWN_M: (f64, f64) = (0.30, 0.45);
+/// Half the width of long hair hanging over the neck and the upper back, metres (about a head's).
+pub const LONG_HAIR_HALF_WIDTH_M: f64 = 0.10;
+
+/// Looks a scan can be asked for beyond what [`Appearance::from_seed`] draws (a cohort widened to a
+/// failure class; every scan of a seed keeps its other draws). Default: none.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Look {
+    /// Long hair: a subject with hair hangs it down over the neck and the upper back, the back camera's
+    /// view (to [`LONG_HAIR_DOWN_M`] below the top of the head, drawn from the seed; a bald subject stays
+    /// bald).
+    pub long_hair: bool,
+}
+
 /// The look of a scan with a room.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Appearance {
@@ -90,6 +107,10 @@ pub struct Appearance {
     /// How far hair comes down from the top of the head, metres (0 = bald); at the back of the head
     /// it comes down 2.5 times as far.
     pub hair_length_m: f64,
+    /// Long hair ([`Look::long_hair`]): how far it hangs below the top of the head at the back, over the
+    /// head, the neck and the upper back, within [`LONG_HAIR_HALF_WIDTH_M`] of the head's middle; 0: not long.
+    #[serde(default)]
+    pub hair_down_m: f64,
     /// Floor albedo (sRGB).
     pub floor: [u8; 3],
     /// Floor tile size, metres.
@@ -147,6 +168,7 @@ impl Appearance {
             waist_rise_m,
             hair,
             hair_length_m,
+            hair_down_m: 0.0,
             floor,
             floor_tile_m: tile,
             wall,
@@ -158,6 +180,18 @@ impl Appearance {
     }
 }
 
+impl Appearance {
+    /// [`Appearance::from_seed`] with `look` on top: its other draws are the seed's as always.
+    pub fn from_seed_with(seed: u64, look: &Look) -> Appearance {
+        let mut a = Appearance::from_seed(seed);
+        if look.long_hair && a.hair_length_m > 0.0 {
+            let (lo, hi) = LONG_HAIR_DOWN_M;
+            a.hair_down_m = lo + (hi - lo) * hash01(seed as i64, 0x4A1);
+        }
+        a
+    }
+}
+
 /// Heights of a body that place underwear and hair.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct BodyHeights {
@@ -165,6 +199,10 @@ pub struct BodyHeights {
     pub crotch_y: f64,
     /// Height of the top of the head (the highest vertex), metres.
     pub top_y: f64,
+    /// x of the head's middle (the mean of its vertices; 0 without head vertices), metres: where long hair
+    /// hangs.
+    #[serde(default)]
+    pub head_x: f64,
 }
 
 impl BodyHeights {
@@ -183,7 +221,23 @@ impl BodyHeights {
             .flat_map(|(t, _)| t.iter().filter_map(|&i| mesh.vertices.get(i as usize).map(|p| p[1])))
             .fold(f64::INFINITY, f64::min);
         let crotch_y = if crotch.is_finite() { crotch } else { low_y + 0.47 * (top_y - low_y) };
-        BodyHeights { crotch_y, top_y }
+        let head = Segment::Head as u8;
+        let mut head_vertices = vec![false; mesh.vertices.len()];
+        for (t, _) in mesh.triangles.iter().zip(face_labels).filter(|(_, &l)| l == head) {
+            for &i in t {
+                if let Some(v) = head_vertices.get_mut(i as usize) {
+                    *v = true;
+                }
+            }
+        }
+        let (sum, n) = mesh
+            .vertices
+            .iter()
+            .zip(&head_vertices)
+            .filter(|(_, &h)| h)
+            .fold((0.0, 0usize), |(s, n), (p, _)| (s + p[0], n + 1));
+        let head_x = if n > 0 { sum / n as f64 } else { 0.0 };
+        BodyHeights { crotch_y, top_y, head_x }
     }
 }
 
@@ -206,9 +260,19 @@ fn hash01(a: i64, b: i64) -> f64 {
 }
 
 impl Appearance {
-    /// Albedo of a body pixel: hair on the top and back of the head, underwear over the pelvis, skin elsewhere.
+    /// Albedo of a body pixel: hair on the top and back of the head (long hair also down the neck and the
+    /// upper back), underwear over the pelvis, skin elsewhere.
     fn body_albedo(&self, heights: &BodyHeights, label: u8, p: [f64; 3], n: [f64; 3]) -> [f64; 3] {
         let y = p[1];
+        let hangs = label == Segment::Head as u8 || label == Segment::Torso as u8;
+        if self.hair_down_m > 0.0
+            && hangs
+            && n[2] < -0.2
+            && y > heights.top_y - self.hair_down_m
+            && (p[0] - heights.head_x).abs() < LONG_HAIR_HALF_WIDTH_M
+        {
+            return self.hair.map(f64::from);
+        }
         if label == Segment::Head as u8 && self.hair_length_m > 0.0 {
             let reach = if n[2] < -0.2 { 2.5 * self.hair_length_m } else { self.hair_length_m };
             if y > heights.top_y - reach {

@@ -10,6 +10,7 @@
 //! normal errors). Example: the back camera's 0.28 deg about the vertical (paper x) is a yaw about
 //! our camera Y axis.
 
+use super::appearance::Look;
 use super::room::Room;
 use super::ScanError;
 use crate::camera::{Extrinsics, Intrinsics};
@@ -239,6 +240,8 @@ pub struct Rig {
     pub noise: DepthNoise,
     /// The room around the subject; `None`: the body alone on an empty background.
     pub room: Option<Room>,
+    /// Looks asked for beyond the seed's (with a room: [`super::Look`]).
+    pub look: Look,
 }
 
 /// Image width of the portrait L515-like camera.
@@ -290,6 +293,7 @@ impl Rig {
             ],
             noise: DepthNoise::default(),
             room: None,
+            look: Look::default(),
         }
     }
 

@@ -559,3 +559,15 @@ def test_the_sex_template_follows_each_subject() -> None:
     assert not np.array_equal(female.vertices, load_template("default").vertices)
     with pytest.raises(BenchError, match="needs the subject's sex"):
         load_template("sex")
+
+
+def test_look_options_reach_the_scans() -> None:
+    from bsv.bench.main import parser, synth_config, synth_record
+
+    args = parser().parse_args(["synth", "--segmentation", "camera", "--long-hair", "--top"])
+    cfg = synth_config(args)
+    assert cfg.look_arg() == {"long_hair": True, "top": True}
+    assert synth_record(cfg, args)["long_hair"] is True and synth_record(cfg, args)["top"] is True
+    assert synth_config(parser().parse_args(["synth", "--segmentation", "camera"])).look_arg() is None
+    # without a room there is no look to draw
+    assert synth_config(parser().parse_args(["synth", "--long-hair", "--no-room"])).look_arg() is None

@@ -21,7 +21,7 @@ def test_a_room_scan_records_its_look_and_a_plain_one_does_not(tmp_path: Path) -
     bsv.scan(body, "noer", 3, images=tmp_path / "room", room=True)
     bsv.scan(body, "noer", 3, images=tmp_path / "plain")
     look = read_look(tmp_path / "room")
-    assert look is not None and set(look) == {"lights", "light_colour", "skin", "underwear", "hair"}
+    assert look is not None and set(look) == {"lights", "light_colour", "skin", "underwear", "hair", "top"}
     assert look["lights"] in {"key_front_left", "key_front_right", "overhead", "side"}
     assert read_look(tmp_path / "plain") is None
     assert read_look(tmp_path / "nowhere") is None
@@ -33,13 +33,14 @@ def test_a_room_scan_records_its_look_and_a_plain_one_does_not(tmp_path: Path) -
 def test_look_of_names_the_levels() -> None:
     rec = {"skin": [80, 52, 36], "tint": [1.0, 0.92, 0.78], "light_setup": "side", "underwear_style": "trunks"}
     assert look_of(rec) == {"lights": "side", "light_colour": "warm", "skin": "darker", "underwear": "trunks",
-                            "hair": "none"}
+                            "hair": "none", "top": "none"}
     rec = {"skin": [255, 224, 196], "tint": [0.88, 0.95, 1.05], "light_setup": "overhead", "underwear_style": "briefs"}
     assert look_of(rec)["light_colour"] == "cool" and look_of(rec)["skin"] == "lighter"
     rec["tint"] = [1.0, 1.0, 1.0]
     assert look_of(rec)["light_colour"] == "neutral"
     assert look_of(rec | {"hair_length_m": 0.06})["hair"] == "short"
     assert look_of(rec | {"hair_length_m": 0.06, "hair_down_m": 0.35})["hair"] == "long"
+    assert look_of(rec | {"top": True})["top"] == "top"
 
 
 def test_long_hair_is_drawn_on_the_back_view_only_when_asked(tmp_path: Path) -> None:
@@ -63,6 +64,11 @@ def test_long_hair_is_drawn_on_the_back_view_only_when_asked(tmp_path: Path) -> 
     assert rows.max() < pixels("long", "back").shape[0] * 0.45  # the upper body only
     with pytest.raises(bsv.InputError, match="look"):
         bsv.scan(body, "noer", seed, room=True, look={"long_hiar": True})
+    # A top changes both views' chests.
+    bsv.scan(body, "noer", seed, images=tmp_path / "top", room=True, look={"top": True})
+    assert read_look(tmp_path / "top")["top"] == "top"
+    for cam in ("front", "back"):
+        assert np.any(pixels("top", cam) != pixels(f"s{seed}", cam))
 
 
 def _has_hair(tmp_path: Path, body: Any, seed: int) -> bool:

@@ -22,7 +22,7 @@ mod room;
 
 pub use appearance::{
     Appearance, BodyHeights, Light, LightSetup, Look, SurfacePixel, UnderwearStyle, LONG_HAIR_DOWN_M,
-    LONG_HAIR_HALF_WIDTH_M, SKIN_TONES,
+    LONG_HAIR_HALF_WIDTH_M, SKIN_TONES, TOP_BAND,
 };
 pub use capture::{write_capture, CaptureCamera, ExtrinsicsCovariance, DEPTH_SCALE};
 pub use cast::SurfaceImage;

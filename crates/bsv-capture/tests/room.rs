@@ -6,7 +6,7 @@
 use bsv_capture::distance::surface_distances;
 use bsv_capture::scanner::{
     scan, write_capture, Appearance, BodyHeights, Condition, Look, Rig, Room, RoomObject, ScanError, SurfaceKind,
-    SurfacePixel, LONG_HAIR_DOWN_M, LONG_HAIR_HALF_WIDTH_M, SKIN_TONES,
+    SurfacePixel, LONG_HAIR_DOWN_M, LONG_HAIR_HALF_WIDTH_M, SKIN_TONES, TOP_BAND,
 };
 use bsv_core::{shapes, Segment};
 use std::collections::HashSet;
@@ -144,7 +144,7 @@ fn bad_room_parameters_name_the_parameter_and_the_remedy() {
 
 #[test]
 fn long_hair_keeps_the_seeds_other_draws_and_hangs_over_the_upper_back() {
-    let long = Look { long_hair: true };
+    let long = Look { long_hair: true, ..Look::default() };
     let mut seen_long = false;
     for seed in 0..64 {
         let plain = Appearance::from_seed(seed);
@@ -179,4 +179,38 @@ fn long_hair_keeps_the_seeds_other_draws_and_hangs_over_the_upper_back() {
     assert_eq!(with.shade(&heights, &px(0.01, 1.0)), plain.shade(&heights, &px(0.01, 1.0)));
     let beside = 0.01 + LONG_HAIR_HALF_WIDTH_M + 0.02;
     assert_eq!(with.shade(&heights, &px(beside, -1.0)), plain.shade(&heights, &px(beside, -1.0)));
+}
+
+#[test]
+fn a_top_covers_the_chest_front_and_back_in_the_underwears_colour() {
+    let seed = 5;
+    let plain = Appearance::from_seed(seed);
+    let with = Appearance::from_seed_with(seed, &Look { top: true, ..Look::default() });
+    assert!(with.top && !plain.top);
+    assert_eq!(Appearance { top: false, ..with.clone() }, plain);
+    let heights = BodyHeights { crotch_y: 0.85, top_y: 1.75, head_x: 0.0 };
+    let at = |t: f64, label: Segment, nz: f64| SurfacePixel {
+        kind: SurfaceKind::Body,
+        label: label as u8,
+        point: [0.05, heights.crotch_y + t * (heights.top_y - heights.crotch_y), 0.1 * nz],
+        normal: [0.0, 0.0, nz],
+    };
+    let mid = 0.5 * (TOP_BAND.0 + TOP_BAND.1);
+    // On the chest, front and back: the underwear's albedo, as on the pelvis; the arm beside it and the
+    // belly below it stay skin.
+    let pelvis = at(0.05, Segment::Torso, 1.0);
+    for nz in [1.0, -1.0] {
+        let chest = at(mid, Segment::Torso, nz);
+        assert_eq!(
+            with.shade(&heights, &chest),
+            with.shade(&heights, &SurfacePixel { normal: chest.normal, ..pelvis })
+        );
+        assert_ne!(plain.shade(&heights, &chest), with.shade(&heights, &chest));
+    }
+    assert_eq!(
+        with.shade(&heights, &at(mid, Segment::UpperArmL, 1.0)),
+        plain.shade(&heights, &at(mid, Segment::UpperArmL, 1.0))
+    );
+    let belly = at(TOP_BAND.0 - 0.05, Segment::Torso, 1.0);
+    assert_eq!(with.shade(&heights, &belly), plain.shade(&heights, &belly));
 }

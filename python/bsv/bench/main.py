@@ -86,6 +86,8 @@ def parser() -> argparse.ArgumentParser:
     s.add_argument("--long-hair", action="store_true",
                    help="with a room: every subject with hair wears it long, down over the neck and the upper "
                    "back (the back camera's view; compare with the same seed without it)")
+    s.add_argument("--top", action="store_true",
+                   help="with a room: every subject wears a top in the underwear's colour over the chest")
     s.add_argument("--refine-calibration", action="store_true",
                    help="in cali and l5ca, also refine each capture's calibration as a user would (the rig's "
                    "board view: bsv calibrate --depth; the floor: bsv process --refine-floor), register the "
@@ -136,7 +138,7 @@ def synth_config(args: argparse.Namespace) -> SynthConfig:
     return SynthConfig(n=args.n, seed=args.seed, conditions=args.conditions, segmentation=args.segmentation,
                        template=args.template, methods=_methods(args), params=dict(args.param),
                        local=not args.no_local, cloud=args.cloud, room=args.room, studio=args.studio,
-                       long_hair=args.long_hair,
+                       long_hair=args.long_hair, top=args.top,
                        cloud_params=dict(args.cloud_param), cohort=args.cohort,
                        refine_calibration=args.refine_calibration, arm_range=args.arm_down,
                        leg_range=args.hip_abduction, bmi_shift=args.bmi_shift)
@@ -148,7 +150,7 @@ def synth_record(cfg: SynthConfig, args: argparse.Namespace) -> dict[str, Any]:
     return {"n": cfg.n, "seed": cfg.seed, "conditions": ",".join(cfg.conditions),
             "segmentation": cfg.segmentation, "cloud": cfg.cloud,
             "room": ("studio" if cfg.studio else "clinic") if cfg.uses_room() else False,
-            "long_hair": cfg.long_hair and cfg.uses_room(),
+            "long_hair": cfg.long_hair and cfg.uses_room(), "top": cfg.top and cfg.uses_room(),
             "cloud_params": cfg.cloud_params, "template": cfg.template, "methods": ",".join(cfg.methods),
             "params": cfg.params, "local_modifiers": cfg.local, "jobs": args.jobs,
             "cohort": cfg.cohort, "arm_down_deg": list(cfg.arm_range),

@@ -86,6 +86,8 @@ class SynthConfig:
     #: With a room: every subject with hair wears it long, down over the neck and the upper back
     #: (``--long-hair``; :func:`bsv.scan`'s ``look``).
     long_hair: bool = False
+    #: With a room: every subject wears a top in the underwear's colour over the chest (``--top``).
+    top: bool = False
     #: ``standard`` or ``hard`` (:data:`COHORTS`).
     cohort: str = "standard"
     #: In cali and l5ca, also refine each capture's calibration as a user would (``--refine-calibration``,
@@ -101,7 +103,8 @@ class SynthConfig:
 
     def look_arg(self) -> dict[str, Any] | None:
         """The ``look`` argument of :func:`bsv.scan` for this configuration."""
-        return {"long_hair": True} if self.long_hair and self.uses_room() else None
+        look = {k: True for k, on in (("long_hair", self.long_hair), ("top", self.top)) if on}
+        return look if look and self.uses_room() else None
 
     def uses_room(self) -> bool:
         """Whether the scans render a room (:attr:`room`, or its default for the path)."""

@@ -80,6 +80,10 @@ pub const LONG_HAIR_DOWN_M: (f64, f64) = (0.30, 0.45);
 /// Half the width of long hair hanging over the neck and the upper back, metres (about a head's).
 pub const LONG_HAIR_HALF_WIDTH_M: f64 = 0.10;
 
+/// The band a top ([`Look::top`]) covers on the torso, as fractions of the height from the crotch to the
+/// top of the head: from below the bust to above it (a sports top or a bra's band and cups).
+pub const TOP_BAND: (f64, f64) = (0.38, 0.56);
+
 /// Looks a scan can be asked for beyond what [`Appearance::from_seed`] draws (a cohort widened to a
 /// failure class; every scan of a seed keeps its other draws). Default: none.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -89,6 +93,8 @@ pub struct Look {
     /// view (to [`LONG_HAIR_DOWN_M`] below the top of the head, drawn from the seed; a bald subject stays
     /// bald).
     pub long_hair: bool,
+    /// A top in the underwear's colour over the chest ([`TOP_BAND`] of the torso), front and back.
+    pub top: bool,
 }
 
 /// The look of a scan with a room.
@@ -111,6 +117,9 @@ pub struct Appearance {
     /// head, the neck and the upper back, within [`LONG_HAIR_HALF_WIDTH_M`] of the head's middle; 0: not long.
     #[serde(default)]
     pub hair_down_m: f64,
+    /// A top in the underwear's colour over the chest ([`Look::top`]).
+    #[serde(default)]
+    pub top: bool,
     /// Floor albedo (sRGB).
     pub floor: [u8; 3],
     /// Floor tile size, metres.
@@ -169,6 +178,7 @@ impl Appearance {
             hair,
             hair_length_m,
             hair_down_m: 0.0,
+            top: false,
             floor,
             floor_tile_m: tile,
             wall,
@@ -188,6 +198,7 @@ impl Appearance {
             let (lo, hi) = LONG_HAIR_DOWN_M;
             a.hair_down_m = lo + (hi - lo) * hash01(seed as i64, 0x4A1);
         }
+        a.top = look.top;
         a
     }
 }
@@ -261,7 +272,7 @@ fn hash01(a: i64, b: i64) -> f64 {
 
 impl Appearance {
     /// Albedo of a body pixel: hair on the top and back of the head (long hair also down the neck and the
-    /// upper back), underwear over the pelvis, skin elsewhere.
+    /// upper back), underwear over the pelvis (and with a top over the chest), skin elsewhere.
     fn body_albedo(&self, heights: &BodyHeights, label: u8, p: [f64; 3], n: [f64; 3]) -> [f64; 3] {
         let y = p[1];
         let hangs = label == Segment::Head as u8 || label == Segment::Torso as u8;
@@ -286,6 +297,12 @@ impl Appearance {
         };
         if pelvis.contains(&label) && y >= heights.crotch_y - drop && y <= heights.crotch_y + self.waist_rise_m {
             return self.underwear.map(f64::from);
+        }
+        if self.top && label == Segment::Torso as u8 {
+            let t = (y - heights.crotch_y) / (heights.top_y - heights.crotch_y);
+            if (TOP_BAND.0..=TOP_BAND.1).contains(&t) {
+                return self.underwear.map(f64::from);
+            }
         }
         self.skin.map(f64::from)
     }

@@ -47,27 +47,32 @@ def _writer(url: str, prefix: str, acked: list[str], stop: threading.Event) -> N
 def test_kill9_during_writes_keeps_the_database_whole(tmp_path: Path, kill_in: str) -> None:
     data = tmp_path / "data"
     server = Server(data).start()
-    c, tok = _client(server.url)
-    r = c.post("/subjects", data={"csrf_token": tok, "code": "JOB-1", "sex": "female"})
-    sid = int(r.headers["location"].rsplit("/", 1)[1])
-    r = c.post(f"/subjects/{sid}/captures", data={"csrf_token": tok, "source": "virtual", "segmentation": "oracle"})
-    job = int(r.headers["location"].rsplit("/", 1)[1])
     acked: list[str] = []
     stop = threading.Event()
-    threads = [threading.Thread(target=_writer, args=(server.url, f"W{k}", acked, stop)) for k in range(4)]
-    for t in threads:
-        t.start()
-    t0 = time.monotonic()
-    while c.get(f"/api/jobs/{job}").json()["state"] != kill_in and time.monotonic() - t0 < 120:
-        time.sleep(0.1)
-    time.sleep(0.5)
-    state_before = c.get(f"/api/jobs/{job}").json()["state"]
-    assert state_before == kill_in
-    print(f"\nkilled while the job was {state_before}: {len(acked)} subjects acknowledged")
-    server.kill9()
-    stop.set()
-    for t in threads:
-        t.join(15)
+    threads = [threading.Thread(target=_writer, args=(server.url, f"W{k}", acked, stop), daemon=True)
+               for k in range(4)]
+    try:
+        c, tok = _client(server.url)
+        r = c.post("/subjects", data={"csrf_token": tok, "code": "JOB-1", "sex": "female"})
+        sid = int(r.headers["location"].rsplit("/", 1)[1])
+        r = c.post(f"/subjects/{sid}/captures", data={"csrf_token": tok, "source": "virtual", "segmentation": "oracle"})
+        job = int(r.headers["location"].rsplit("/", 1)[1])
+        for t in threads:
+            t.start()
+        t0 = time.monotonic()
+        while c.get(f"/api/jobs/{job}").json()["state"] != kill_in and time.monotonic() - t0 < 120:
+            time.sleep(0.1)
+        time.sleep(0.5)
+        state_before = c.get(f"/api/jobs/{job}").json()["state"]
+        assert state_before == kill_in
+        print(f"\nkilled while the job was {state_before}: {len(acked)} subjects acknowledged")
+        server.kill9()
+    finally:  # a failure above must not leave the station and its writers running (pytest would wait for them)
+        stop.set()
+        server.stop()
+        for t in threads:
+            if t.is_alive():
+                t.join(15)
     time.sleep(1.0)  # the worker notices its parent is gone and exits
     db = data / "station.sqlite3"
     with sqlite3.connect(db) as conn:

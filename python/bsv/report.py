@@ -528,7 +528,7 @@ summary{cursor:pointer;font-weight:bold}
 @page{size:A4;margin:14mm}"""
 
 
-#: A 1-pixel PNG and JPEG (white): the image decoders a report's layout uses.
+#: A white 1-pixel PNG (base64) for :func:`warm_up_document`, beside a JPEG it encodes: the decoders a layout uses.
 _PIXEL_PNG = ("iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAIAAACQd1PeAAAADElEQVR4nGP4//8/AAX+Av4N70a4AAAAAElFTkSuQmCC")
 
 

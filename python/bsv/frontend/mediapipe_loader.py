@@ -35,7 +35,7 @@ DEFERRED: dict[str, str] = {
 }
 
 #: Parent packages of :data:`DEFERRED` that the import of ``mediapipe`` would import only on the way to a
-#: deferred module (:func:`_defer_drawing` imports them itself), with their ``__init__.py``.
+#: deferred module (:func:`_defer_unused` imports them itself), with their ``__init__.py``.
 EMPTY_PARENTS: dict[str, str] = {"mediapipe.tasks": "tasks/__init__.py"}
 
 _LOAD_LOCK = threading.Lock()
@@ -82,11 +82,11 @@ def _stand_in(name: str, path: Path) -> ModuleType:
         mod.__package__ = name
 
     def __getattr__(attr: str) -> Any:  # PEP 562's module __getattr__
-        if attr == "__path__":  # the import system asking whether it is a package: it is not
-            raise AttributeError(attr)
+        if attr == "__path__":  # the import system asking whether a module is a package (a package's
+            raise AttributeError(attr)  # stand-in has its own __path__)
         return getattr(_load_real(name, path), attr)
 
-    def __dir__() -> list[str]:  # PEP 562's module __getattr__
+    def __dir__() -> list[str]:  # PEP 562's module __dir__
         return dir(_load_real(name, path))
 
     mod.__getattr__ = __getattr__  # type: ignore[method-assign]
@@ -95,9 +95,9 @@ def _stand_in(name: str, path: Path) -> ModuleType:
     return mod
 
 
-def _defer_drawing() -> dict[str, ModuleType]:
-    """Puts the stand-ins of :data:`DEFERRED` in ``sys.modules`` when mediapipe is not imported yet and its
-    wheel has the files; returns them (empty otherwise)."""
+def _defer_unused() -> dict[str, ModuleType]:
+    """Puts the stand-ins of :data:`DEFERRED` and the packages of :data:`EMPTY_PARENTS` in ``sys.modules`` when
+    mediapipe is not imported yet and its wheel has the files; returns them (empty otherwise)."""
     if "mediapipe" in sys.modules:
         return {}
     try:
@@ -128,7 +128,7 @@ def _defer_drawing() -> dict[str, ModuleType]:
 
 def _empty_package(name: str, init: Path) -> ModuleType | None:
     """Package ``name`` from its ``__init__.py``, imported when that file imports nothing (the parent of a
-    stand-in, see :func:`_defer_drawing`); None otherwise."""
+    stand-in, see :func:`_defer_unused`); None otherwise."""
     import ast
 
     try:
@@ -149,9 +149,9 @@ def _empty_package(name: str, init: Path) -> ModuleType | None:
 
 
 def holistic() -> ModuleType:
-    """``mediapipe.python.solutions.holistic``, imported with the drawing helpers deferred (module doc).
-    ImportError as the plain import raises it."""
-    stand_ins = _defer_drawing()
+    """``mediapipe.python.solutions.holistic``, imported with the drawing helpers and the Tasks API deferred
+    (module doc). ImportError as the plain import raises it."""
+    stand_ins = _defer_unused()
     try:
         module = importlib.import_module(HOLISTIC_MODULE)
     except BaseException:

@@ -1,31 +1,40 @@
-"""report.pdf: the report's HTML laid out by WeasyPrint, in this process or in a worker process.
+"""report.pdf: the report's HTML laid out by WeasyPrint, in this process or in a worker process that also
+draws the report's figures.
 
-WeasyPrint costs a fresh process about 0.8 s of one core to import (cffi loads pango and its companions,
-asking ``ldconfig`` about each library name it tries) and 0.5-0.7 s to lay the report out. A fresh
-``bsv process`` keeps one core busy (GIL-bound imports, MediaPipe, the registration) and leaves the other
-mostly idle, so :class:`PdfRenderer` starts ``python -m bsv.pdf`` (:func:`main`) first thing: it imports
-WeasyPrint while the capture is segmented and registered, then reads the report's HTML on its standard
-input and writes the PDF on its standard output.
+WeasyPrint costs a fresh process about 0.4 s of one core to import (cffi loads pango and its companions,
+their names looked up in the linker's cache: :func:`_import_renderer`) and 0.3-0.6 s to lay the report out;
+matplotlib 0.3-0.5 s to import and 0.3 s to draw the figures. A fresh ``bsv process`` keeps one core busy
+(GIL-bound imports, MediaPipe, the registration) and leaves the other mostly idle, so :class:`PdfRenderer`
+starts ``python -m bsv.pdf`` (:func:`main`) first thing: it imports WeasyPrint and matplotlib while the
+capture is segmented and registered, then reads the report on its standard input (a
+:class:`bsv.report.ReportJob`: the documents with their figures still to draw), draws the figures, lays
+report.pdf out and writes report.html's document and the PDF on its standard output (pickled: the two
+processes are parent and child). The process that runs MediaPipe never imports matplotlib.
 
 A process's later reports (a station, a batch worker, a notebook: WeasyPrint is loaded once and kept),
 a process that has loaded WeasyPrint already or a machine with one core render in this process: :func:`render_pdf`, the function the worker
 runs. A worker that cannot start or dies is replaced by this process: the report is never lost to it.
 """
-
 from __future__ import annotations
 
 import contextlib
+import functools
 import importlib.util
 import os
+import pickle
 import subprocess
 import sys
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 from types import TracebackType
-from typing import IO, NoReturn, Self
+from typing import IO, TYPE_CHECKING, NoReturn, Self
 
 from .errors import BsvError, ReportError
 from .extras import require
+
+if TYPE_CHECKING:
+    from .report import ReportJob
 
 #: The module that renders the PDF (its extra: ``frontend``).
 RENDERER_MODULE = "weasyprint"
@@ -37,12 +46,49 @@ WARM_UP_DOC = ('<html><head><style>body{font-family:system-ui,sans-serif}</style
 WORKER_ERROR_EXIT = 3
 
 
+@contextlib.contextmanager
+def _libraries_from_ldconfig() -> Iterator[None]:
+    """While the block runs, ``ctypes.util.find_library`` answers from the dynamic linker's cache alone
+    (``ldconfig -p``, each name once). WeasyPrint's import tries up to six names for each of its seven C
+    libraries through cffi, which asks ``find_library`` about every name it cannot open directly; for a
+    name the cache lacks, ``find_library`` then runs ``gcc`` and ``ld`` too: 0.1-0.15 s of a core in child
+    processes and 0.15 s of waiting, while MediaPipe loads on the same two cores. Elsewhere than on Linux
+    (no ldconfig lookup in ``ctypes.util``) nothing changes."""
+    import ctypes.util
+
+    from_cache = getattr(ctypes.util, "_findSoname_ldconfig", None)
+    if from_cache is None or not sys.platform.startswith("linux"):
+        yield
+        return
+    original = ctypes.util.find_library
+    ctypes.util.find_library = functools.lru_cache(maxsize=None)(from_cache)
+    try:
+        yield
+    finally:
+        ctypes.util.find_library = original
+
+
+def _import_renderer() -> None:
+    """Imports WeasyPrint (:data:`RENDERER_MODULE`), its C libraries looked up in the linker's cache first
+    (:func:`_libraries_from_ldconfig`); if that fails to find them (a library only on ``LD_LIBRARY_PATH``,
+    say), the import is tried again with the usual lookup, whose error is the one raised."""
+    if sys.modules.get(RENDERER_MODULE) is not None:
+        return
+    try:
+        with _libraries_from_ldconfig():
+            require(RENDERER_MODULE)
+        return
+    except OSError:
+        pass
+    require(RENDERER_MODULE)
+
+
 def require_pdf() -> None:
     """Checks that report.pdf can be made (``bsv process`` calls it before any work): without WeasyPrint a
     :class:`bsv.errors.MissingExtraError` naming the ``frontend`` extra; without Debian's pango (WeasyPrint
     fails to load it) a :class:`bsv.errors.ReportError` naming the packages to install."""
     try:
-        require(RENDERER_MODULE)
+        _import_renderer()
     except OSError as exc:
         raise ReportError(f"report.pdf needs Debian's pango for WeasyPrint ({exc}); install it with "
                           "`apt-get install libpango-1.0-0 libpangoft2-1.0-0`") from exc
@@ -112,19 +158,42 @@ def _reap(proc: subprocess.Popen[bytes]) -> None:
     proc.wait()
 
 
+def _render(doc: str | ReportJob) -> tuple[str | None, bytes]:
+    """(report.html's document, the PDF) of a :class:`bsv.report.ReportJob`, its figures drawn in this
+    process; (None, the PDF) of an HTML document."""
+    if isinstance(doc, str):
+        return None, render_pdf(doc)
+    docs = doc.documents()
+    return docs.get("html"), render_pdf(docs["pdf"])
+
+
+def _unpickled_output(data: bytes) -> tuple[str | None, bytes] | None:
+    """The worker's output (:func:`main`): (report.html's document or None, a PDF), or None when ``data`` is
+    not that (a worker that was killed mid-way)."""
+    try:
+        out = pickle.loads(data)
+    except Exception:  # truncated or empty: the worker did not finish
+        return None
+    ok = (isinstance(out, tuple) and len(out) == 2 and (out[0] is None or isinstance(out[0], str))
+          and isinstance(out[1], bytes) and out[1].startswith(b"%PDF-"))
+    return out if ok else None
+
+
 class PdfRenderer:
     """Renders report.pdf, loading WeasyPrint as early as possible (module doc).
 
     ``worker``: True a worker process, False this process, None (the default) a worker when
     :func:`worker_pays`. Use it as a context manager (or :meth:`start` and :meth:`close`): :meth:`start`
     names a missing ``frontend`` extra at once and starts loading WeasyPrint; :meth:`check` raises the
-    worker's error (pango missing) once known, without waiting; :meth:`submit` hands it the report's HTML and
-    :meth:`result` returns the PDF (one document per renderer)."""
+    worker's error (pango missing) once known, without waiting; :meth:`submit` hands it the report's HTML or
+    a :class:`bsv.report.ReportJob` and :meth:`result` returns the PDF (:meth:`report`: with a job's
+    report.html; one document per renderer)."""
 
     def __init__(self, worker: bool | None = None) -> None:
         self.worker = worker_pays() if worker is None else worker
         self._proc: subprocess.Popen[bytes] | None = None
-        self._doc: str | None = None
+        self._doc: str | ReportJob | None = None
+        self._done: tuple[str | None, bytes] | None = None
         self._err: IO[bytes] | None = None
 
     def start(self) -> Self:
@@ -155,15 +224,17 @@ class PdfRenderer:
             _reap(proc)
             self._failed(proc.returncode, self._stderr())
 
-    def submit(self, doc: str) -> None:
-        """Starts laying out ``doc`` (a report's HTML): the worker reads it and works while this process goes
-        on; :meth:`result` returns the PDF. Without a worker, :meth:`result` lays it out here."""
+    def submit(self, doc: str | ReportJob) -> None:
+        """Starts laying out ``doc``: a report's HTML, or a :class:`bsv.report.ReportJob` (the report with its
+        figures still to draw: the worker draws them, then lays report.pdf out). The worker reads it and works
+        while this process goes on; :meth:`result` returns the PDF (:meth:`report`, a job's report.html too).
+        Without a worker, :meth:`result` does the work here."""
         if self._doc is not None:
             raise RuntimeError("PdfRenderer.submit: one document per renderer, and one was submitted")
         self._doc = doc
         if self._proc is not None and self._proc.stdin is not None:
-            try:
-                self._proc.stdin.write(doc.encode("utf-8"))  # the worker is waiting: it reads it all at once
+            try:  # the worker is waiting: it reads it all at once
+                self._proc.stdin.write(pickle.dumps(doc, protocol=pickle.HIGHEST_PROTOCOL))
             except OSError:  # the worker died: result() says why or renders here
                 pass
             finally:
@@ -172,19 +243,29 @@ class PdfRenderer:
 
     def result(self) -> bytes:
         """The PDF of the submitted document (:func:`render_pdf`), from the worker if one was started."""
+        return self.report()[1]
+
+    def report(self) -> tuple[str | None, bytes]:
+        """(report.html's document with its figures, the PDF) of a submitted :class:`bsv.report.ReportJob`;
+        (None, the PDF) of a submitted HTML document. From the worker if one was started; a worker that died
+        is replaced by this process (the figures drawn here then)."""
         doc, proc = self._doc, self._proc
         if doc is None:
             raise RuntimeError("PdfRenderer.result: submit a document first")
-        if proc is None:
-            return render_pdf(doc)
-        pdf = proc.stdout.read() if proc.stdout is not None else b""  # an interruption: close() reaps it
-        _reap(proc)
-        self._proc = None
-        if proc.returncode == 0 and pdf.startswith(b"%PDF-"):
-            self._stderr()
-            return pdf
-        self._failed(proc.returncode, self._stderr())
-        return render_pdf(doc)  # killed, or something else than a PDF on its stdout
+        if self._done is not None:
+            return self._done
+        if proc is not None:
+            data = proc.stdout.read() if proc.stdout is not None else b""  # an interruption: close() reaps it
+            _reap(proc)
+            self._proc = None
+            done = _unpickled_output(data) if proc.returncode == 0 else None
+            if done is not None:
+                self._stderr()
+                self._done = done
+                return done
+            self._failed(proc.returncode, self._stderr())
+        self._done = _render(doc)  # no worker, or it was killed or wrote something else than its output
+        return self._done
 
     def render(self, doc: str) -> bytes:
         """:meth:`submit` then :meth:`result`: the PDF of ``doc``."""
@@ -226,8 +307,10 @@ class PdfRenderer:
 
 def main() -> int:
     """The worker (``python -m bsv.pdf``): loads WeasyPrint, lays out a document shaped like the report
-    (:func:`_warm_up_document`), reads a report's HTML (UTF-8) on stdin until its end, writes the PDF on
-    stdout. A BSV error (pango missing, a failed layout) is printed on stderr with exit code
+    (:func:`_warm_up_document`), loads what the figures need (:func:`_warm_up_figures`), reads what
+    :meth:`PdfRenderer.submit` sent on stdin until its end (a report's HTML, or a
+    :class:`bsv.report.ReportJob` whose figures it draws), writes (report.html's document or None, the PDF)
+    on stdout. A BSV error (pango missing, a failed layout) is printed on stderr with exit code
     :data:`WORKER_ERROR_EXIT`."""
     out = os.fdopen(os.dup(1), "wb")  # the PDF's channel; whatever else writes to stdout goes to stderr
     os.dup2(2, 1)
@@ -236,13 +319,14 @@ def main() -> int:
         require_pdf()
         with contextlib.suppress(BsvError):  # only a warm-up: the report's own layout says what fails
             render_pdf(_warm_up_document())  # fonts, styles, image decoders: ready before the report
-        doc = sys.stdin.buffer.read().decode("utf-8")
-        pdf = render_pdf(doc)
+        _warm_up_figures()
+        doc = pickle.loads(sys.stdin.buffer.read())  # from PdfRenderer.submit: this process's parent
+        done = _render(doc)
     except BsvError as exc:
         sys.stderr.write(f"{exc}\n")
         return WORKER_ERROR_EXIT
     with out:
-        out.write(pdf)
+        out.write(pickle.dumps(done, protocol=pickle.HIGHEST_PROTOCOL))
     return 0
 
 
@@ -255,6 +339,16 @@ def _warm_up_document() -> str:
         return warm_up_document()
     except Exception:  # a warm-up: the plain document warms most of it
         return WARM_UP_DOC
+
+
+def _warm_up_figures() -> None:
+    """Loads what the report's figures need (:func:`bsv.report.prepare_figures`: matplotlib, fonts, the
+    image encoders) while the worker waits; nothing when the report module cannot be imported here (the
+    job then says why)."""
+    with contextlib.suppress(Exception):
+        from .report import prepare_figures
+
+        prepare_figures()
 
 
 def _exit_now(status: int) -> NoReturn:

@@ -32,7 +32,7 @@ import numpy as np
 from . import _bsv
 from .argtypes import real, whole
 from .argtypes import seed as seed_type
-from .errors import BsipError, InputError, OutputExistsError, PersonIsolationError
+from .errors import BsipError, InputError, OutputExistsError, PersonIsolationError, ReportError
 from .extras import require
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
 from .frontend.sex import SEX_SCORES, template_gender
@@ -509,12 +509,13 @@ def process(
     # this one and the capture is read (the worker first: MediaPipe's thread redirects stderr while it runs).
     steps = _Steps(progress)
     pdf_renderer = PdfRenderer()
-    warm = (warming_up(then=prepare_figures, **(segment_params or {})) if segmentation == "camera"
-            else contextlib.nullcontext())
     with contextlib.closing(pdf_renderer), contextlib.ExitStack() as stack:
-        steps.run("prepare", "starting the PDF renderer (report.pdf) in a worker process" if pdf_renderer.worker
+        steps.run("prepare", "starting the report's worker process (figures, report.pdf)" if pdf_renderer.worker
                   else "loading the PDF renderer (report.pdf)", pdf_renderer.start)
-        stack.enter_context(warm)
+        # the figures are drawn by the worker; without one, what they need loads while MediaPipe detects
+        then = None if pdf_renderer.worker else prepare_figures
+        if segmentation == "camera":
+            stack.enter_context(warming_up(then=then, **(segment_params or {})))
 
         def read_all() -> dict[str, dict[str, Any]]:
             return {cam: read_capture(d) for cam, d in dirs.items()}
@@ -641,9 +642,9 @@ def process(
                                bsip=inertial, joints=joints, warnings=vols["warnings"])
         if truth is not None:
             result.comparison = compare(vols, truth)
-        # report.html and volumes.csv; report.pdf's document goes to the PDF renderer (a worker process lays
-        # it out while this one writes the other files).
-        rendered = steps.run("report", "drawing the report (report.html, volumes.csv, report.pdf's figures)",
+        # volumes.csv here; the report (its documents, the figures to draw) goes to the PDF renderer, whose
+        # worker process draws the figures and lays report.pdf out while this one writes the other files.
+        rendered = steps.run("report", "composing the report (volumes.csv, report.html and report.pdf's documents)",
                              lambda: render_report(result, out, title=title, pdf_renderer=pdf_renderer,
                                                    segmentations={c: s.labels for c, s in seg_files.items()
                                                                   if s is not None}))
@@ -652,11 +653,16 @@ def process(
             with staged_outputs(out, overwrite) as stage:
                 write_all(stage)
                 write_rendered({k: (stage / p.name, data) for k, (p, data) in rendered.items()})
-                (stage / "report.pdf").write_bytes(pdf_renderer.result())
-            files.update({k: out / p.name for k, (p, _) in rendered.items()}, report_pdf=out / "report.pdf")
+                report_html, report_pdf = pdf_renderer.report()
+                if report_html is None:  # a ReportJob always brings report.html's document back
+                    raise ReportError("report.html was not rendered with report.pdf")
+                write_rendered({"report": (stage / "report.html", report_html.encode("utf-8"))})
+                (stage / "report.pdf").write_bytes(report_pdf)
+            files.update({k: out / p.name for k, (p, _) in rendered.items()}, report=out / "report.html",
+                         report_pdf=out / "report.pdf", volumes_csv=out / "volumes.csv")
 
         steps.run("write", "writing the segmentation, cloud.ply, fitted.ply, volumes.json and the report "
-                  "(report.pdf laid out meanwhile)", write_everything)
+                  "(its figures drawn and report.pdf laid out meanwhile)", write_everything)
         result.timings["total"] = steps.total()
         if progress:
             print(f"[bsv] done in {result.timings['total']:.1f} s: {out}", flush=True)

@@ -10,9 +10,11 @@ segments when known (a synthetic subject), proportions, left/right asymmetry ("n
 symmetric" when the interval holds 0), landmark and calibration warnings; the technical details (cloud
 cleaning per camera, registration figures and parameters, timings) are folded away in ``<details>`` in
 report.html and left out of report.pdf, the copy to print (:data:`TECHNICAL_IN_PDF`).
-Every file is rendered before any is written (``bsv process`` lays report.pdf out in a worker while it
-writes the others into a staging folder, :mod:`bsv.staging`), and each is written atomically. The figures are drawn once
-for both files; report.pdf embeds the shaded renders as JPEG, which WeasyPrint takes as they are.
+Every file is rendered before any is written, and each is written atomically. The documents are composed
+first with their figures still to draw (:class:`ReportJob`); the figures are then drawn once for both files
+(``bsv process``: by the PDF worker, which lays report.pdf out, while this process writes the other files
+into a staging folder, :mod:`bsv.staging`); report.pdf embeds the shaded renders as JPEG, which WeasyPrint
+takes as they are.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import html
 import io
 import math
 import os
+import re
 import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -191,10 +194,10 @@ def _new_figure(width: float, height: float) -> Any:
 def prepare_figures() -> bool:
     """Loads what the first figure needs (matplotlib's figure, Agg canvas, collections and font cache, one
     font, Pillow's PNG and JPEG encoders) by drawing a small chart with a title and encoding it. About half a
-    second of a fresh process: ``bsv process`` runs it on a background thread while MediaPipe detects and
-    the template is registered (threads of native code that let Python run), not after the registration.
-    Returns whether it all went through; errors are left to the report, which draws the same things and
-    reports them."""
+    second of a fresh process: the PDF worker of ``bsv process`` runs it while it waits for the report
+    (:func:`bsv.pdf.main`); without a worker, ``bsv process`` runs it on a background thread while MediaPipe
+    detects (native code that lets Python run), not after the registration. Returns whether it all went
+    through; errors are left to the report, which draws the same things and reports them."""
     try:
         fig = _new_figure(1.0, 1.0)
         ax = fig.add_subplot()
@@ -242,29 +245,40 @@ def _data_uri(data: bytes, mime: str = "image/png") -> str:
     return f"data:{mime};base64," + base64.b64encode(data).decode("ascii")
 
 
-def _body_figure(mesh: Any, labels: np.ndarray, view: str) -> _Image:
+def _body_figure(vertices: np.ndarray, faces: np.ndarray, labels: np.ndarray, view: str) -> _Image:
+    """The segmented fitted mesh seen from ``view`` (a shaded render: JPEG in report.pdf)."""
     fig = _new_figure(3.0, 5.0)
     ax = fig.add_subplot()
-    render_mesh(ax, mesh.vertices, mesh.faces, labels, view)
+    render_mesh(ax, vertices, faces, labels, view)
     fig.subplots_adjust(bottom=0.01, top=0.99, left=0.01, right=0.99)
     return _image(fig, shaded=True)
 
 
-def _cloud_figure(mesh: Any, labels: np.ndarray, cloud: Any, max_points: int = 25_000) -> _Image:
-    """The measured points (segment colours) over the fitted mesh (grey), front and left side. The points
-    are one-pixel marks at half opacity, one batch per segment (a scatter of 25,000 markers cost 0.15 s a
-    view; these look alike)."""
+#: The most measured points the cloud figure shows (a fixed random subset of a larger cloud).
+CLOUD_FIGURE_POINTS = 25_000
+
+
+def _cloud_sample(cloud: Any, max_points: int = CLOUD_FIGURE_POINTS) -> tuple[np.ndarray, np.ndarray]:
+    """The points the cloud figure shows and their segment ids (0-14): all of them, or ``max_points`` drawn
+    with a fixed seed (the same figure for the same cloud)."""
     pts = np.asarray(cloud.points)
     lab = np.zeros(len(pts), dtype=np.uint8) if cloud.labels is None else np.asarray(cloud.labels)
     if len(pts) > max_points:
         sel = np.random.default_rng(0).choice(len(pts), max_points, replace=False)
         pts, lab = pts[sel], lab[sel]
-    lab = np.clip(lab, 0, 14)
+    return np.ascontiguousarray(pts, dtype=np.float64), np.clip(lab, 0, 14).astype(np.uint8)
+
+
+def _cloud_figure(vertices: np.ndarray, faces: np.ndarray, labels: np.ndarray, pts: np.ndarray,
+                  lab: np.ndarray) -> _Image:
+    """The measured points ``pts`` (segment colours ``lab``, :func:`_cloud_sample`) over the fitted mesh
+    (grey), front and left side. The points are one-pixel marks at half opacity, one batch per segment (a
+    scatter of 25,000 markers cost 0.15 s a view; these look alike)."""
     pal = rgb01()
     fig = _new_figure(5.6, 5.0)
     axes = fig.subplots(1, 2)
     for ax, view in zip(axes, ("front", "side"), strict=True):
-        render_mesh(ax, mesh.vertices, mesh.faces, labels, view, grey=True)
+        render_mesh(ax, vertices, faces, labels, view, grey=True)
         sx, sy, _ = VIEWS[view]
         for k in np.unique(lab):
             p = pts[lab == k]
@@ -328,10 +342,68 @@ def _segmentation_ids(out: Path, segmentations: Mapping[str, np.ndarray] | None)
     return found
 
 
-def _preview(ids: np.ndarray) -> _Image:
-    """A segmentation colourised in the palette, at most :data:`PREVIEW_MAX_PX` on the long side."""
+def _preview_ids(ids: np.ndarray) -> np.ndarray:
+    """A segmentation's ids every n-th pixel, at most :data:`PREVIEW_MAX_PX` on the long side."""
     step = max(1, math.ceil(max(ids.shape[:2]) / PREVIEW_MAX_PX))
-    return _Image(colourise(ids[::step, ::step]))
+    return np.ascontiguousarray(ids[::step, ::step])
+
+
+def _preview(ids: np.ndarray) -> _Image:
+    """A segmentation (reduced by :func:`_preview_ids`) colourised in the palette."""
+    return _Image(colourise(ids))
+
+
+#: What draws each kind of :class:`FigureJob`.
+_DRAWERS: dict[str, Callable[..., _Image]] = {
+    "body": _body_figure, "cloud": _cloud_figure, "bar": _bar_chart, "preview": _preview}
+
+
+@dataclass(frozen=True, eq=False)
+class FigureJob:
+    """One report figure still to draw: its kind (``body``, ``cloud``, ``bar``, ``preview``) and the
+    arguments of that kind's drawer, plain data (arrays, numbers, strings) that a worker process can be
+    sent (:class:`bsv.pdf.PdfRenderer`)."""
+
+    kind: Literal["body", "cloud", "bar", "preview"]
+    args: tuple[Any, ...]
+
+    def draw(self) -> _Image:
+        """The figure drawn (matplotlib, in this process)."""
+        return _DRAWERS[self.kind](*self.args)
+
+
+#: How a document of a :class:`ReportJob` marks where a figure goes: ``<img src="bsv-figure:KEY"``.
+FIGURE_SRC_PREFIX = "bsv-figure:"
+_FIGURE_SRC = re.compile(r'src="' + re.escape(FIGURE_SRC_PREFIX) + r'([^"]+)"')
+
+
+@dataclass(frozen=True, eq=False)
+class ReportJob:
+    """A report with its figures still to draw: the figures (:class:`FigureJob` by key) and the documents
+    for report.html and report.pdf, where each figure's ``src`` is its key (:data:`FIGURE_SRC_PREFIX`).
+    Composing the documents needs no matplotlib; :meth:`documents` draws the figures once and inlines them
+    in each document in its format (:meth:`_Image.src`). ``bsv process`` sends it to the PDF worker, which
+    draws while this process writes the other files (:meth:`bsv.pdf.PdfRenderer.submit`)."""
+
+    figures: dict[str, FigureJob]
+    templates: dict[_Target, str]
+
+    def documents(self) -> dict[_Target, str]:
+        """Every document with its figures drawn and inlined."""
+        images = {key: job.draw() for key, job in self.figures.items()}
+        return {target: fill_figures(doc, images, target) for target, doc in self.templates.items()}
+
+
+def fill_figures(doc: str, images: Mapping[str, _Image], target: _Target) -> str:
+    """``doc`` with each figure's key (:data:`FIGURE_SRC_PREFIX`) replaced by its image's data: URI for
+    ``target``; a key without an image is a :class:`KeyError` naming it."""
+    def src(m: re.Match[str]) -> str:
+        key = m[1]
+        if key not in images:
+            raise KeyError(f"fill_figures: the document shows figure {key!r}, which was not drawn")
+        return f'src="{images[key].src(target)}"'
+
+    return _FIGURE_SRC.sub(src, doc)
 
 
 def _opt(x: Any, digits: int) -> str:
@@ -551,9 +623,9 @@ def warm_up_document() -> str:
             '</table><p class="key"><b>60.4</b> L</p></main></body></html>')
 
 
-def _figure(img: _Image, target: _Target, alt: str, caption: str, cls: str = "") -> str:
-    """A ``<figure>`` with the image inlined as a data: URI, in its format for ``target`` (:meth:`_Image.src`)."""
-    return (f'<figure class="{cls}"><img src="{img.src(target)}" alt="{html.escape(alt)}">'
+def _figure(key: str, alt: str, caption: str, cls: str = "") -> str:
+    """A ``<figure>`` showing figure ``key`` of a :class:`ReportJob` (inlined by :func:`fill_figures`)."""
+    return (f'<figure class="{cls}"><img src="{FIGURE_SRC_PREFIX}{html.escape(key)}" alt="{html.escape(alt)}">'
             f"<figcaption>{html.escape(caption)}</figcaption></figure>")
 
 
@@ -567,9 +639,17 @@ def render_html(result: Any, out_dir: PathLike, title: str = "BSV report",
 
 def _documents(result: Any, out_dir: PathLike, title: str, segmentations: Mapping[str, np.ndarray] | None,
                targets: Sequence[_Target]) -> dict[_Target, str]:
-    """The report's HTML for each of ``targets`` from one drawing of the figures: for report.html (every
-    image a PNG), for report.pdf (the shaded renders as JPEG; see :class:`_Image`). Only the figures'
-    ``src`` differ between the two."""
+    """The report's HTML for each of ``targets`` from one drawing of the figures, in this process: for
+    report.html (every image a PNG), for report.pdf (the shaded renders as JPEG; see :class:`_Image`)."""
+    return report_job(result, out_dir, title, segmentations, targets).documents()
+
+
+def report_job(result: Any, out_dir: PathLike, title: str = "BSV report",
+               segmentations: Mapping[str, np.ndarray] | None = None,
+               targets: Sequence[_Target] = ("html", "pdf")) -> ReportJob:
+    """The report of a :class:`bsv.pipeline.ProcessResult` as a :class:`ReportJob`: its documents for each of
+    ``targets`` composed, its figures still to draw. Only the figures' ``src`` differ between the documents
+    once drawn. ``segmentations`` as for :func:`render_html`."""
     from .uncertainty import asymmetry_text
 
     out = Path(out_dir)
@@ -592,13 +672,17 @@ def _documents(result: Any, out_dir: PathLike, title: str, segmentations: Mappin
     limbs = [n for n in LIMB_SEGMENTS if n in volumes_l]
     central = [n for n in CENTRAL_SEGMENTS if n in volumes_l]
     seg_ids = _segmentation_ids(out, segmentations)
-    img = {"front": _body_figure(mesh, flabels, "front"), "side": _body_figure(mesh, flabels, "side"),
-           "cloud": _cloud_figure(mesh, flabels, result.cloud)}
+    vertices = np.ascontiguousarray(mesh.vertices, dtype=np.float64)
+    faces = np.ascontiguousarray(mesh.faces, dtype=np.int64)
+    figures = {"front": FigureJob("body", (vertices, faces, flabels, "front")),
+               "side": FigureJob("body", (vertices, faces, flabels, "side")),
+               "cloud": FigureJob("cloud", (vertices, faces, flabels, *_cloud_sample(result.cloud)))}
+    truth_l = dict(same) if same else None
     if central:
-        img["torso"] = _bar_chart(central, volumes_l, bands, same or None, "Torso", 1.9 + 0.6 * len(central))
+        figures["torso"] = FigureJob("bar", (central, volumes_l, bands, truth_l, "Torso", 1.9 + 0.6 * len(central)))
     if limbs:
-        img["limbs"] = _bar_chart(limbs, volumes_l, bands, same or None, "Arms and legs", 5.2)
-    img.update((f"seg:{cam}", _preview(ids)) for cam, ids in seg_ids.items())
+        figures["limbs"] = FigureJob("bar", (limbs, volumes_l, bands, truth_l, "Arms and legs", 5.2))
+    figures.update((f"seg:{cam}", FigureJob("preview", (_preview_ids(ids),))) for cam, ids in seg_ids.items())
 
     # Key numbers
     tl = "trunk_limbs" if "trunk_limbs" in volumes_l else ("whole" if "whole" in volumes_l else None)
@@ -651,23 +735,25 @@ def _documents(result: Any, out_dir: PathLike, title: str, segmentations: Mappin
     tech = _technical_html(result, vols)
     notes = "".join(f"<li>{html.escape(str(n))}</li>" for n in vols.get("notes", []) or [])
 
+    body = (_figure("front", "segmented fitted body, front", "Front", "body")
+            + _figure("side", "segmented fitted body, left side", "Left side", "body"))
+    charts = ""
+    if central:
+        charts += _figure("torso", "torso volume", "Torso (own scale)", "narrow")
+    if limbs:
+        charts += _figure("limbs", "limb volumes", "Arms and legs (own scale)")
+    seg_html = ""
+    if seg_ids:
+        seg_html = ("<h2>Camera segmentation</h2><p class=\"note\">What each camera's image was divided into (the "
+                    "raw label images are <code>segmentation/&lt;camera&gt;/segmentation.png</code>, ids 0-14).</p>"
+                    '<div class="figs">' + "".join(_figure(f"seg:{cam}", f"{cam} camera segmentation",
+                                                           f"{cam} camera", "seg") for cam in seg_ids) + "</div>")
+    cloud = _figure("cloud", "measured points over the fitted body",
+                    "Measured points (colours: segments) over the fitted body (grey)")
+
     def page(target: _Target) -> str:
-        """The document for ``target``: everything computed above is shared, the figures' markup is its own."""
-        body = (_figure(img["front"], target, "segmented fitted body, front", "Front", "body")
-                + _figure(img["side"], target, "segmented fitted body, left side", "Left side", "body"))
-        charts = ""
-        if central:
-            charts += _figure(img["torso"], target, "torso volume", "Torso (own scale)", "narrow")
-        if limbs:
-            charts += _figure(img["limbs"], target, "limb volumes", "Arms and legs (own scale)")
-        seg_html = ""
-        if seg_ids:
-            seg_html = ("<h2>Camera segmentation</h2><p class=\"note\">What each camera's image was divided into (the "
-                        "raw label images are <code>segmentation/&lt;camera&gt;/segmentation.png</code>, ids 0-14).</p>"
-                        '<div class="figs">' + "".join(_figure(img[f"seg:{cam}"], target, f"{cam} camera segmentation",
-                                                               f"{cam} camera", "seg") for cam in seg_ids) + "</div>")
-        cloud = _figure(img["cloud"], target, "measured points over the fitted body",
-                        "Measured points (colours: segments) over the fitted body (grey)")
+        """The document for ``target``: everything computed above is shared; report.pdf leaves out the
+        technical details and describes the boundaries more briefly."""
         return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><meta name="viewport" content="width=device-width, initial-scale=1">
 <title>{html.escape(title)}</title><style>{CSS}</style></head><body><main>
@@ -695,7 +781,7 @@ Volumes in litres, masses in kilograms; 95 % intervals give the range the true v
 </main></body></html>
 """
 
-    return {target: page(target) for target in targets}
+    return ReportJob(figures, {target: page(target) for target in targets})
 
 
 def definitions_html(vols: dict[str, Any], target: _Target = "html") -> str:
@@ -846,16 +932,22 @@ def render_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", 
                   segmentations: Mapping[str, np.ndarray] | None = None,
                   pdf_renderer: PdfRenderer | None = None) -> dict[str, tuple[Path, bytes]]:
     """The report's files rendered in memory, nothing written: {key: (path, bytes)} for ``report.html``
-    (self-contained), ``report.pdf`` (unless ``pdf`` is False or a ``pdf_renderer`` is given, see below) and
-    ``volumes.csv`` (keys: report, report_pdf, volumes_csv). Write them with :func:`write_rendered`. The figures are drawn once for both
-    files (report.pdf takes the shaded renders as JPEG)."""
+    (self-contained), ``report.pdf`` (unless ``pdf`` is False) and ``volumes.csv`` (keys: report, report_pdf,
+    volumes_csv). Write them with :func:`write_rendered`. The figures are drawn once for both files (report.pdf
+    takes the shaded renders as JPEG).
+
+    With a ``pdf_renderer`` (and ``pdf``), only volumes.csv is returned: the report (a :class:`ReportJob`) goes
+    to the renderer, whose worker process draws the figures and lays report.pdf out while this process goes
+    on; :meth:`bsv.pdf.PdfRenderer.report` then returns report.html's and report.pdf's contents."""
     out = Path(out_dir)
-    docs = _documents(result, out, title, segmentations, ("html", "pdf") if pdf else ("html",))
-    files = {"report": (out / "report.html", docs["html"].encode("utf-8")),
-             "volumes_csv": (out / "volumes.csv", csv_text(result).encode("utf-8"))}
+    files = {"volumes_csv": (out / "volumes.csv", csv_text(result).encode("utf-8"))}
+    job = report_job(result, out, title, segmentations, ("html", "pdf") if pdf else ("html",))
     if pdf and pdf_renderer is not None:
-        pdf_renderer.submit(docs["pdf"])
-    elif pdf:
+        pdf_renderer.submit(job)
+        return files
+    docs = job.documents()
+    files["report"] = (out / "report.html", docs["html"].encode("utf-8"))
+    if pdf:
         files["report_pdf"] = (out / "report.pdf", render_pdf(docs["pdf"]))
     return files
 

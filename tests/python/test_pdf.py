@@ -51,6 +51,37 @@ def test_the_workers_warm_up_is_shaped_like_the_report():
     assert pdf.render_pdf(doc).startswith(b"%PDF-")
 
 
+def test_libraries_are_looked_up_in_the_linkers_cache_only_while_weasyprint_loads():
+    import ctypes.util
+
+    if not sys.platform.startswith("linux"):
+        pytest.skip("the linker's cache lookup (ldconfig) is Linux's")
+    original = ctypes.util.find_library
+    with pdf._libraries_from_ldconfig():
+        assert ctypes.util.find_library is not original
+        assert ctypes.util.find_library("pango-1.0") == original("pango-1.0")  # in the cache: the same answer
+        assert ctypes.util.find_library("libpango-1.0-0") is None  # a name cffi tries first on Windows
+    assert ctypes.util.find_library is original
+
+
+def test_weasyprint_loads_with_the_usual_lookup_when_the_cache_lacks_a_library(tmp_path):
+    # In a fresh interpreter whose linker's cache knows nothing, the import is retried with the usual
+    # lookup (a library on LD_LIBRARY_PATH only, say) and succeeds.
+    import subprocess
+
+    code = ("import ctypes.util, sys\n"
+            "ctypes.util._findSoname_ldconfig = lambda name: None\n"
+            "from bsv import pdf\n"
+            "pdf.require_pdf()\n"
+            "assert 'weasyprint' in sys.modules\n"
+            "print('ok')\n")
+    env = dict(os.environ, PYTHONPATH=str(Path(pdf.__file__).resolve().parents[1]))
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=tmp_path,
+                         timeout=120)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip() == "ok"
+
+
 def test_a_document_is_submitted_once():
     r = pdf.PdfRenderer(worker=False).start()
     with pytest.raises(RuntimeError, match="submit a document first"):

@@ -168,6 +168,36 @@ def test_the_pdf_has_the_same_figures_with_the_shaded_renders_as_jpeg(run):
     assert pdf.count(b"/DCTDecode") == 3  # embedded as they are, not decoded and compressed again
 
 
+def test_the_worker_draws_the_figures_and_returns_the_report_this_process_would_draw(run):
+    """`bsv process` sends the report with its figures still to draw (a ReportJob: no matplotlib in the
+    process that runs MediaPipe) to the PDF worker, which draws them and lays report.pdf out: report.html
+    comes back byte for byte as this process draws it."""
+    from bsv import pdf
+
+    _, res, _ = run
+    job = report.report_job(res, res.out_dir, "t")
+    for doc in job.templates.values():  # composed without drawing: every figure is a key to fill in
+        assert "data:image" not in doc
+        assert set(re.findall(r'src="bsv-figure:([^"]+)"', doc)) == set(job.figures)
+    with pdf.PdfRenderer(worker=True) as r:
+        assert r.worker
+        r.submit(job)
+        html_doc, pdf_bytes = r.report()
+    here = job.documents()
+    assert html_doc == here["html"]
+    assert pdf_bytes.startswith(b"%PDF-") and pdf_bytes.count(b"/DCTDecode") == 3
+    assert r.result() == pdf_bytes  # asked again: the same PDF, not laid out again
+
+
+def test_a_document_showing_a_figure_not_drawn_is_an_error_naming_it():
+    doc = '<img src="bsv-figure:front" alt="x"><img src="bsv-figure:side" alt="y">'
+    img = report._Image(np.zeros((2, 2, 3), np.uint8))
+    with pytest.raises(KeyError, match="'side'"):
+        report.fill_figures(doc, {"front": img}, "html")
+    filled = report.fill_figures(doc, {"front": img, "side": img}, "pdf")
+    assert filled.count('src="data:image/png;base64,') == 2
+
+
 def test_a_report_without_its_pdf_encodes_no_jpeg(run, tmp_path, monkeypatch):
     _, res, _ = run
     formats: list[str] = []

@@ -555,8 +555,8 @@ def warming_up(then: Callable[[], object] | None = None, **overrides: Any) -> It
     """Prepares MediaPipe (:func:`_warm_up`, with :class:`SegmentParams` ``overrides``) on a background
     thread while the body of the ``with`` runs: a fresh ``bsv process`` reads the capture meanwhile (its PDF
     renderer loads in a worker process, :mod:`bsv.pdf`). The segmentation waits for it through the graph
-    lock. ``then``: more to prepare on the same thread once the graph is ready (``bsv process`` loads what
-    the report's figures need while MediaPipe detects).
+    lock. ``then``: more to prepare on the same thread once the graph is ready (``bsv process`` without a PDF worker
+    loads what the report's figures need while MediaPipe detects).
 
     The ``with`` target is a function that waits for the thread (for a caller that must import a package
     the thread may be importing). While the thread runs, file

@@ -9,7 +9,8 @@ starts ``python -m bsv.pdf`` (:func:`main`) first thing: it imports WeasyPrint a
 capture is segmented and registered, then reads the report on its standard input (a
 :class:`bsv.report.ReportJob`: the documents with their figures still to draw), draws the figures, lays
 report.pdf out and writes report.html's document and the PDF on its standard output (pickled: the two
-processes are parent and child). The process that runs MediaPipe never imports matplotlib.
+processes are parent and child). The process that runs MediaPipe never imports matplotlib, and the worker
+runs at a lower priority (:data:`WORKER_NICENESS`) so that its warm-up takes only what the parent leaves.
 
 A process's later reports (a station, a batch worker, a notebook: WeasyPrint is loaded once and kept),
 a process that has loaded WeasyPrint already or a machine with one core render in this process: :func:`render_pdf`, the function the worker
@@ -315,6 +316,7 @@ def main() -> int:
     out = os.fdopen(os.dup(1), "wb")  # the PDF's channel; whatever else writes to stdout goes to stderr
     os.dup2(2, 1)
     sys.stdout = sys.stderr
+    _yield_to_parent()
     try:
         require_pdf()
         with contextlib.suppress(BsvError):  # only a warm-up: the report's own layout says what fails
@@ -341,6 +343,21 @@ def _warm_up_document() -> str:
         return WARM_UP_DOC
 
 
+#: How much the worker lowers its scheduling priority (``nice``): its warm-up is not needed before the
+#: report, and on two cores it competed with the parent's MediaPipe graph, reading and segmentation.
+WORKER_NICENESS = 10
+
+
+def _yield_to_parent() -> None:
+    """Lowers the worker's priority by :data:`WORKER_NICENESS`: its imports and warm-ups run in the time the
+    parent leaves free (``bsv process`` waits on MediaPipe's and the registration's native code, one core
+    at a time, much of the run), and the parent's work before the report comes first. Not raised again (an
+    unprivileged process cannot): when the report arrives the parent waits for it, and the worker has a core
+    to itself. Where the priority cannot be changed, nothing changes."""
+    with contextlib.suppress(AttributeError, OSError):
+        os.nice(WORKER_NICENESS)
+
+
 def _warm_up_figures() -> None:
     """Loads what the report's figures need (:func:`bsv.report.prepare_figures`: matplotlib, fonts, the
     image encoders) while the worker waits; nothing when the report module cannot be imported here (the
@@ -359,7 +376,7 @@ def _exit_now(status: int) -> NoReturn:
     os._exit(status)
 
 
-__all__ = ["RENDERER_MODULE", "WORKER_ERROR_EXIT", "PdfRenderer", "main", "render_pdf", "require_pdf", "worker_pays"]
+__all__ = ["RENDERER_MODULE", "WORKER_ERROR_EXIT", "WORKER_NICENESS", "PdfRenderer", "main", "render_pdf", "require_pdf", "worker_pays"]
 
 
 if __name__ == "__main__":

@@ -82,6 +82,22 @@ def test_weasyprint_loads_with_the_usual_lookup_when_the_cache_lacks_a_library(t
     assert run.stdout.strip() == "ok"
 
 
+def test_the_worker_leaves_the_cores_to_its_parent_until_the_report():
+    if not hasattr(os, "getpriority"):
+        pytest.skip("no process priorities here (os.getpriority)")
+    own = os.getpriority(os.PRIO_PROCESS, 0)
+    expected = min(19, own + pdf.WORKER_NICENESS)
+    with pdf.PdfRenderer(worker=True) as r:
+        assert r._proc is not None
+        pid = r._proc.pid
+        deadline = time.monotonic() + 60
+        while os.getpriority(os.PRIO_PROCESS, pid) != expected and time.monotonic() < deadline:
+            time.sleep(0.02)  # the worker lowers its priority once its interpreter is up
+        assert os.getpriority(os.PRIO_PROCESS, pid) == expected
+        assert r.render(DOC)[:5] == b"%PDF-"
+    assert os.getpriority(os.PRIO_PROCESS, 0) == own  # this process keeps its own
+
+
 def test_a_document_is_submitted_once():
     r = pdf.PdfRenderer(worker=False).start()
     with pytest.raises(RuntimeError, match="submit a document first"):

@@ -23,19 +23,21 @@ import functools
 import importlib.util
 import os
 import pickle
+import queue
 import subprocess
 import sys
 import tempfile
-from collections.abc import Iterator
+import threading
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from types import TracebackType
-from typing import IO, TYPE_CHECKING, NoReturn, Self
+from typing import IO, TYPE_CHECKING, Any, NoReturn, Self
 
 from .errors import BsvError, ReportError
 from .extras import require
 
 if TYPE_CHECKING:
-    from .report import ReportJob
+    from .report import FigureJob, ReportJob
 
 #: The module that renders the PDF (its extra: ``frontend``).
 RENDERER_MODULE = "weasyprint"
@@ -159,12 +161,12 @@ def _reap(proc: subprocess.Popen[bytes]) -> None:
     proc.wait()
 
 
-def _render(doc: str | ReportJob) -> tuple[str | None, bytes]:
+def _render(doc: str | ReportJob, drawn: Mapping[str, Any] | None = None) -> tuple[str | None, bytes]:
     """(report.html's document, the PDF) of a :class:`bsv.report.ReportJob`, its figures drawn in this
-    process; (None, the PDF) of an HTML document."""
+    process (those of ``drawn`` before: :meth:`PdfRenderer.prepare`); (None, the PDF) of an HTML document."""
     if isinstance(doc, str):
         return None, render_pdf(doc)
-    docs = doc.documents()
+    docs = doc.documents(drawn)
     return docs.get("html"), render_pdf(docs["pdf"])
 
 
@@ -233,14 +235,27 @@ class PdfRenderer:
         if self._doc is not None:
             raise RuntimeError("PdfRenderer.submit: one document per renderer, and one was submitted")
         self._doc = doc
+        self._send(("report", doc))
         if self._proc is not None and self._proc.stdin is not None:
-            try:  # the worker is waiting: it reads it all at once
-                self._proc.stdin.write(pickle.dumps(doc, protocol=pickle.HIGHEST_PROTOCOL))
-            except OSError:  # the worker died: result() says why or renders here
-                pass
-            finally:
-                with contextlib.suppress(OSError):
-                    self._proc.stdin.close()
+            with contextlib.suppress(OSError):
+                self._proc.stdin.close()
+
+    def prepare(self, figures: Mapping[str, FigureJob]) -> None:
+        """Has the worker draw ``figures`` now, before the report that shows them is submitted (``bsv
+        process``: the fitted mesh's figures, :func:`bsv.report.mesh_figures`, while it computes the
+        intervals). They must be the submitted :class:`bsv.report.ReportJob`'s own for the same keys.
+        Without a worker nothing is drawn ahead (:meth:`result` draws everything)."""
+        if self._doc is not None:
+            raise RuntimeError("PdfRenderer.prepare: the report was submitted already")
+        self._send(("figures", dict(figures)))
+
+    def _send(self, message: tuple[str, Any]) -> None:
+        """Writes one message to the worker (its reader thread takes it at once: :class:`_Inbox`); a worker
+        that died is left to :meth:`result`, which says why or renders here."""
+        if self._proc is not None and self._proc.stdin is not None:
+            with contextlib.suppress(OSError, ValueError):
+                self._proc.stdin.write(pickle.dumps(message, protocol=pickle.HIGHEST_PROTOCOL))
+                self._proc.stdin.flush()
 
     def result(self) -> bytes:
         """The PDF of the submitted document (:func:`render_pdf`), from the worker if one was started."""
@@ -308,22 +323,31 @@ class PdfRenderer:
 
 def main() -> int:
     """The worker (``python -m bsv.pdf``): loads WeasyPrint, lays out a document shaped like the report
-    (:func:`_warm_up_document`), loads what the figures need (:func:`_warm_up_figures`), reads what
-    :meth:`PdfRenderer.submit` sent on stdin until its end (a report's HTML, or a
-    :class:`bsv.report.ReportJob` whose figures it draws), writes (report.html's document or None, the PDF)
-    on stdout. A BSV error (pango missing, a failed layout) is printed on stderr with exit code
-    :data:`WORKER_ERROR_EXIT`."""
+    (:func:`_warm_up_document`), loads what the figures need (:func:`_warm_up_figures`), then takes the
+    parent's messages on stdin (:func:`_inbox`): figures to draw ahead (:meth:`PdfRenderer.prepare`), then
+    the report (:meth:`PdfRenderer.submit`: its HTML, or a :class:`bsv.report.ReportJob` whose other figures
+    it draws), and writes (report.html's document or None, the PDF) on stdout. A BSV error (pango missing, a
+    failed layout) is printed on stderr with exit code :data:`WORKER_ERROR_EXIT`."""
     out = os.fdopen(os.dup(1), "wb")  # the PDF's channel; whatever else writes to stdout goes to stderr
     os.dup2(2, 1)
     sys.stdout = sys.stderr
     _yield_to_parent()
+    inbox = _inbox(sys.stdin.buffer)
     try:
         require_pdf()
         with contextlib.suppress(BsvError):  # only a warm-up: the report's own layout says what fails
             render_pdf(_warm_up_document())  # fonts, styles, image decoders: ready before the report
         _warm_up_figures()
-        doc = pickle.loads(sys.stdin.buffer.read())  # from PdfRenderer.submit: this process's parent
-        done = _render(doc)
+        drawn: dict[str, Any] = {}
+        while True:
+            kind, payload = inbox.get()
+            if kind == "figures":  # PdfRenderer.prepare
+                drawn.update(_drawn_ahead(payload))
+            elif kind == "report":  # PdfRenderer.submit
+                done = _render(payload, drawn)
+                break
+            else:  # the parent closed the pipe without a report (it failed or was interrupted)
+                return 0
     except BsvError as exc:
         sys.stderr.write(f"{exc}\n")
         return WORKER_ERROR_EXIT
@@ -341,6 +365,36 @@ def _warm_up_document() -> str:
         return warm_up_document()
     except Exception:  # a warm-up: the plain document warms most of it
         return WARM_UP_DOC
+
+
+def _inbox(stream: IO[bytes]) -> queue.Queue[tuple[str, Any]]:
+    """The parent's messages (pickled ``(kind, payload)`` tuples, :meth:`PdfRenderer._send`) read from
+    ``stream`` by a thread as they arrive, so that the parent never waits on a full pipe while the worker
+    warms up; ``("end", None)`` once the stream ends or breaks."""
+    box: queue.Queue[tuple[str, Any]] = queue.Queue()
+
+    def read() -> None:
+        while True:
+            try:
+                message = pickle.load(stream)  # from this process's parent
+            except Exception:  # EOFError: the parent closed the pipe; anything else: a broken message
+                box.put(("end", None))
+                return
+            box.put(message)
+
+    threading.Thread(target=read, name="bsv-pdf-inbox", daemon=True).start()
+    return box
+
+
+def _drawn_ahead(figures: Mapping[str, FigureJob]) -> dict[str, Any]:
+    """``figures`` drawn and encoded for both documents (:meth:`PdfRenderer.prepare`)."""
+    drawn = {}
+    for key, job in figures.items():
+        img = job.draw()
+        img.src("html")
+        img.src("pdf")
+        drawn[key] = img
+    return drawn
 
 
 #: How much the worker lowers its scheduling priority (``nice``): its warm-up is not needed before the

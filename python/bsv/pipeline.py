@@ -471,7 +471,7 @@ def process(
     from .frontend.capture import read_capture
     from .frontend.segment import warming_up
     from .pdf import PdfRenderer
-    from .report import prepare_figures, render_report, write_rendered
+    from .report import mesh_figures, prepare_figures, render_report, write_rendered
     from .staging import staged_outputs
 
     if segmentation not in SEGMENTATIONS:
@@ -596,6 +596,8 @@ def process(
             lambda: bsv_register(cloud, template=template, progress=False, density=density, label_source=label_source,
                                  keypoints=measured, **register_params))
 
+        # the fitted mesh's figures, drawn by the PDF worker while the intervals are computed
+        pdf_renderer.prepare(mesh_figures(reg.mesh, cloud))
         inertial = None
         if bsip:
             from .biomech import compute as compute_bsip

@@ -388,10 +388,24 @@ class ReportJob:
     figures: dict[str, FigureJob]
     templates: dict[_Target, str]
 
-    def documents(self) -> dict[_Target, str]:
-        """Every document with its figures drawn and inlined."""
-        images = {key: job.draw() for key, job in self.figures.items()}
+    def documents(self, drawn: Mapping[str, _Image] | None = None) -> dict[_Target, str]:
+        """Every document with its figures inlined: those of ``drawn`` (drawn before from the same
+        :class:`FigureJob`, :func:`mesh_figures`) as they are, the others drawn now."""
+        ready = dict(drawn or {})
+        images = {key: ready[key] if key in ready else job.draw() for key, job in self.figures.items()}
         return {target: fill_figures(doc, images, target) for target, doc in self.templates.items()}
+
+
+def mesh_figures(mesh: Any, cloud: Any) -> dict[str, FigureJob]:
+    """The report's figures of the fitted ``mesh`` (its segments front and side, and the measured ``cloud``
+    over it): all the report needs of the registration's result, so ``bsv process`` has them drawn while
+    it computes the intervals (:meth:`bsv.pdf.PdfRenderer.prepare`)."""
+    vertices = np.ascontiguousarray(mesh.vertices, dtype=np.float64)
+    faces = np.ascontiguousarray(mesh.faces, dtype=np.int64)
+    flabels = face_labels(mesh.faces, mesh.vertex_labels, mesh.face_labels)
+    return {"front": FigureJob("body", (vertices, faces, flabels, "front")),
+            "side": FigureJob("body", (vertices, faces, flabels, "side")),
+            "cloud": FigureJob("cloud", (vertices, faces, flabels, *_cloud_sample(cloud)))}
 
 
 def fill_figures(doc: str, images: Mapping[str, _Image], target: _Target) -> str:
@@ -654,7 +668,6 @@ def report_job(result: Any, out_dir: PathLike, title: str = "BSV report",
 
     out = Path(out_dir)
     mesh = result.registration.mesh
-    flabels = face_labels(mesh.faces, mesh.vertex_labels, mesh.face_labels)
     vols = result.volumes
     volumes_l: dict[str, float] = vols.get("volumes_l", {})
     truth = getattr(result, "truth", None)
@@ -672,11 +685,7 @@ def report_job(result: Any, out_dir: PathLike, title: str = "BSV report",
     limbs = [n for n in LIMB_SEGMENTS if n in volumes_l]
     central = [n for n in CENTRAL_SEGMENTS if n in volumes_l]
     seg_ids = _segmentation_ids(out, segmentations)
-    vertices = np.ascontiguousarray(mesh.vertices, dtype=np.float64)
-    faces = np.ascontiguousarray(mesh.faces, dtype=np.int64)
-    figures = {"front": FigureJob("body", (vertices, faces, flabels, "front")),
-               "side": FigureJob("body", (vertices, faces, flabels, "side")),
-               "cloud": FigureJob("cloud", (vertices, faces, flabels, *_cloud_sample(result.cloud)))}
+    figures = mesh_figures(mesh, result.cloud)
     truth_l = dict(same) if same else None
     if central:
         figures["torso"] = FigureJob("bar", (central, volumes_l, bands, truth_l, "Torso", 1.9 + 0.6 * len(central)))

@@ -188,6 +188,23 @@ def test_the_worker_draws_the_figures_and_returns_the_report_this_process_would_
     assert pdf_bytes.startswith(b"%PDF-") and pdf_bytes.count(b"/DCTDecode") == 3
     assert r.result() == pdf_bytes  # asked again: the same PDF, not laid out again
 
+    # the fitted mesh's figures drawn ahead (bsv process: while the intervals are computed), the rest after
+    with pdf.PdfRenderer(worker=True) as r:
+        r.prepare(report.mesh_figures(res.registration.mesh, res.cloud))
+        r.submit(job)
+        with pytest.raises(RuntimeError, match="submitted already"):
+            r.prepare({})
+        assert r.report()[0] == here["html"]
+    assert {"front", "side", "cloud"} <= set(job.figures)
+    # what was drawn ahead is what the report shows (here, against the rule, not the job's own front view)
+    ids = np.full((4, 6), SEGMENT_IDS["torso"], np.uint8)
+    stand_in = report.FigureJob("preview", (ids,))
+    with pdf.PdfRenderer(worker=True) as r:
+        r.prepare({"front": stand_in})
+        r.submit(job)
+        html_doc = r.report()[0]
+    assert html_doc is not None and stand_in.draw().src("html") in html_doc and html_doc != here["html"]
+
 
 def test_a_document_showing_a_figure_not_drawn_is_an_error_naming_it():
     doc = '<img src="bsv-figure:front" alt="x"><img src="bsv-figure:side" alt="y">'

@@ -16,6 +16,7 @@ A process's later reports (a station, a batch worker, a notebook: WeasyPrint is 
 a process that has loaded WeasyPrint already or a machine with one core render in this process: :func:`render_pdf`, the function the worker
 runs. A worker that cannot start or dies is replaced by this process: the report is never lost to it.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -250,7 +251,7 @@ class PdfRenderer:
         self._send(("figures", dict(figures)))
 
     def _send(self, message: tuple[str, Any]) -> None:
-        """Writes one message to the worker (its reader thread takes it at once: :class:`_Inbox`); a worker
+        """Writes one message to the worker (its reader thread takes it at once: :func:`_inbox`); a worker
         that died is left to :meth:`result`, which says why or renders here."""
         if self._proc is not None and self._proc.stdin is not None:
             with contextlib.suppress(OSError, ValueError):

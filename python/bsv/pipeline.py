@@ -597,7 +597,8 @@ def process(
                                  keypoints=measured, **register_params))
 
         # the fitted mesh's figures, drawn by the PDF worker while the intervals are computed
-        pdf_renderer.prepare(mesh_figures(reg.mesh, cloud))
+        mesh_jobs = mesh_figures(reg.mesh, cloud)
+        pdf_renderer.prepare(mesh_jobs)
         inertial = None
         if bsip:
             from .biomech import compute as compute_bsip
@@ -649,7 +650,7 @@ def process(
         rendered = steps.run("report", "composing the report (volumes.csv, report.html and report.pdf's documents)",
                              lambda: render_report(result, out, title=title, pdf_renderer=pdf_renderer,
                                                    segmentations={c: s.labels for c, s in seg_files.items()
-                                                                  if s is not None}))
+                                                                  if s is not None}, mesh_jobs=mesh_jobs))
 
         def write_everything() -> None:
             with staged_outputs(out, overwrite) as stage:

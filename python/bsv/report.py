@@ -660,10 +660,12 @@ def _documents(result: Any, out_dir: PathLike, title: str, segmentations: Mappin
 
 def report_job(result: Any, out_dir: PathLike, title: str = "BSV report",
                segmentations: Mapping[str, np.ndarray] | None = None,
-               targets: Sequence[_Target] = ("html", "pdf")) -> ReportJob:
+               targets: Sequence[_Target] = ("html", "pdf"),
+               mesh_jobs: Mapping[str, FigureJob] | None = None) -> ReportJob:
     """The report of a :class:`bsv.pipeline.ProcessResult` as a :class:`ReportJob`: its documents for each of
     ``targets`` composed, its figures still to draw. Only the figures' ``src`` differ between the documents
-    once drawn. ``segmentations`` as for :func:`render_html`."""
+    once drawn. ``segmentations`` as for :func:`render_html`; ``mesh_jobs``: the result's
+    :func:`mesh_figures`, made before (and sent to :meth:`bsv.pdf.PdfRenderer.prepare`), else made here."""
     from .uncertainty import asymmetry_text
 
     out = Path(out_dir)
@@ -685,7 +687,7 @@ def report_job(result: Any, out_dir: PathLike, title: str = "BSV report",
     limbs = [n for n in LIMB_SEGMENTS if n in volumes_l]
     central = [n for n in CENTRAL_SEGMENTS if n in volumes_l]
     seg_ids = _segmentation_ids(out, segmentations)
-    figures = mesh_figures(mesh, result.cloud)
+    figures = dict(mesh_jobs) if mesh_jobs is not None else mesh_figures(mesh, result.cloud)
     truth_l = dict(same) if same else None
     if central:
         figures["torso"] = FigureJob("bar", (central, volumes_l, bands, truth_l, "Torso", 1.9 + 0.6 * len(central)))
@@ -939,7 +941,8 @@ def _write_atomic(path: Path, data: bytes) -> None:
 
 def render_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", pdf: bool = True,
                   segmentations: Mapping[str, np.ndarray] | None = None,
-                  pdf_renderer: PdfRenderer | None = None) -> dict[str, tuple[Path, bytes]]:
+                  pdf_renderer: PdfRenderer | None = None,
+                  mesh_jobs: Mapping[str, FigureJob] | None = None) -> dict[str, tuple[Path, bytes]]:
     """The report's files rendered in memory, nothing written: {key: (path, bytes)} for ``report.html``
     (self-contained), ``report.pdf`` (unless ``pdf`` is False) and ``volumes.csv`` (keys: report, report_pdf,
     volumes_csv). Write them with :func:`write_rendered`. The figures are drawn once for both files (report.pdf
@@ -947,10 +950,12 @@ def render_report(result: Any, out_dir: PathLike, *, title: str = "BSV report", 
 
     With a ``pdf_renderer`` (and ``pdf``), only volumes.csv is returned: the report (a :class:`ReportJob`) goes
     to the renderer, whose worker process draws the figures and lays report.pdf out while this process goes
-    on; :meth:`bsv.pdf.PdfRenderer.report` then returns report.html's and report.pdf's contents."""
+    on; :meth:`bsv.pdf.PdfRenderer.report` then returns report.html's and report.pdf's contents.
+    ``mesh_jobs``: the fitted mesh's figures as sent to that renderer's :meth:`~bsv.pdf.PdfRenderer.prepare`
+    (:func:`report_job`)."""
     out = Path(out_dir)
     files = {"volumes_csv": (out / "volumes.csv", csv_text(result).encode("utf-8"))}
-    job = report_job(result, out, title, segmentations, ("html", "pdf") if pdf else ("html",))
+    job = report_job(result, out, title, segmentations, ("html", "pdf") if pdf else ("html",), mesh_jobs)
     if pdf and pdf_renderer is not None:
         pdf_renderer.submit(job)
         return files

@@ -662,7 +662,7 @@ def process(
                 write_rendered({"report": (stage / "report.html", report_html.encode("utf-8"))})
                 (stage / "report.pdf").write_bytes(report_pdf)
             files.update({k: out / p.name for k, (p, _) in rendered.items()}, report=out / "report.html",
-                         report_pdf=out / "report.pdf", volumes_csv=out / "volumes.csv")
+                         report_pdf=out / "report.pdf")
 
         steps.run("write", "writing the segmentation, cloud.ply, fitted.ply, volumes.json and the report "
                   "(its figures drawn and report.pdf laid out meanwhile)", write_everything)

@@ -343,7 +343,9 @@ def main() -> int:
         while True:
             kind, payload = inbox.get()
             if kind == "figures":  # PdfRenderer.prepare
-                drawn.update(_drawn_ahead(payload))
+                from .report import draw_ahead
+
+                drawn.update(draw_ahead(payload))
             elif kind == "report":  # PdfRenderer.submit
                 done = _render(payload, drawn)
                 break
@@ -385,17 +387,6 @@ def _inbox(stream: IO[bytes]) -> queue.Queue[tuple[str, Any]]:
 
     threading.Thread(target=read, name="bsv-pdf-inbox", daemon=True).start()
     return box
-
-
-def _drawn_ahead(figures: Mapping[str, FigureJob]) -> dict[str, Any]:
-    """``figures`` drawn and encoded for both documents (:meth:`PdfRenderer.prepare`)."""
-    drawn = {}
-    for key, job in figures.items():
-        img = job.draw()
-        img.src("html")
-        img.src("pdf")
-        drawn[key] = img
-    return drawn
 
 
 #: How much the worker lowers its scheduling priority (``nice``): its warm-up is not needed before the

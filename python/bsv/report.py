@@ -396,6 +396,16 @@ class ReportJob:
         return {target: fill_figures(doc, images, target) for target, doc in self.templates.items()}
 
 
+def draw_ahead(figures: Mapping[str, FigureJob]) -> dict[str, _Image]:
+    """``figures`` drawn and encoded for both documents now (:meth:`bsv.pdf.PdfRenderer.prepare`), to be
+    passed to :meth:`ReportJob.documents` later."""
+    drawn = {key: job.draw() for key, job in figures.items()}
+    for img in drawn.values():
+        for target in ("html", "pdf"):
+            img.src(target)
+    return drawn
+
+
 def mesh_figures(mesh: Any, cloud: Any) -> dict[str, FigureJob]:
     """The report's figures of the fitted ``mesh`` (its segments front and side, and the measured ``cloud``
     over it): all the report needs of the registration's result, so ``bsv process`` has them drawn while
@@ -1012,6 +1022,7 @@ __all__ = [
     "check_outputs",
     "cleaning_html",
     "csv_text",
+    "draw_ahead",
     "face_labels",
     "fill_figures",
     "like_for_like_truth",

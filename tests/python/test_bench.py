@@ -571,3 +571,14 @@ def test_look_options_reach_the_scans() -> None:
     assert synth_config(parser().parse_args(["synth", "--segmentation", "camera"])).look_arg() is None
     # without a room there is no look to draw
     assert synth_config(parser().parse_args(["synth", "--long-hair", "--no-room"])).look_arg() is None
+
+
+def test_oracle_joints_need_the_camera_path_on_the_standard_cohort() -> None:
+    from bsv.bench.main import parser, synth_config
+
+    cfg = synth_config(parser().parse_args(["synth", "--param", "oracle_joints=elbow"]))
+    with pytest.raises(BenchError, match=r"oracle_joints.*--segmentation camera and the standard cohort"):
+        cfg.validate()  # the oracle labels' path has no measured joints to replace
+    bad = synth_config(parser().parse_args(["synth", "--param", "oracle_joints=elbows"]))
+    with pytest.raises(BenchError, match="unknown: elbows"):
+        bad.validate()

@@ -194,3 +194,35 @@ def test_joint_figure_is_written_only_with_joints(tmp_path) -> None:
     assert out is not None and out.stat().st_size > 1000
     assert joint_figure([Run("s", "noer", "bsv", True)], tmp_path / "none.png") is None
     assert not (tmp_path / "none.png").exists()
+
+
+def test_oracle_joints_replace_only_the_asked_kinds() -> None:
+    from bsv.bench.joints import oracle_joint_kinds, with_oracle_joints
+    from bsv.frontend.landmarks import JointCentre
+
+    truth = {k: np.asarray(v) for k, v in rig_joints().items()}
+    measured = {k: JointCentre(np.asarray(v) + 0.01, 0.8, "front+back") for k, v in truth.items() if k != "knee_r"}
+    kinds = oracle_joint_kinds("elbow+knee")
+    assert kinds == ("elbow", "knee")
+    out = with_oracle_joints(measured, truth, kinds)
+    assert set(out) == set(measured)  # a joint the camera path did not place stays missing (knee_r)
+    for name, joint in out.items():
+        if name.rsplit("_", 1)[0] in kinds:
+            assert np.array_equal(joint.xyz, truth[name]) and joint.source == "rig (oracle)"
+            assert joint.confidence == 0.8
+        else:
+            assert joint is measured[name]
+    assert np.allclose(measured["elbow_l"].xyz, truth["elbow_l"] + 0.01)  # the measured joints are not touched
+    assert oracle_joint_kinds("all") == ("shoulder", "elbow", "wrist", "hip", "knee", "ankle")
+    assert oracle_joint_kinds("none") == () and oracle_joint_kinds("") == ()
+    assert with_oracle_joints(measured, None, ()) == measured
+
+
+def test_oracle_joints_name_a_bad_kind_and_need_the_rigs_joints() -> None:
+    from bsv.bench.joints import oracle_joint_kinds, with_oracle_joints
+    from bsv.errors import BenchError
+
+    with pytest.raises(BenchError, match=r"oracle_joints=elbow\+kne.*unknown: kne"):
+        oracle_joint_kinds("elbow+kne")
+    with pytest.raises(BenchError, match="standard cohort"):
+        with_oracle_joints({}, None, ("elbow",))

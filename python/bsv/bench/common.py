@@ -120,8 +120,10 @@ class Fit:
 #: joints pull the template's as in ``bsv process``: by default the shoulders, elbows, wrists and hips only
 #: (:data:`bsv.keypoints.CAMERA_KEYPOINT_KINDS`), ``keypoints=true`` every joint (``--keypoints``),
 #: ``keypoints=false`` none (``--no-keypoints``); ``keypoint_joints=elbow+knee`` keeps only those joints;
-#: ``pose_template=false`` keeps the template's own A-pose on the camera path (``--no-pose-template``).
-BENCH_ONLY_PARAMS: tuple[str, ...] = ("keypoints", "keypoint_joints", "pose_template")
+#: ``pose_template=false`` keeps the template's own A-pose on the camera path (``--no-pose-template``);
+#: ``oracle_joints=elbow+knee`` (or ``all``) gives the camera path the rig's true joint centres of those kinds
+#: (:data:`bsv.bench.joints.ORACLE_JOINTS_PARAM`, a diagnostic).
+BENCH_ONLY_PARAMS: tuple[str, ...] = ("keypoints", "keypoint_joints", "pose_template", "oracle_joints")
 
 
 def register_bsv(cloud: PointCloud, template: Mesh, params: Mapping[str, Any] | None = None,

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import BenchError
 from .common import Run
 from .reference import ordered_conditions
 
@@ -82,6 +83,53 @@ def joint_errors(estimated: Mapping[str, Any], truth: Mapping[str, np.ndarray]) 
         if name.endswith("_r"):
             e[0] = -e[0]
         out[name] = [round(float(c), 2) for c in e]
+    return out
+
+
+#: ``--param`` key of ``bench synth --segmentation camera``: the measured joint centres of these kinds (``+`` or
+#: ``,`` separated, or ``all``) replaced by the rig's true ones (:func:`with_oracle_joints`) everywhere the
+#: camera path uses them (the template's posing, the upper arms' confinement, the keypoint term), the camera
+#: labels kept. A diagnostic, like the oracle labels: it measures what a joint's localisation costs each
+#: segment (``benchmarks/BENCH.md``, round 2 session 37: the true elbows take the forearms from 2.0-2.5 % to
+#: 0.6-1.4 %). The run's joint errors stay those of the measured joints.
+ORACLE_JOINTS_PARAM = "oracle_joints"
+
+
+def oracle_joint_kinds(text: object) -> tuple[str, ...]:
+    """The joint kinds of an ``oracle_joints`` value (``elbow+knee``, ``elbow,knee``, ``all``; empty or
+    ``none``: none); :class:`bsv.errors.BenchError` naming the parameter and the known kinds otherwise."""
+    value = str(text).strip()
+    if value in ("", "none"):
+        return ()
+    if value == "all":
+        return KINDS
+    kinds = tuple(k.strip() for k in value.replace("+", ",").split(",") if k.strip())
+    bad = [k for k in kinds if k not in KINDS]
+    if bad or not kinds:
+        raise BenchError(f"--param {ORACLE_JOINTS_PARAM}={value}: use all, none or joint kinds joined by + "
+                         f"(of {', '.join(KINDS)}); unknown: {', '.join(bad) or value}")
+    return kinds
+
+
+def with_oracle_joints(joints: Mapping[str, Any], truth: Mapping[str, np.ndarray] | None,
+                       kinds: Sequence[str]) -> dict[str, Any]:
+    """``joints`` (name -> :class:`bsv.frontend.landmarks.JointCentre`) with the centres of ``kinds`` moved to
+    the rig's true ones ``truth`` (metres; confidence kept, the source marked ``rig (oracle)``); a joint the
+    camera path did not place stays missing. :class:`bsv.errors.BenchError` without the true joints (only the
+    standard cohort knows them)."""
+    if not kinds:
+        return dict(joints)
+    if truth is None:
+        raise BenchError(f"--param {ORACLE_JOINTS_PARAM} needs the rig's true joint centres: the standard "
+                         "cohort (--cohort standard) on the camera path (--segmentation camera)")
+    import dataclasses
+
+    out = {}
+    for name, joint in joints.items():
+        if name.rsplit("_", 1)[0] in kinds and name in truth:
+            joint = dataclasses.replace(joint, xyz=np.asarray(truth[name], dtype=np.float64).copy(),
+                                        source="rig (oracle)")
+        out[name] = joint
     return out
 
 

@@ -137,6 +137,12 @@ class SynthConfig:
             raise BenchError(f"--segmentation {self.segmentation}: use oracle or camera")
         if self.cloud not in ("raw", "lab"):
             raise BenchError(f"--cloud {self.cloud}: use raw (the scanner's cloud) or lab (bsv process's cloud building)")
+        from .joints import ORACLE_JOINTS_PARAM, oracle_joint_kinds
+
+        if oracle_joint_kinds(self.params.get(ORACLE_JOINTS_PARAM, "")) and (
+                self.segmentation != "camera" or self.cohort != "standard"):
+            raise BenchError(f"--param {ORACLE_JOINTS_PARAM} replaces the camera path's measured joints with the "
+                             "rig's: it needs --segmentation camera and the standard cohort")
         if self.segmentation == "camera":
             from .camera import check_available
 
@@ -223,6 +229,11 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
         elif refined is not None and refined.ok:
             refined.raw = refined.reexpress(raw, tmp)
     kinds, params = split_request(params)  # --param bench_outliers=floor,wall,mixed (bench/outliers.py)
+    from .joints import ORACLE_JOINTS_PARAM, oracle_joint_kinds, with_oracle_joints
+
+    oracle_joints = oracle_joint_kinds(params.pop(ORACLE_JOINTS_PARAM, ""))
+    if oracle_joints:  # --param oracle_joints=elbow+knee: the rig's joints on the camera path (a diagnostic)
+        joints = with_oracle_joints(joints or {}, truth_joints if segmentation == "camera" else None, oracle_joints)
     if segmentation == "camera" and "labels" not in params:  # the camera path's labels, as bsv process
         from ..pipeline import CAMERA_LABEL_SOURCE
 
@@ -270,6 +281,8 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
             run.info = {"traceback": traceback.format_exc(limit=3)}
         if joint_errs:
             run.info["joint_errors_mm"] = joint_errs
+        if oracle_joints:
+            run.info[ORACLE_JOINTS_PARAM] = list(oracle_joints)
         if landmark_warnings is not None:
             from .joints import WARNINGS_KEY
 

@@ -116,14 +116,22 @@ class Fit:
     info: dict[str, Any] = field(default_factory=dict)
 
 
+#: ``--param`` key of ``bench synth --segmentation camera``: the measured joint centres of these kinds (``+`` or
+#: ``,`` separated, or ``all``) replaced by the rig's true ones (:func:`bsv.bench.joints.with_oracle_joints`)
+#: everywhere the camera path uses them (the template's posing, the upper arms' confinement, the keypoint term),
+#: the camera labels kept. A diagnostic, like the oracle labels: it measures what a joint's localisation costs
+#: each segment (``benchmarks/BENCH.md``, round 2 session 37: in the room, held-out seeds 20-21, the true elbows
+#: take the forearms from 2.0-2.3 % to 0.9-1.4 %). The run's joint errors stay those of the measured joints.
+ORACLE_JOINTS_PARAM = "oracle_joints"
+
 #: ``--param`` keys the bench itself reads (not registration parameters): the camera path's measured
 #: joints pull the template's as in ``bsv process``: by default the shoulders, elbows, wrists and hips only
 #: (:data:`bsv.keypoints.CAMERA_KEYPOINT_KINDS`), ``keypoints=true`` every joint (``--keypoints``),
 #: ``keypoints=false`` none (``--no-keypoints``); ``keypoint_joints=elbow+knee`` keeps only those joints;
 #: ``pose_template=false`` keeps the template's own A-pose on the camera path (``--no-pose-template``);
 #: ``oracle_joints=elbow+knee`` (or ``all``) gives the camera path the rig's true joint centres of those kinds
-#: (:data:`bsv.bench.joints.ORACLE_JOINTS_PARAM`, a diagnostic).
-BENCH_ONLY_PARAMS: tuple[str, ...] = ("keypoints", "keypoint_joints", "pose_template", "oracle_joints")
+#: (:data:`ORACLE_JOINTS_PARAM`, a diagnostic).
+BENCH_ONLY_PARAMS: tuple[str, ...] = ("keypoints", "keypoint_joints", "pose_template", ORACLE_JOINTS_PARAM)
 
 
 def register_bsv(cloud: PointCloud, template: Mesh, params: Mapping[str, Any] | None = None,

@@ -11,6 +11,7 @@ subject.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -18,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import BenchError
-from .common import Run
+from .common import ORACLE_JOINTS_PARAM, Run
 from .reference import ordered_conditions
 
 #: Key of :attr:`Run.info` holding a run's joint errors ({joint: [lateral, up, forward] mm}).
@@ -86,15 +87,6 @@ def joint_errors(estimated: Mapping[str, Any], truth: Mapping[str, np.ndarray]) 
     return out
 
 
-#: ``--param`` key of ``bench synth --segmentation camera``: the measured joint centres of these kinds (``+`` or
-#: ``,`` separated, or ``all``) replaced by the rig's true ones (:func:`with_oracle_joints`) everywhere the
-#: camera path uses them (the template's posing, the upper arms' confinement, the keypoint term), the camera
-#: labels kept. A diagnostic, like the oracle labels: it measures what a joint's localisation costs each
-#: segment (``benchmarks/BENCH.md``, round 2 session 37: the true elbows take the forearms from 2.0-2.5 % to
-#: 0.6-1.4 %). The run's joint errors stay those of the measured joints.
-ORACLE_JOINTS_PARAM = "oracle_joints"
-
-
 def oracle_joint_kinds(text: object) -> tuple[str, ...]:
     """The joint kinds of an ``oracle_joints`` value (``elbow+knee``, ``elbow,knee``, ``all``; empty or
     ``none``: none); :class:`bsv.errors.BenchError` naming the parameter and the known kinds otherwise."""
@@ -122,8 +114,6 @@ def with_oracle_joints(joints: Mapping[str, Any], truth: Mapping[str, np.ndarray
     if truth is None:
         raise BenchError(f"--param {ORACLE_JOINTS_PARAM} needs the rig's true joint centres: the standard "
                          "cohort (--cohort standard) on the camera path (--segmentation camera)")
-    import dataclasses
-
     out = {}
     for name, joint in joints.items():
         if name.rsplit("_", 1)[0] in kinds and name in truth:
@@ -243,5 +233,19 @@ def joints_markdown(runs: Sequence[Run]) -> list[str]:
     return md
 
 
-__all__ = ["FIGURE", "INFO_KEY", "KINDS", "TARGET_MEDIAN_MM", "WARNINGS_KEY", "camera_segmentations", "degraded_captures",
-           "joint_errors", "joint_figure", "joints_markdown", "summarise"]
+__all__ = [
+    "FIGURE",
+    "INFO_KEY",
+    "KINDS",
+    "ORACLE_JOINTS_PARAM",
+    "TARGET_MEDIAN_MM",
+    "WARNINGS_KEY",
+    "camera_segmentations",
+    "degraded_captures",
+    "joint_errors",
+    "joint_figure",
+    "joints_markdown",
+    "oracle_joint_kinds",
+    "summarise",
+    "with_oracle_joints",
+]

@@ -4,23 +4,11 @@
 
 #![allow(clippy::unwrap_used)]
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+mod common;
 
-fn bsv(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_bsv-cli")).args(args).current_dir(dir).output().unwrap()
-}
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("bsv-cli-outputs-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn text(o: &Output) -> String {
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
-}
+use common::{bsv, text, tmpdir};
+use std::path::Path;
+use std::process::{Command, Stdio};
 
 /// Names in `dir`, sorted (hidden temporary files included).
 fn listing(dir: &Path) -> Vec<String> {
@@ -39,33 +27,35 @@ fn cloud(dir: &Path) {
 
 #[test]
 fn two_outputs_on_one_path_are_refused_before_the_fit() {
-    let d = tmpdir("same");
-    cloud(&d);
-    let before = listing(&d);
-    let o = bsv(&["register", "c.ply", "-o", "same.ply", "--json", "./same.ply", "--quiet"], &d);
+    let tmp = tmpdir("same");
+    let d = tmp.path();
+    cloud(d);
+    let before = listing(d);
+    let o = bsv(&["register", "c.ply", "-o", "same.ply", "--json", "./same.ply", "--quiet"], d);
     assert!(!o.status.success());
     assert!(text(&o).contains("--output and --json both name"), "{}", text(&o));
     assert!(!text(&o).contains("registering"), "refused only after the work: {}", text(&o));
-    assert_eq!(listing(&d), before);
+    assert_eq!(listing(d), before);
 }
 
 #[test]
 fn a_missing_folder_or_a_folder_as_output_is_refused_before_the_fit() {
-    let d = tmpdir("folders");
-    cloud(&d);
-    let before = listing(&d);
-    let o = bsv(&["register", "c.ply", "-o", "fit.ply", "--json", "nodir/v.json", "--quiet"], &d);
+    let tmp = tmpdir("folders");
+    let d = tmp.path();
+    cloud(d);
+    let before = listing(d);
+    let o = bsv(&["register", "c.ply", "-o", "fit.ply", "--json", "nodir/v.json", "--quiet"], d);
     assert!(!o.status.success());
     assert!(text(&o).contains("nodir/v.json") && text(&o).contains("does not exist"), "{}", text(&o));
     std::fs::create_dir(d.join("adir")).unwrap();
-    let o = bsv(&["register", "c.ply", "-o", "adir", "--force", "--quiet"], &d);
+    let o = bsv(&["register", "c.ply", "-o", "adir", "--force", "--quiet"], d);
     assert!(!o.status.success());
     assert!(text(&o).contains("is a folder"), "{}", text(&o));
     // --images naming a file.
-    let o = bsv(&["scan", "t.ply", "-o", "c2.ply", "--images", "t.ply"], &d);
+    let o = bsv(&["scan", "t.ply", "-o", "c2.ply", "--images", "t.ply"], d);
     assert!(!o.status.success());
     assert!(text(&o).contains("is a file"), "{}", text(&o));
-    let mut after = listing(&d);
+    let mut after = listing(d);
     after.retain(|n| n != "adir");
     assert_eq!(after, before, "a refused run left files");
 }
@@ -73,9 +63,10 @@ fn a_missing_folder_or_a_folder_as_output_is_refused_before_the_fit() {
 #[cfg(unix)]
 #[test]
 fn a_dangling_symlink_is_not_followed_without_force() {
-    let d = tmpdir("symlink");
+    let tmp = tmpdir("symlink");
+    let d = tmp.path();
     std::os::unix::fs::symlink(d.join("target.ply"), d.join("link.ply")).unwrap();
-    let o = bsv(&["template", "-o", "link.ply"], &d);
+    let o = bsv(&["template", "-o", "link.ply"], d);
     assert!(!o.status.success());
     assert!(text(&o).contains("already exists"), "{}", text(&o));
     assert!(!d.join("target.ply").exists());
@@ -84,29 +75,31 @@ fn a_dangling_symlink_is_not_followed_without_force() {
 #[cfg(unix)]
 #[test]
 fn a_file_size_limit_leaves_no_partial_file() {
-    let d = tmpdir("ulimit");
+    let tmp = tmpdir("ulimit");
+    let d = tmp.path();
     // 64 blocks of 512 bytes: far below the template's size.
     let o = Command::new("sh")
         .arg("-c")
         .arg(format!("ulimit -f 64; exec '{}' template --kind fine -o t.ply", env!("CARGO_BIN_EXE_bsv-cli")))
-        .current_dir(&d)
+        .current_dir(d)
         .output()
         .unwrap();
     assert!(!o.status.success());
     assert_eq!(o.status.code(), Some(1), "killed instead of a typed error: {}", text(&o));
     assert!(text(&o).contains("t.ply"), "{}", text(&o));
-    assert!(listing(&d).is_empty(), "left {:?}", listing(&d));
+    assert!(listing(d).is_empty(), "left {:?}", listing(d));
 }
 
 #[cfg(unix)]
 #[test]
 fn a_closed_stdout_does_not_stop_the_command() {
-    let d = tmpdir("pipe");
-    cloud(&d);
+    let tmp = tmpdir("pipe");
+    let d = tmp.path();
+    cloud(d);
     // `| head -1`: the reader goes away after the first line.
     let mut child = Command::new(env!("CARGO_BIN_EXE_bsv-cli"))
         .args(["register", "c.ply", "-o", "fit.ply", "--json", "v.json"])
-        .current_dir(&d)
+        .current_dir(d)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -119,7 +112,7 @@ fn a_closed_stdout_does_not_stop_the_command() {
     let o = Command::new("sh")
         .arg("-c")
         .arg(format!("'{}' info t.ply | head -1", env!("CARGO_BIN_EXE_bsv-cli")))
-        .current_dir(&d)
+        .current_dir(d)
         .output()
         .unwrap();
     assert!(!text(&o).contains("panicked"), "{}", text(&o));
@@ -127,15 +120,16 @@ fn a_closed_stdout_does_not_stop_the_command() {
 
 #[test]
 fn a_failed_capture_write_leaves_no_cloud() {
-    let d = tmpdir("capture");
-    assert!(bsv(&["template", "-o", "t.ply"], &d).status.success());
+    let tmp = tmpdir("capture");
+    let d = tmp.path();
+    assert!(bsv(&["template", "-o", "t.ply"], d).status.success());
     // The capture folder's parent does not exist: refused before the scan.
-    let o = bsv(&["scan", "t.ply", "-o", "c.ply", "--images", "no/such/dir"], &d);
+    let o = bsv(&["scan", "t.ply", "-o", "c.ply", "--images", "no/such/dir"], d);
     assert!(!o.status.success());
     assert!(!d.join("c.ply").exists());
     // A fresh capture folder is complete when it appears, with no temporary folder left.
-    let o = bsv(&["scan", "t.ply", "-o", "c.ply", "--images", "cap"], &d);
+    let o = bsv(&["scan", "t.ply", "-o", "c.ply", "--images", "cap"], d);
     assert!(o.status.success(), "{}", text(&o));
     assert!(d.join("cap/front/depth.png").exists() && d.join("c.ply").exists());
-    assert!(listing(&d).iter().all(|n| !n.starts_with(".bsv-partial")), "{:?}", listing(&d));
+    assert!(listing(d).iter().all(|n| !n.starts_with(".bsv-partial")), "{:?}", listing(d));
 }

@@ -4,26 +4,13 @@
 
 #![allow(clippy::unwrap_used)]
 
+mod common;
+
 use bsv_core::io::{read_mesh, read_point_cloud, write_mesh, write_point_cloud};
 use bsv_core::shapes::icosphere;
 use bsv_core::PointCloud;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn bsv(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_bsv-cli")).args(args).current_dir(dir).output().unwrap()
-}
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("bsv-cli-plausible-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn text(o: &Output) -> String {
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
-}
+use common::{bsv, text, tmpdir};
+use std::path::Path;
 
 /// The template and its noise-free two-camera scan (a standing person in the world frame).
 fn scanned(d: &Path) -> PointCloud {
@@ -45,8 +32,9 @@ fn write_map(d: &Path, name: &str, c: &PointCloud, f: fn([f64; 3]) -> [f64; 3], 
 
 #[test]
 fn turned_and_upside_down_clouds_exit_non_zero_naming_the_problem() {
-    let d = tmpdir("turned");
-    let c = scanned(&d);
+    let tmp = tmpdir("turned");
+    let d = tmp.path();
+    let c = scanned(d);
     type Case = (&'static str, fn([f64; 3]) -> [f64; 3], &'static str);
     let cases: [Case; 4] = [
         ("x90", |[x, y, z]| [x, -z, y], "--up"),
@@ -57,21 +45,21 @@ fn turned_and_upside_down_clouds_exit_non_zero_naming_the_problem() {
     for (name, f, hint) in cases {
         for labels in [true, false] {
             let file = format!("{name}-{labels}.ply");
-            write_map(&d, &file, &c, f, labels);
-            let o = bsv(&["register", &file, "--quiet"], &d);
+            write_map(d, &file, &c, f, labels);
+            let o = bsv(&["register", &file, "--quiet"], d);
             let t = text(&o);
             assert_eq!(o.status.code(), Some(1), "{file}: {t}");
             assert!(t.contains("error:") && t.contains(hint) && !t.contains("panicked"), "{file}: {t}");
         }
     }
     // The remedy works: the upside-down cloud registers with --up -y.
-    let o = bsv(&["register", "flip-true.ply", "--up", "-y", "--quiet", "--json", "v.json"], &d);
+    let o = bsv(&["register", "flip-true.ply", "--up", "-y", "--quiet", "--json", "v.json"], d);
     assert!(o.status.success(), "{}", text(&o));
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("v.json")).unwrap()).unwrap();
     assert!(v["registration"]["quality"]["torso"]["coverage"].as_f64().unwrap() > 0.5, "{v}");
     assert!(!text(&o).contains("doubtful"), "{}", text(&o));
     // The remedy for a cloud lying along z: --up +z; then the fit is good (no segment flagged).
-    let o = bsv(&["register", "x90-true.ply", "--up", "+z", "--quiet"], &d);
+    let o = bsv(&["register", "x90-true.ply", "--up", "+z", "--quiet"], d);
     assert!(o.status.success() && !text(&o).contains("doubtful"), "{}", text(&o));
     // A deliberately bad fit (the check switched off, a body facing +x) is flagged per segment.
     let o = bsv(
@@ -85,7 +73,7 @@ fn turned_and_upside_down_clouds_exit_non_zero_naming_the_problem() {
             "--json",
             "bad.json",
         ],
-        &d,
+        d,
     );
     assert!(o.status.success() && text(&o).contains("is doubtful"), "{}", text(&o));
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("bad.json")).unwrap()).unwrap();
@@ -95,7 +83,8 @@ fn turned_and_upside_down_clouds_exit_non_zero_naming_the_problem() {
 
 #[test]
 fn a_sphere_and_a_plane_exit_non_zero_naming_the_shape() {
-    let d = tmpdir("shapes");
+    let tmp = tmpdir("shapes");
+    let d = tmp.path();
     // The sphere: 88 L, standing on the floor.
     let r = (88e-3 * 3.0 / (4.0 * std::f64::consts::PI)).cbrt();
     let mut sphere = PointCloud::new(bsv_capture::sample::sample_surface(&icosphere(r, 4), 20_000, 1).0);
@@ -105,7 +94,7 @@ fn a_sphere_and_a_plane_exit_non_zero_naming_the_shape() {
         PointCloud::new((0..20_000).map(|i| [(i % 100) as f64 / 100.0, (i / 100) as f64 * 0.008, 2.0]).collect());
     write_point_cloud(&d.join("plane.ply"), &plane).unwrap();
     for (file, what) in [("sphere.ply", "compact"), ("plane.ply", "flat")] {
-        let o = bsv(&["register", file, "--quiet", "-o", "fit.ply"], &d);
+        let o = bsv(&["register", file, "--quiet", "-o", "fit.ply"], d);
         let t = text(&o);
         assert_eq!(o.status.code(), Some(1), "{file}: {t}");
         assert!(t.contains(what) && t.contains("--no-plausibility-check"), "{file}: {t}");
@@ -115,20 +104,21 @@ fn a_sphere_and_a_plane_exit_non_zero_naming_the_shape() {
 
 #[test]
 fn volume_refuses_a_mesh_in_millimetres_like_register_refuses_a_cloud() {
-    let d = tmpdir("mm");
-    assert!(bsv(&["template", "-o", "t.ply"], &d).status.success());
+    let tmp = tmpdir("mm");
+    let d = tmp.path();
+    assert!(bsv(&["template", "-o", "t.ply"], d).status.success());
     let mut m = read_mesh(&d.join("t.ply")).unwrap();
     m.vertices.iter_mut().for_each(|p| *p = p.map(|v| v * 1000.0));
     write_mesh(&d.join("mm.ply"), &m).unwrap();
-    let o = bsv(&["volume", "mm.ply", "--json", "v.json"], &d);
+    let o = bsv(&["volume", "mm.ply", "--json", "v.json"], d);
     let t = text(&o);
     assert_eq!(o.status.code(), Some(1), "{t}");
     assert!(t.contains("millimetres") && t.contains("--units mm"), "{t}");
     assert!(!d.join("v.json").exists());
-    let o = bsv(&["volume", "mm.ply", "--units", "mm", "--json", "v.json"], &d);
+    let o = bsv(&["volume", "mm.ply", "--units", "mm", "--json", "v.json"], d);
     assert!(o.status.success(), "{}", text(&o));
     let mm: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("v.json")).unwrap()).unwrap();
-    assert!(bsv(&["volume", "t.ply", "--json", "m.json"], &d).status.success());
+    assert!(bsv(&["volume", "t.ply", "--json", "m.json"], d).status.success());
     let m: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("m.json")).unwrap()).unwrap();
     let (a, b) = (mm["volumes_l"]["trunk_limbs"].as_f64().unwrap(), m["volumes_l"]["trunk_limbs"].as_f64().unwrap());
     assert!((a - b).abs() < 1e-6 * b, "{a} vs {b}");

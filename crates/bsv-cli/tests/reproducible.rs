@@ -3,7 +3,10 @@
 
 #![allow(clippy::unwrap_used)]
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::tmpdir;
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn bsv(args: &[&str], dir: &Path, rayon_threads: Option<&str>) -> Output {
@@ -14,13 +17,6 @@ fn bsv(args: &[&str], dir: &Path, rayon_threads: Option<&str>) -> Output {
         None => c.env_remove("RAYON_NUM_THREADS"),
     };
     c.output().unwrap()
-}
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("bsv-cli-test-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 fn ok(o: &Output) {
@@ -35,11 +31,12 @@ fn volumes(path: &Path) -> serde_json::Value {
 
 #[test]
 fn register_writes_the_same_bytes_for_any_thread_count() {
-    let d = tmpdir("repro");
-    ok(&bsv(&["template", "-o", "t.ply"], &d, None));
+    let tmp = tmpdir("repro");
+    let d = tmp.path();
+    ok(&bsv(&["template", "-o", "t.ply"], d, None));
     // The scan (noise and calibration error) with one and with three threads.
-    ok(&bsv(&["scan", "t.ply", "--condition", "l5ca", "--seed", "5", "-o", "c.ply"], &d, Some("1")));
-    ok(&bsv(&["scan", "t.ply", "--condition", "l5ca", "--seed", "5", "-o", "c3.ply"], &d, Some("3")));
+    ok(&bsv(&["scan", "t.ply", "--condition", "l5ca", "--seed", "5", "-o", "c.ply"], d, Some("1")));
+    ok(&bsv(&["scan", "t.ply", "--condition", "l5ca", "--seed", "5", "-o", "c3.ply"], d, Some("3")));
     let cloud = std::fs::read(d.join("c.ply")).unwrap();
     assert!(cloud == std::fs::read(d.join("c3.ply")).unwrap(), "scan depends on the thread count");
     let runs: [(&str, &[&str], Option<&str>); 5] = [
@@ -54,7 +51,7 @@ fn register_writes_the_same_bytes_for_any_thread_count() {
         let json = out.replace(".ply", ".json");
         let mut args = vec!["register", "c.ply", "-o", out, "--json", &json, "--quiet"];
         args.extend_from_slice(extra);
-        ok(&bsv(&args, &d, env));
+        ok(&bsv(&args, d, env));
         let bytes = std::fs::read(d.join(out)).unwrap();
         let vols = volumes(&d.join(&json));
         match &first {
@@ -66,8 +63,8 @@ fn register_writes_the_same_bytes_for_any_thread_count() {
         }
     }
     // Volumes of the fit with one and with three threads.
-    ok(&bsv(&["volume", "f1.ply", "--json", "v1.json"], &d, Some("1")));
-    ok(&bsv(&["volume", "f1.ply", "--json", "v3.json"], &d, Some("3")));
+    ok(&bsv(&["volume", "f1.ply", "--json", "v1.json"], d, Some("1")));
+    ok(&bsv(&["volume", "f1.ply", "--json", "v3.json"], d, Some("3")));
     assert_eq!(volumes(&d.join("v1.json")), volumes(&d.join("v3.json")));
-    let _ = std::fs::remove_dir_all(&d);
+    let _ = std::fs::remove_dir_all(d);
 }

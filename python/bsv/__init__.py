@@ -207,15 +207,21 @@ def register(
     :class:`~bsv.frontend.landmarks.JointCentre`) that pull the template's own joint centres (the
     keypoint term; parameters ``keypoint_weight``, ``keypoint_robust_m``). Only the embedded templates
     (and those :func:`bsv.posed_template.posed_template` poses) carry joints; the fitted-to-measured distances are in ``volumes["registration"]["keypoints"]``.
+    A measured segment boundary of :data:`bsv.keypoints.BOUNDARY_RINGS` (``hip_loop_l``, ``hip_loop_r``: the
+    centre of a thigh's boundary with the torso, :mod:`bsv.frontend.groin`) pulls the ring the template's
+    labels give it (:func:`bsv.keypoints.boundary_rings`) along its axis.
     """
     cloud = as_cloud(points, labels=labels)
     tmpl = default_template() if template is None else as_mesh(template)
     measured = rings = None
     if keypoints is not None:
-        from .keypoints import JOINT_NAMES, as_keypoints, joint_rings
+        from .keypoints import BOUNDARY_RINGS, JOINT_NAMES, as_keypoints, boundary_rings, joint_rings
 
         measured = as_keypoints(keypoints)
         rings = joint_rings(tmpl)
+        loops = [m[0] for m in measured if m[0] in BOUNDARY_RINGS]
+        if rings is not None and loops:  # the segment boundaries measured too: rings of the template's labels
+            rings += boundary_rings(tmpl, loops)
         if rings is None and measured:
             err = InputError("keypoints need a template that carries joint centres: the embedded templates "
                              "(template=None, bsv.default_template(), the 'fine', 'full' and sexed ones, and a "

@@ -168,7 +168,7 @@ def register(
     params: RegisterParams,
     density: float = 1000.0,
     progress: Callable[[dict[str, Any]], object] | None = None,
-    keypoints: Sequence[tuple[str, Sequence[float], float]] | None = None,
+    keypoints: Sequence[tuple[str, Sequence[float], float, Sequence[float] | None]] | None = None,
     joint_rings: Sequence[tuple[str, Sequence[int], Sequence[float]]] | None = None,
 ) -> RegistrationResult: ...
 def template_joints(kind: str) -> list[tuple[str, list[int], list[float], tuple[float, float, float]]]: ...

@@ -54,21 +54,56 @@ def joint_rings(mesh: Mesh) -> list[tuple[str, list[int], list[float]]] | None:
     return [(name, list(v), list(w)) for name, v, w, _ in _bsv.template_joints(kind)]
 
 
+#: Segment boundaries the camera path can pull like joints (``bsv.register``'s keypoint term): name -> (the
+#: segment whose vertices form the ring, the segment across the boundary). A boundary ring is the ring of the
+#: first segment's vertices that share an edge with a vertex of the second (uniform weights), read from any
+#: labelled template, so it is the same anatomical loop on every MakeHuman template; its centre is pulled along
+#: the ring's axis (the keypoint term's axial setting) to a target the capture measures
+#: (:mod:`bsv.frontend.groin`: the thighs' proximal boundary from the crotch the depth images show).
+BOUNDARY_RINGS: dict[str, tuple[str, str]] = {"hip_loop_l": ("thigh_l", "torso"), "hip_loop_r": ("thigh_r", "torso")}
+
+
+def boundary_rings(mesh: Mesh, names: Sequence[str] | None = None) -> list[tuple[str, list[int], list[float]]]:
+    """The :data:`BOUNDARY_RINGS` (those of ``names``, default all) of a labelled template as ``(name,
+    vertices, weights)``; a boundary the template's labels do not have is left out (none without vertex
+    labels)."""
+    labels = getattr(mesh, "vertex_labels", None)
+    if labels is None:
+        return []
+    lab = np.asarray(labels)
+    faces = np.asarray(mesh.faces, dtype=np.int64)
+    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    out = []
+    for name in BOUNDARY_RINGS if names is None else names:
+        if name not in BOUNDARY_RINGS:
+            continue
+        inner, outer = (SEGMENT_IDS[s] for s in BOUNDARY_RINGS[name])
+        a, b = lab[edges[:, 0]], lab[edges[:, 1]]
+        ring = np.union1d(edges[(a == inner) & (b == outer), 0], edges[(b == inner) & (a == outer), 1])
+        if len(ring) >= 3:
+            out.append((name, [int(v) for v in ring], [1.0 / len(ring)] * len(ring)))
+    return out
+
+
 def _bad(message: str) -> InputError:
     e = InputError(message)
     e.argument = "keypoints"
     return e
 
 
-def _one(name: str, value: Any) -> tuple[str, list[float], float]:
-    """``(name, xyz, confidence)`` of one measured joint: a :class:`bsv.frontend.landmarks.JointCentre`,
-    a ``{"xyz", "confidence"}`` dict (the volumes JSON's ``joints_m`` entry), ``(xyz, confidence)`` or xyz."""
+def _one(name: str, value: Any) -> tuple[str, list[float], float, list[float] | None]:
+    """``(name, xyz, confidence, direction)`` of one measured joint or boundary: a
+    :class:`bsv.frontend.landmarks.JointCentre` or an object with ``xyz``, ``confidence`` and optionally
+    ``direction`` (:class:`bsv.frontend.groin.LoopTarget`), a ``{"xyz", "confidence", "direction"}`` dict (the
+    volumes JSON's ``joints_m`` entry; the last two optional), ``(xyz, confidence)`` or xyz. ``direction``: the
+    one direction the measurement holds (the registration pulls along it alone), None for a full position."""
+    direction: Any = None
     if hasattr(value, "xyz"):
-        xyz, conf = value.xyz, getattr(value, "confidence", 1.0)
+        xyz, conf, direction = value.xyz, getattr(value, "confidence", 1.0), getattr(value, "direction", None)
     elif isinstance(value, Mapping):
         if "xyz" not in value:
             raise _bad(f"keypoints[{name!r}]: a dict needs an 'xyz' entry (and optionally 'confidence')")
-        xyz, conf = value["xyz"], value.get("confidence", 1.0)
+        xyz, conf, direction = value["xyz"], value.get("confidence", 1.0), value.get("direction")
     elif isinstance(value, tuple) and len(value) == 2 and np.ndim(value[0]) == 1:
         xyz, conf = value
     else:
@@ -76,17 +111,21 @@ def _one(name: str, value: Any) -> tuple[str, list[float], float]:
     try:
         p = np.asarray(xyz, dtype=np.float64).reshape(-1)
         c = float(conf)
+        a = None if direction is None else np.asarray(direction, dtype=np.float64).reshape(-1)
     except (TypeError, ValueError) as e:
         raise _bad(f"keypoints[{name!r}]: expected 3 coordinates (metres) and a confidence, got {value!r}") from e
     if p.shape != (3,) or not np.isfinite(p).all():
         raise _bad(f"keypoints[{name!r}]: expected 3 finite coordinates in metres, got {xyz!r}")
     if not (math.isfinite(c) and 0.0 <= c <= 1.0):
         raise _bad(f"keypoints[{name!r}]: confidence must be in [0, 1], got {conf!r}")
-    return str(name), [float(x) for x in p], c
+    if a is not None and (a.shape != (3,) or not np.isfinite(a).all() or not np.linalg.norm(a) > 0.0):
+        raise _bad(f"keypoints[{name!r}]: a direction is 3 finite coordinates, not all zero, got {direction!r}")
+    return str(name), [float(x) for x in p], c, None if a is None else [float(x) for x in a]
 
 
-def as_keypoints(keypoints: Mapping[str, Any]) -> list[tuple[str, list[float], float]]:
-    """The measured joints of a ``{name: joint}`` mapping as ``(name, xyz, confidence)`` tuples."""
+def as_keypoints(keypoints: Mapping[str, Any]) -> list[tuple[str, list[float], float, list[float] | None]]:
+    """The measured joints (and boundaries) of a ``{name: joint}`` mapping as ``(name, xyz, confidence,
+    direction)`` tuples (direction None for a full position)."""
     if not isinstance(keypoints, Mapping):
         raise _bad(f"keypoints must be a dict {{joint name: position}}, got {type(keypoints).__name__}")
     return [_one(name, value) for name, value in keypoints.items()]
@@ -108,8 +147,11 @@ def as_keypoints(keypoints: Mapping[str, Any]) -> list[tuple[str, list[float], f
 #: Before that, where one view's elbow cut lay 5 cm up the arm (seed 6 subject 9) the elbow's pull against
 #: the mislabelled points collapsed the forearm (-11 -> -40 %); it now reads -3.6 to -4.8 %. Left out: the
 #: knees (their vertical error, sd 11-13 mm, exceeds the 2-D labels' knee loop's; the shins got worse on
-#: every try, last in session 25).
-CAMERA_KEYPOINT_KINDS: tuple[str, ...] = ("shoulder", "elbow", "wrist", "hip")
+#: every try, last in session 25). The thighs' loops (``hip_loop``, :data:`BOUNDARY_RINGS`) joined in round 2
+#: session 38, each pulled to the height the crotch in the depth images gives (:mod:`bsv.frontend.groin`): held
+#: out (room seeds 20-21) the hip loop's sd 4.4-5.5 -> 3.4-4.5 mm, the thighs 1.62-2.25 -> 1.34-1.90 %, the
+#: torso 0.97-1.20 -> 0.67-0.82 % (benchmarks/BENCH.md).
+CAMERA_KEYPOINT_KINDS: tuple[str, ...] = ("shoulder", "elbow", "wrist", "hip", "hip_loop")
 
 
 def select_joints(joints: Mapping[str, Any], kinds: Sequence[str] | None) -> dict[str, Any]:
@@ -156,7 +198,7 @@ def confine_upper_arms(points: Any, labels: Any, joints: Mapping[str, Any],
         raise _bad(f"confine_upper_arms: points must be (N, 3) with N labels, got {pts.shape} and {lab.shape}")
     if not (math.isfinite(max_distance_m) and max_distance_m > 0):
         raise _bad(f"confine_upper_arms: max_distance_m must be positive, got {max_distance_m!r}")
-    measured = {name: np.asarray(xyz) for name, xyz, _ in as_keypoints(joints)}
+    measured = {name: np.asarray(xyz) for name, xyz, _, _ in as_keypoints(joints)}
     torso = SEGMENT_IDS["torso"]
     changed = 0
     for side in ("l", "r"):
@@ -191,4 +233,4 @@ def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray
     return np.asarray(np.linalg.norm(p - (a + t[:, None] * ab), axis=1))
 
 
-__all__ = ["CAMERA_KEYPOINT_KINDS", "JOINT_NAMES", "UPPER_ARM_MAX_DISTANCE_M", "as_keypoints", "camera_joints", "confine_cloud_upper_arms", "confine_upper_arms", "joint_rings", "select_joints", "template_kind"]
+__all__ = ["BOUNDARY_RINGS", "CAMERA_KEYPOINT_KINDS", "JOINT_NAMES", "UPPER_ARM_MAX_DISTANCE_M", "as_keypoints", "boundary_rings", "camera_joints", "confine_cloud_upper_arms", "confine_upper_arms", "joint_rings", "select_joints", "template_kind"]

@@ -260,17 +260,22 @@ def _read_label_png(path: Path) -> np.ndarray:
 
 
 def _segment_cameras(data: dict[str, dict[str, Any]], extrinsics: dict[str, dict[str, Any]], cameras: Sequence[str],
-                     params: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
-    """Both cameras segmented together (landmarks filled in across views, :mod:`bsv.frontend.landmarks`)
-    and the joint centres in 3-D; a single camera is segmented alone."""
+                     params: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
+    """Both cameras segmented together (landmarks filled in across views, :mod:`bsv.frontend.landmarks`),
+    the joint centres in 3-D and the thighs' loop targets (:mod:`bsv.frontend.groin`); a single camera is
+    segmented alone."""
+    from .frontend.groin import hip_loop_targets
     from .frontend.landmarks import Camera, joint_centres, segment_views
     from .frontend.segment import segment_image
 
     if sorted(cameras) != ["back", "front"]:
-        return {c: segment_image(data[c]["colour"], view=c, depth=data[c]["depth_m"], **params) for c in cameras}, {}
+        return ({c: segment_image(data[c]["colour"], view=c, depth=data[c]["depth_m"], **params) for c in cameras},
+                {}, {})
     cams = {c: Camera.from_json(data[c]["intrinsics"], extrinsics[c]) for c in cameras}
     segs = segment_views({c: data[c] for c in cameras}, cams, **params)
-    return segs, joint_centres(segs, {c: data[c]["depth_m"] for c in cameras}, cams)
+    depths = {c: data[c]["depth_m"] for c in cameras}
+    joints = joint_centres(segs, depths, cams)
+    return segs, joints, hip_loop_targets(segs, depths, cams, joints)
 
 
 def _segment(cam: str, data: dict[str, Any], folder: Path, mode: str, params: dict[str, Any],
@@ -460,8 +465,10 @@ def process(
     (:func:`bsv.keypoints.confine_upper_arms`; counted in volumes.json's ``cloud``).
     ``keypoints`` (camera segmentation): the joint centres lifted from both views pull the template's
     joints in the first iterations (``bsv.register``'s keypoint term): None (the default) the shoulders,
-    elbows, wrists and hips only (:data:`bsv.keypoints.CAMERA_KEYPOINT_KINDS`, where the measurements on the synthetic cohort
-    say why), True (``--keypoints``) every joint, False (``--no-keypoints``) none.
+    elbows, wrists and hips only, and the thighs' loops at the height the crotch in the depth images gives
+    (:mod:`bsv.frontend.groin`; volumes.json's ``boundaries_m``) (:data:`bsv.keypoints.CAMERA_KEYPOINT_KINDS`,
+    where the measurements on the synthetic cohort say why), True (``--keypoints``) every joint, False
+    (``--no-keypoints``) none.
     ``pose_template`` (camera segmentation, the template's segments; ``--no-pose-template`` turns it off):
     the embedded template is first posed like the subject, its arm, elbow and hip angles read from the
     measured joint centres (:func:`bsv.posed_template.camera_template`); volumes.json's ``template`` holds
@@ -527,12 +534,13 @@ def process(
         seg_summary: dict[str, dict[str, Any]] = {}
         seg_files: dict[str, Any] = {}
         joints: dict[str, Any] = {}
+        loops: dict[str, Any] = {}  # the thighs' loop targets (bsv.frontend.groin)
         camera_segs: dict[str, Any] = {}
         seg_params = dict(segment_params or {})
         if sex is not None and segmentation == "camera":  # the cut lines of that sex (bsv.frontend.sex)
             seg_params.setdefault("sex_score", SEX_SCORES[sex])
         if segmentation == "camera":
-            camera_segs, joints = steps.run("segment", "segmenting both cameras (MediaPipe) and their joint centres",
+            camera_segs, joints, loops = steps.run("segment", "segmenting both cameras (MediaPipe) and their joint centres",
                                             lambda: _segment_cameras(data, extrinsics, cameras, seg_params))
         sex_estimate = next((s.sex for s in camera_segs.values() if s.sex is not None), None)
         refined: dict[str, dict[str, Any]] = {}
@@ -590,7 +598,7 @@ def process(
             if progress:
                 for w in template_notes:
                     print(f"[bsv]   warning: {w}", flush=True)
-        measured = camera_joints(joints, keypoints)
+        measured = camera_joints({**joints, **loops}, keypoints)
         reg: Registration = steps.run(
             "register", "registering the template (ARAP)",
             lambda: bsv_register(cloud, template=template, progress=False, density=density, label_source=label_source,
@@ -617,6 +625,8 @@ def process(
         vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report,
                          "upper_arm_points_relabelled_torso": arm_relabelled}
         vols["joints_m"] = {name: j.to_json() for name, j in joints.items()}
+        if segmentation == "camera":
+            vols["boundaries_m"] = {name: t.to_json() for name, t in loops.items() if measured and name in measured}
         vols["warnings"] = landmark_warnings + template_notes
         vols["template"] = template_record(template, sex)
         if sex_estimate is not None:
@@ -817,7 +827,7 @@ def main_process(argv: Sequence[str] | None = None) -> int:
                     help="correct each camera's pitch, roll and height with the floor it sees (the cameras must see it)")
     ap.add_argument("--keypoints", action=argparse.BooleanOptionalAction, default=None,
                     help="camera segmentation: let the joint centres lifted from both views pull the template's "
-                         f"joints; default: the {', '.join(k + 's' for k in CAMERA_KEYPOINT_KINDS)} only, "
+                         f"joints; default: the {', '.join(k.replace('_', ' ') + 's' for k in CAMERA_KEYPOINT_KINDS)} only, "
                          "--keypoints: every joint, --no-keypoints: none")
     ap.add_argument("--pose-template", action=argparse.BooleanOptionalAction, default=True,
                     help="camera segmentation: pose the embedded template like the subject (arm, elbow and hip "

@@ -182,8 +182,8 @@ def test_confine_upper_arms_refuses_bad_input() -> None:
 
 
 def test_select_joints_and_the_camera_paths_default_joints(monkeypatch) -> None:
-    """The camera path lets the shoulders, elbows, wrists and hips pull by default (not the knees); ``keypoints=true`` every joint,
-    ``false`` none."""
+    """The camera path lets the shoulders, elbows, wrists and hips (and the thighs' loops) pull by default (not the
+    knees); ``keypoints=true`` every joint, ``false`` none."""
     from bsv.bench import common
     from bsv.keypoints import CAMERA_KEYPOINT_KINDS, JOINT_NAMES, select_joints
 
@@ -191,6 +191,8 @@ def test_select_joints_and_the_camera_paths_default_joints(monkeypatch) -> None:
     arms = select_joints(joints, CAMERA_KEYPOINT_KINDS)
     assert sorted(arms) == sorted(f"{j}_{s}" for j in ("shoulder", "elbow", "wrist", "hip") for s in "lr")
     assert select_joints(joints, None) == joints and select_joints(joints, ()) == {}
+    loops = {"hip_loop_l": [0.1, 0.8, 0.0], "hip_loop_r": [-0.1, 0.8, 0.0]}  # the thighs' loops pull by default too
+    assert select_joints({**joints, **loops}, CAMERA_KEYPOINT_KINDS) == {**arms, **loops}
     seen: list[object] = []
 
     class Stop(Exception):

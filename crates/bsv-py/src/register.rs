@@ -39,6 +39,8 @@ impl Progress {
 
 /// A template joint ring from Python: `(name, vertex indices, weights)`.
 type RingTuple = (String, Vec<usize>, Vec<f64>);
+/// A measured keypoint from Python: `(name, xyz, confidence, direction or None)`.
+type KeypointTuple = (String, [f64; 3], f64, Option<[f64; 3]>);
 
 /// Registers a template onto a cloud. Head/hand/foot points are dropped by the library unless
 /// `params` has `drop_extremities=False` (the count is `summary["extremities_dropped"]`). The fitted
@@ -58,13 +60,13 @@ pub fn register<'py>(
     params: Bound<'py, PyRegisterParams>,
     density: f64,
     progress: Option<Bound<'py, PyAny>>,
-    keypoints: Option<Vec<(String, [f64; 3], f64)>>,
+    keypoints: Option<Vec<KeypointTuple>>,
     joint_rings: Option<Vec<RingTuple>>,
 ) -> PyResult<PyRegistration> {
     let measured: Vec<bsv_register::Keypoint> = keypoints
         .unwrap_or_default()
         .into_iter()
-        .map(|(name, position, confidence)| bsv_register::Keypoint { name, position, confidence })
+        .map(|(name, position, confidence, direction)| bsv_register::Keypoint { name, position, confidence, direction })
         .collect();
     let rings: Vec<bsv_core::template::JointRing> = joint_rings
         .unwrap_or_default()

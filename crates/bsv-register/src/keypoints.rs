@@ -13,6 +13,10 @@
 //! `c = keypoint_weight x data_weight x confidence x rho(|q - J*|)` with the robust factor
 //! `rho(r) = 1 / (1 + (r / keypoint_robust_m)^2)`: a landmark far from where the fit puts the joint
 //! (a mislabelled or occluded one) loses its pull instead of dragging the limb.
+//!
+//! A keypoint with a [`Keypoint::direction`] measures one coordinate only (a segment boundary's height
+//! along the body's axis, say): its ring is pulled along that direction alone, by the component of
+//! `q - J*` along it, and its residual is that component.
 
 use crate::error::InputError;
 use bsv_core::geometry::{add, dot, scale, sub};
@@ -28,6 +32,9 @@ pub struct Keypoint {
     pub position: [f64; 3],
     /// Confidence in [0, 1] (0 = ignored).
     pub confidence: f64,
+    /// The one direction the measurement holds (world frame; normalised here): the ring is pulled along it
+    /// alone, whatever `keypoint_axial` says. `None`: a full 3-D position.
+    pub direction: Option<[f64; 3]>,
 }
 
 /// A measured joint paired with the template ring that carries it.
@@ -36,6 +43,7 @@ struct Pair {
     ring: JointRing,
     target: [f64; 3],
     confidence: f64,
+    direction: Option<[f64; 3]>,
 }
 
 /// Measured joints matched to the template's joint rings, checked against the template.
@@ -80,6 +88,19 @@ impl Keypoints {
                     reason: format!("confidence {} is not in [0, 1]", k.confidence),
                 });
             }
+            let direction = match k.direction {
+                None => None,
+                Some(a) => {
+                    let n = dot(a, a).sqrt();
+                    if !(n.is_finite() && n > 1e-9) {
+                        return Err(InputError::BadKeypoint {
+                            name: k.name.clone(),
+                            reason: format!("direction {a:?} is not a finite non-zero vector"),
+                        });
+                    }
+                    Some(scale(a, 1.0 / n))
+                }
+            };
             let bad_weights = ring.weights.len() != ring.vertices.len()
                 || ring.vertices.is_empty()
                 || ring.weights.iter().any(|&w| !(w.is_finite() && w >= 0.0))
@@ -87,7 +108,7 @@ impl Keypoints {
             if bad_weights || ring.vertices.iter().any(|&v| v >= n_vertices) {
                 return Err(InputError::BadJointRing { name: ring.name.clone(), n_vertices });
             }
-            pairs.push(Pair { ring: ring.clone(), target: k.position, confidence: k.confidence });
+            pairs.push(Pair { ring: ring.clone(), target: k.position, confidence: k.confidence, direction });
         }
         Ok(Keypoints { pairs })
     }
@@ -116,11 +137,13 @@ impl Keypoints {
         for p in &self.pairs {
             let centre = p.ring.position(cur);
             let full = sub(p.target, centre);
-            let shift = if axial {
-                let a = ring_axis(&p.ring, cur, centre);
-                scale(a, dot(full, a))
-            } else {
-                full
+            let shift = match p.direction {
+                Some(a) => scale(a, dot(full, a)),
+                None if axial => {
+                    let a = ring_axis(&p.ring, cur, centre);
+                    scale(a, dot(full, a))
+                }
+                None => full,
             };
             let r = dot(shift, shift).sqrt() / robust_m;
             let c = weight * p.confidence / (1.0 + r * r);
@@ -138,17 +161,18 @@ impl Keypoints {
         }
     }
 
-    /// Distance of each fitted template joint (vertex positions `cur`) to its measured centre.
+    /// Distance of each fitted template joint (vertex positions `cur`) to its measured centre (along the
+    /// measured direction only, for a keypoint that has one).
     pub fn residuals(&self, cur: &[[f64; 3]]) -> Vec<KeypointResidual> {
         self.pairs
             .iter()
             .map(|p| {
                 let e = sub(p.ring.position(cur), p.target);
-                KeypointResidual {
-                    name: p.ring.name.clone(),
-                    distance_mm: dot(e, e).sqrt() * 1e3,
-                    confidence: p.confidence,
-                }
+                let distance = match p.direction {
+                    Some(a) => dot(e, a).abs(),
+                    None => dot(e, e).sqrt(),
+                };
+                KeypointResidual { name: p.ring.name.clone(), distance_mm: distance * 1e3, confidence: p.confidence }
             })
             .collect()
     }
@@ -189,7 +213,7 @@ mod tests {
         let cur = vec![[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
         let k = Keypoints::new(
             &[ring()],
-            &[Keypoint { name: "knee_l".into(), position: [0.0, 0.01, 0.0], confidence: 1.0 }],
+            &[Keypoint { name: "knee_l".into(), position: [0.0, 0.01, 0.0], confidence: 1.0, direction: None }],
             4,
         )
         .unwrap();
@@ -208,7 +232,7 @@ mod tests {
         let cur = vec![[0.0; 3]; 4];
         let k = Keypoints::new(
             &[ring()],
-            &[Keypoint { name: "knee_l".into(), position: [0.04, 0.0, 0.0], confidence: 1.0 }],
+            &[Keypoint { name: "knee_l".into(), position: [0.04, 0.0, 0.0], confidence: 1.0, direction: None }],
             4,
         )
         .unwrap();
@@ -222,7 +246,7 @@ mod tests {
     #[test]
     fn far_landmarks_lose_their_pull() {
         let cur = vec![[0.0; 3]; 4];
-        let near = Keypoint { name: "knee_l".into(), position: [0.01, 0.0, 0.0], confidence: 1.0 };
+        let near = Keypoint { name: "knee_l".into(), position: [0.01, 0.0, 0.0], confidence: 1.0, direction: None };
         let far = Keypoint { position: [0.30, 0.0, 0.0], ..near.clone() };
         let weight_of = |kp: Keypoint| {
             let k = Keypoints::new(&[ring()], &[kp], 4).unwrap();
@@ -234,8 +258,38 @@ mod tests {
     }
 
     #[test]
+    fn a_directed_keypoint_pulls_along_its_direction_only() {
+        // The target lies 1 cm up and 3 cm aside; measured along (0, 2, 0) the ring moves up only, even
+        // with the axial setting (whose ring axis, the flattest direction of this square, is y too: the
+        // direction decides), and the residual is the component along it.
+        let cur = vec![[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
+        let kp = Keypoint {
+            name: "knee_l".into(),
+            position: [0.03, 0.01, 0.0],
+            confidence: 1.0,
+            direction: Some([0.0, 2.0, 0.0]),
+        };
+        let k = Keypoints::new(&[ring()], &[kp], 4).unwrap();
+        for axial in [false, true] {
+            let (mut d, mut q) = (vec![0.0; 4], cur.clone());
+            k.apply(&cur, 10.0, 1.0, axial, &mut d, &mut q);
+            let j = ring().position(&q);
+            assert!((j[1] - 0.01).abs() < 1e-12 && j[0].abs() < 1e-12 && j[2].abs() < 1e-12, "{j:?}");
+        }
+        assert!((k.residuals(&cur)[0].distance_mm - 10.0).abs() < 1e-9);
+        let zero = Keypoint { name: "knee_l".into(), position: [0.0; 3], confidence: 1.0, direction: Some([0.0; 3]) };
+        let e = Keypoints::new(&[ring()], &[zero], 4).unwrap_err();
+        assert!(e.to_string().contains("knee_l") && e.to_string().contains("direction"), "{e}");
+    }
+
+    #[test]
     fn bad_keypoints_are_named() {
-        let kp = |name: &str, position: [f64; 3], confidence: f64| Keypoint { name: name.into(), position, confidence };
+        let kp = |name: &str, position: [f64; 3], confidence: f64| Keypoint {
+            name: name.into(),
+            position,
+            confidence,
+            direction: None,
+        };
         let e = Keypoints::new(&[ring()], &[kp("nose", [0.0; 3], 1.0)], 4).unwrap_err();
         assert!(e.to_string().contains("nose") && e.to_string().contains("knee_l"), "{e}");
         let e = Keypoints::new(&[ring()], &[kp("knee_l", [f64::NAN, 0.0, 0.0], 1.0)], 4).unwrap_err();

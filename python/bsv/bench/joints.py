@@ -54,6 +54,28 @@ def camera_segmentations(capture_dir: str | Path, correct: bool = True,
     return segs, joint_centres(segs, {v: data[v]["depth_m"] for v in VIEWS}, cams, correct=correct)
 
 
+def capture_views_geometry(capture_dir: str | Path) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    """The depth images (metres) and calibrated cameras (camera.json's ``camera_to_world``) of both views of a
+    (virtual) capture folder, as :func:`camera_segmentations` reads them."""
+    from ..frontend.capture import read_capture
+    from ..frontend.landmarks import Camera
+    from ..frontend.segment import VIEWS
+
+    d = Path(capture_dir)
+    data = {v: read_capture(d / v) for v in VIEWS}
+    return ({v: data[v]["depth_m"] for v in VIEWS},
+            {v: Camera.from_json(data[v]["intrinsics"], data[v]["meta"]["camera_to_world"]) for v in VIEWS})
+
+
+def capture_hip_loops(capture_dir: str | Path, segs: Mapping[str, Any], joints: Mapping[str, Any]) -> dict[str, Any]:
+    """The thighs' loop targets of the camera path (:func:`bsv.frontend.groin.hip_loop_targets`, as ``bsv
+    process`` makes them) of a capture folder segmented by :func:`camera_segmentations`."""
+    from ..frontend.groin import hip_loop_targets
+
+    depths, cameras = capture_views_geometry(capture_dir)
+    return hip_loop_targets(segs, depths, cameras, joints)
+
+
 def subject_segmentations(subject: Any, condition: str, scan_seed: int, correct: bool = True,
                           sex: str | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
     """:func:`camera_segmentations` of a cohort ``subject`` (:func:`bsv.bodies.subject`) captured by the virtual

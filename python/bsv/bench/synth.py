@@ -189,6 +189,7 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
     unfiltered: tuple[float | None, float | None] = (None, None)
     joint_errs: dict[str, list[float]] | None = None
     joints: dict[str, Any] | None = None
+    loops: dict[str, Any] = {}  # the thighs' loop targets of the camera path (bsv.frontend.groin)
     lab = cloud_mode == "lab" or segmentation == "camera"
     need_files = condition in CALIBRATED or lab
     refined: Refined | None = None
@@ -211,9 +212,10 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
             from .camera import build_views_cloud, capture_views
 
             if segmentation == "camera":
-                from .joints import camera_segmentations, joint_errors
+                from .joints import camera_segmentations, capture_hip_loops, joint_errors
 
                 segs, joints = camera_segmentations(tmp, sex=sex)
+                loops = capture_hip_loops(tmp, segs, joints)
                 sex_estimate = segs["front"].sex
                 landmark_warnings = [w for s in segs.values() for w in s.warnings]
                 views = capture_views(tmp, segmentation, labels={v: s.labels for v, s in segs.items()})
@@ -257,12 +259,13 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
         except BsvError as exc:  # the template's own pose, said in each run
             template_info = {"template_notes": [f"the template kept its own A-pose: {type(exc).__name__}: {exc}"]}
     far2, far10 = cloud_far_pct(cloud, truth_surface)
+    pulls = {**(joints or {}), **loops} if loops else joints  # as bsv process: the joints and the thighs' loops
     for method in methods:
         run = Run(name, condition, method, False, truth_l=dict(truth), floor_l=dict(floor), n_points=len(cloud),
                   cloud_far_2cm_pct=far2, cloud_far_10cm_pct=far10, unfiltered_far_2cm_pct=unfiltered[0],
                   unfiltered_far_10cm_pct=unfiltered[1])
         try:
-            fit = register_method(method, cloud, template, params, keypoints=joints)
+            fit = register_method(method, cloud, template, params, keypoints=pulls)
             run.estimated_l, run.seconds, run.info, run.ok = fit.volumes_l, fit.seconds, {**fit.info, **template_info}, True
             if method == "bsv":  # the intervals' ingredients (bench/coverage.py)
                 from .coverage import record
@@ -275,7 +278,7 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
                 except (BsvError, ValueError) as exc:
                     run.info[INFO_KEY + "_error"] = f"{type(exc).__name__}: {exc}"
                 if refined is not None:
-                    run.info["refined"] = refined.register(kinds, seed, template, params, joints, segmentation)
+                    run.info["refined"] = refined.register(kinds, seed, template, params, pulls, segmentation)
         except Exception as exc:  # a failed registration is reported, the run goes on
             run.error = f"{type(exc).__name__}: {exc}"
             run.info = {"traceback": traceback.format_exc(limit=3)}
@@ -283,6 +286,8 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
             run.info["joint_errors_mm"] = joint_errs
         if oracle_joints:
             run.info[ORACLE_JOINTS_PARAM] = list(oracle_joints)
+        if segmentation == "camera":
+            run.info["hip_loops"] = {k: t.to_json() for k, t in loops.items()}
         if landmark_warnings is not None:
             from .joints import WARNINGS_KEY
 

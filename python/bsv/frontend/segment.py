@@ -1192,7 +1192,7 @@ def disagreeing_arm_angles(poses: Mapping[str, np.ndarray]) -> dict[str, str]:
 ARMPIT_REF_ARM_DEG = 40.0
 
 
-def _gap_top(mask: np.ndarray, x0: float, x1: float, top_y: float, bottom_y: float) -> np.ndarray | None:
+def gap_top(mask: np.ndarray, x0: float, x1: float, top_y: float, bottom_y: float) -> np.ndarray | None:
     """The top of the background gap that opens downward in the box of a person mask between the columns
     ``x0``, ``x1`` and the rows ``top_y``, ``bottom_y`` (pixels, x y), or None: of the box's background regions
     (4-connected), those that touch its bottom row, the highest one's top row's middle. A hole in the mask
@@ -1234,7 +1234,7 @@ def armpit_point(mask: np.ndarray, elbow: np.ndarray, centre_x: float, top_y: fl
     el = np.asarray(elbow, dtype=np.float64)
     if not np.all(np.isfinite(el)):
         return None
-    return _gap_top(mask, centre_x, float(el[0]), top_y, bottom_y)
+    return gap_top(mask, centre_x, float(el[0]), top_y, bottom_y)
 
 
 def crotch_point(mask: np.ndarray, left_knee: np.ndarray, right_knee: np.ndarray, top_y: float) -> np.ndarray | None:
@@ -1246,7 +1246,7 @@ def crotch_point(mask: np.ndarray, left_knee: np.ndarray, right_knee: np.ndarray
     lk, rk = np.asarray(left_knee, dtype=np.float64), np.asarray(right_knee, dtype=np.float64)
     if not (np.all(np.isfinite(lk)) and np.all(np.isfinite(rk))):
         return None
-    return _gap_top(mask, float(lk[0]), float(rk[0]), top_y, max(float(lk[1]), float(rk[1])))
+    return gap_top(mask, float(lk[0]), float(rk[0]), top_y, max(float(lk[1]), float(rk[1])))
 
 
 #: :func:`agreeing_crotches`: the two views' crotches disagree when their depths below the hips, as fractions
@@ -1700,6 +1700,7 @@ __all__ = [
     "detect",
     "disagreeing_arm_angles",
     "expected_crotch_depth",
+    "gap_top",
     "label_accuracy",
     "label_detection",
     "label_pixels",

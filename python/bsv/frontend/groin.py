@@ -1,0 +1,224 @@
+"""Where each thigh begins, from the crotch the depth images show (the camera path's hip-loop targets).
+
+On the camera path a thigh's volume follows its boundary loop with the torso: -0.5 % of the thigh per mm the
+loop lies distal (benchmarks/BENCH.md, round 2 session 36). The registration carries the template's own loop
+there, and where it lands scatters by 4-4.5 mm (sd) against 1.2-1.6 mm with oracle labels; the fitted crotch's
+height explains two thirds of that scatter, because both cameras see the crotch edge-on and few points hold it
+up or down. MediaPipe's person mask is too soft between the thighs to say where the crotch is (sd 7 mm), but
+the depth images are sharp there: the top of the gap between the legs, where the body's depth gives way to the
+background's, lies 29 mm (sd 7) above MakeHuman's crotch on the rig's renders of the cohort, and the sex and
+the build explain most of that spread (residual sd 3 mm).
+
+So :func:`crotch_from_depth` finds that gap's top in each view (:func:`bsv.frontend.segment.gap_top` on the
+depth's own silhouette of the body, in the box between the knees below the hips that the 2-D landmarks span),
+lifts it at the body's depth just above it and averages the views; :func:`hip_loop_targets` places each
+thigh's loop centre (the centre of the ring of thigh vertices next to the torso,
+:data:`bsv.keypoints.BOUNDARY_RINGS`) at the learned offset :data:`HIP_LOOP_OFFSETS_M` from it, in the body
+frame, for the capture's sex and build. ``bsv process`` and ``bsv bench synth --segmentation camera`` give
+them to the registration with the measured joints, and its keypoint term pulls each template loop's centre
+along the loop's axis to its target.
+
+No target is given (and the registration does as before) where the crotch is not seen: thighs that touch
+below it in either view (the gap opens lower than :func:`bsv.frontend.segment.expected_crotch_depth` allows,
+the rule of :func:`bsv.frontend.segment.agreeing_crotches`), no gap, views that disagree by more than
+:data:`CROTCH_VIEWS_DISAGREE_M`, a missing hip or knee, or no depth at the gap.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from .landmarks import Camera, JointCentre, body_frame
+from .segment import (
+    CROTCH_TOUCH_MARGIN,
+    POSE_NAMES,
+    VIEWS,
+    Segmentation,
+    body_axes,
+    expected_crotch_depth,
+    gap_top,
+    thigh_angle_deg,
+)
+from .sex import build_score
+
+#: The depth's silhouette of the body: pixels whose point lies within this horizontal distance (metres) of the
+#: hips' midpoint (the wall and anything beside the subject lie farther) ...
+BODY_RADIUS_M = 0.4
+#: ... and at least this high above the floor (metres).
+ABOVE_FLOOR_M = 0.03
+#: The gap's top is lifted at the median depth of the body's pixels in this many rows above it, within this
+#: many columns either side.
+LIFT_WINDOW_PX: tuple[int, int] = (4, 4)
+#: The two views' crotches disagree when their heights differ by more than this (metres; on the rig's renders
+#: the front view's lies 2 mm below the back's, sd 3 mm).
+CROTCH_VIEWS_DISAGREE_M = 0.02
+#: Where each thigh's loop centre lies from the measured crotch, in the body frame (metres: lateral, outward
+#: from the midline; up; forward): ``"1"`` plus ``"sex"`` per unit of the capture's sex score (+1 a woman, -1 a
+#: man) plus ``"build"`` per unit of its build score (:func:`bsv.frontend.sex.build_score`). Learned by
+#: ``benchmarks/learn_hip_loops.py`` on the 60 subjects of seeds 11-16 (room, noer): held out (seeds 0 and 2)
+#: the height scatters 3.5 mm (sd) around it, 4.4 with the constant alone. Only the height is pulled
+#: (:class:`LoopTarget`), and the target is set :data:`HIP_LOOP_PULL_RAISE_M` higher.
+HIP_LOOP_OFFSETS_M: dict[str, tuple[float, float, float]] = {
+    "1": (0.0910, 0.0228, 0.0029), "sex": (0.0012, -0.0023, 0.0107), "build": (0.0006, 0.0001, -0.0001)}
+#: How much higher than the learned place the target is set (metres, along the body's up axis): the pulled loop stops short of its target, 1-2 mm distal of it on average, held by the points and the
+#: template's stiffness. Of -2, 0 and +2 mm on the camera path's room seeds 0-1 (noer and l515), +2 mm
+#: brought the loops' mean nearest 0 and the thighs' mean error lowest (benchmarks/BENCH.md, round 2 session 38).
+HIP_LOOP_PULL_RAISE_M = 0.002
+#: The confidence a hip-loop target pulls with (the keypoint term's per-keypoint weight, 0..1).
+HIP_LOOP_CONFIDENCE = 1.0
+
+
+@dataclass(frozen=True)
+class LoopTarget:
+    """Where the registration is to put a segment boundary's centre: a height along the body's axis (the
+    keypoint term pulls the template's boundary ring along ``direction`` alone)."""
+
+    #: (3,) metres, world frame; only its component along ``direction`` is measured.
+    xyz: np.ndarray
+    #: The keypoint term's weight for it (0..1).
+    confidence: float
+    #: How it was found, e.g. "front+back depth (crotch)".
+    source: str
+    #: (3,) unit vector, world frame: the body's up axis.
+    direction: np.ndarray
+
+    def to_json(self) -> dict[str, object]:
+        """``{"xyz", "confidence", "source", "direction"}`` (rounded)."""
+        return {"xyz": [round(float(c), 5) for c in self.xyz], "confidence": round(float(self.confidence), 3),
+                "source": self.source, "direction": [round(float(c), 5) for c in self.direction]}
+
+
+@dataclass(frozen=True)
+class Crotch:
+    """The crotch the depth images show: the top of the gap between the legs, lifted to the world frame."""
+
+    #: (3,) metres, world frame: the mean of the views'.
+    xyz: np.ndarray
+    #: Each view's lifted gap top.
+    views: dict[str, np.ndarray]
+
+
+def _view_gap_top(seg: Segmentation, depth: np.ndarray, camera: Camera, hips_mid: np.ndarray) -> np.ndarray | None:
+    """One view's crotch (world, metres): the top of the gap between the legs in the depth's silhouette of the
+    body, lifted at the body's depth just above it; None without the gap, with thighs that touch below the
+    crotch, or without depth there."""
+    if seg.pose is None:
+        return None
+    P = {n: seg.pose[i, :2].astype(np.float64) for i, n in enumerate(POSE_NAMES)}
+    if not all(np.all(np.isfinite(P[n])) for n in ("left_hip", "right_hip", "left_knee", "right_knee",
+                                                   "left_shoulder", "right_shoulder")):
+        return None
+    d = np.asarray(depth, dtype=np.float64)
+    h, w = d.shape
+    _, h_mid, down, lat = body_axes(P)
+    span = float(((P["left_knee"] + P["right_knee"]) / 2 - h_mid) @ down)
+    if not span > 1.0:
+        return None
+    # the box the gap is searched in (the 2-D landmarks'), and the depth's silhouette of the body inside it
+    x0, x1 = sorted((float(P["left_knee"][0]), float(P["right_knee"][0])))
+    y0, y1 = float(h_mid[1]), max(float(P["left_knee"][1]), float(P["right_knee"][1]))
+    r0, r1 = int(max(0, math.floor(y0))), int(min(h, math.ceil(y1) + 1))
+    c0, c1 = int(max(0, math.floor(x0))), int(min(w, math.ceil(x1) + 1))
+    if r1 - r0 < 4 or c1 - c0 < 4:
+        return None
+    body = np.zeros((h, w), dtype=bool)
+    ys, xs = np.nonzero(d[r0:r1, c0:c1] > 0)
+    ys, xs = ys + r0, xs + c0
+    if len(ys) == 0:
+        return None
+    pts = np.asarray(camera.deproject(np.column_stack([xs, ys]).astype(np.float64), d[ys, xs]))
+    near = (np.hypot(pts[:, 0] - hips_mid[0], pts[:, 2] - hips_mid[2]) < BODY_RADIUS_M) & (pts[:, 1] > ABOVE_FLOOR_M)
+    body[ys[near], xs[near]] = True
+    top = gap_top(body, x0, x1, y0, y1)
+    if top is None:
+        return None
+    spread = (thigh_angle_deg(P["left_hip"], P["left_knee"], down, lat)
+              + thigh_angle_deg(P["right_hip"], P["right_knee"], down, -lat)) / 2
+    sex = seg.sex.score if seg.sex is not None else 0.0
+    expected = expected_crotch_depth(seg.view, sex, spread if math.isfinite(spread) else 0.0)
+    if float((top - h_mid) @ down) / span > expected + CROTCH_TOUCH_MARGIN:
+        return None  # the thighs touch below the crotch: the gap opens lower
+    gx, gy = round(float(top[0])), round(float(top[1]))
+    dy, dx = LIFT_WINDOW_PX
+    a0, b0, b1 = max(gy - dy, 0), max(gx - dx, 0), min(gx + dx + 1, w)
+    above = d[a0:gy, b0:b1][body[a0:gy, b0:b1]]
+    if len(above) == 0:
+        return None
+    return np.asarray(camera.deproject(np.array([[top[0], top[1] - 0.5]]), np.array([float(np.median(above))]))[0])
+
+
+def crotch_from_depth(segs: Mapping[str, Segmentation], depths: Mapping[str, np.ndarray],
+                      cameras: Mapping[str, Camera], joints: Mapping[str, JointCentre]) -> Crotch | None:
+    """The crotch both views' depth images show (see the module notes), or None where it is not seen: a view
+    without the gap's top (or whose thighs touch below the crotch) gives none, two views that disagree by more
+    than :data:`CROTCH_VIEWS_DISAGREE_M` give none; one view alone gives its own. ``joints``: the capture's
+    joint centres (:func:`bsv.frontend.landmarks.joint_centres`), for the hips' midpoint."""
+    if "hip_l" not in joints or "hip_r" not in joints:
+        return None
+    hips_mid = (np.asarray(joints["hip_l"].xyz) + np.asarray(joints["hip_r"].xyz)) / 2
+    found: dict[str, np.ndarray] = {}
+    for v in VIEWS:
+        if v in segs and v in depths and v in cameras:
+            p = _view_gap_top(segs[v], depths[v], cameras[v], hips_mid)
+            if p is not None and np.all(np.isfinite(p)):
+                found[v] = p
+    if not found:
+        return None
+    if len(found) == 2 and abs(found["front"][1] - found["back"][1]) > CROTCH_VIEWS_DISAGREE_M:
+        return None
+    return Crotch(np.mean(list(found.values()), axis=0), found)
+
+
+def hip_loop_offsets(sex_score: float, build: float,
+                     table: Mapping[str, tuple[float, float, float]] | None = None) -> np.ndarray:
+    """The left thigh's loop target from the crotch in the body frame (metres: lateral outward, up, forward):
+    :data:`HIP_LOOP_OFFSETS_M` (or ``table``) at this sex score and build score, raised by
+    :data:`HIP_LOOP_PULL_RAISE_M`; the right thigh's mirrors the lateral component."""
+    t = HIP_LOOP_OFFSETS_M if table is None else table
+    out = np.asarray(t["1"], dtype=np.float64) + float(sex_score) * np.asarray(t["sex"], dtype=np.float64) \
+        + float(build) * np.asarray(t["build"], dtype=np.float64)
+    out[1] += HIP_LOOP_PULL_RAISE_M
+    return out
+
+
+def hip_loop_targets(segs: Mapping[str, Segmentation], depths: Mapping[str, np.ndarray],
+                     cameras: Mapping[str, Camera], joints: Mapping[str, JointCentre],
+                     table: Mapping[str, tuple[float, float, float]] | None = None) -> dict[str, LoopTarget]:
+    """Targets of the thighs' loop centres (``hip_loop_l``, ``hip_loop_r``; :data:`bsv.keypoints.BOUNDARY_RINGS`)
+    from the crotch the depth images show (:func:`crotch_from_depth`), for the registration's keypoint term:
+    heights along the body's up axis (the measured joints' body frame); empty where the crotch is not seen or
+    the body frame (hips and shoulders) is not measured."""
+    crotch = crotch_from_depth(segs, depths, cameras, joints)
+    frame = body_frame({k: np.asarray(j.xyz) for k, j in joints.items()})
+    if crotch is None or frame is None:
+        return {}
+    seg = next((s for s in segs.values() if s.sex is not None), None)
+    sex = 0.0 if seg is None or seg.sex is None else float(seg.sex.score)
+    build = 0.0 if seg is None or seg.sex is None else build_score(seg.sex.measurements)
+    off = hip_loop_offsets(sex, build, table)
+    source = "+".join(crotch.views) + " depth (crotch)"
+    out = {}
+    for name, lateral in (("hip_loop_l", 1.0), ("hip_loop_r", -1.0)):
+        local = np.array([lateral * off[0], off[1], off[2]])
+        out[name] = LoopTarget(crotch.xyz + frame.T @ local, HIP_LOOP_CONFIDENCE, source, frame[1].copy())
+    return out
+
+
+__all__ = [
+    "ABOVE_FLOOR_M",
+    "BODY_RADIUS_M",
+    "CROTCH_VIEWS_DISAGREE_M",
+    "HIP_LOOP_CONFIDENCE",
+    "HIP_LOOP_OFFSETS_M",
+    "HIP_LOOP_PULL_RAISE_M",
+    "LIFT_WINDOW_PX",
+    "Crotch",
+    "LoopTarget",
+    "crotch_from_depth",
+    "hip_loop_offsets",
+    "hip_loop_targets",
+]

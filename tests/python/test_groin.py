@@ -92,6 +92,18 @@ def test_views_that_disagree_give_no_crotch_and_one_view_gives_its_own(capture):
     assert groin.crotch_from_depth(no_pose, depths, cams, joints) is None
 
 
+def test_a_crotch_far_below_where_the_hips_put_it_is_set_aside(capture):
+    _, depths, cams, segs, joints, _ = capture
+    raised = {k: dataclasses.replace(j, xyz=np.asarray(j.xyz) + [0.0, 0.03, 0.0]) if k.startswith("hip") else j
+              for k, j in joints.items()}  # hips 3 cm higher: the same crotch lies 3 cm lower than they expect
+    assert groin.crotch_from_depth(segs, depths, cams, raised) is None
+    assert groin.crotch_from_depth(segs, depths, cams, raised, gate=False) is not None
+    expected = groin.expected_crotch_below_hips(joints, 1.0, {"1": 0.01, "sex": 0.002, "thigh": 0.1})
+    thigh = np.mean([np.linalg.norm(joints[f"hip_{s}"].xyz - joints[f"knee_{s}"].xyz) for s in "lr"])
+    assert expected == pytest.approx(0.012 + 0.1 * thigh)
+    assert groin.expected_crotch_below_hips({k: j for k, j in joints.items() if k != "knee_r"}, 0.0) is None
+
+
 def test_the_offsets_mirror_the_right_thigh_and_follow_the_table():
     table = {"1": (0.09, 0.02, 0.0), "sex": (0.0, -0.01, 0.0), "build": (0.0, 0.0, 0.005)}
     off = groin.hip_loop_offsets(1.0, 2.0, table)

@@ -824,6 +824,9 @@ def definitions_html(vols: dict[str, Any], target: _Target = "html") -> str:
         from .frontend.sex import describe
 
         lead += html.escape(describe(vols["sex"]), quote=False) + " "
+    if vols.get("boundaries_m"):
+        lead += ("The thighs' loops with the torso were pulled to the height the crotch in the depth images gives "
+                 "them. ")
     pose = (vols.get("template") or {}).get("pose")
     if isinstance(pose, dict) and pose:
         lead += ("Posed like the subject before the fit, from the measured joints: arms "

@@ -74,6 +74,10 @@ def test_the_report_says_how_this_results_boundaries_were_placed() -> None:
     posed = report.definitions_html({"registration": {"params": {"labels": "template"}},
                                      "template": {"kind": "default", "pose": pose}})
     assert "Posed like the subject" in posed and "arms 31 / 45 deg below horizontal" in posed
+    assert "depth images" not in posed
+    pulled = report.definitions_html({"registration": {"params": {"labels": "template"}},
+                                      "boundaries_m": {"hip_loop_l": {"xyz": [0.09, 0.8, 0.0]}}}, "pdf")
+    assert "pulled to the height the crotch in the depth images gives" in pulled
     assert tpl.count("<tr>") == len(anatomy.BOUNDARIES) + 1
     assert "through the armpit" in tpl and "centroid +38 mm" in tpl
     assert "Segment boundaries in this result" not in report.definitions_html({})

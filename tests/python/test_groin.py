@@ -94,7 +94,7 @@ def test_views_that_disagree_give_no_crotch_and_one_view_gives_its_own(capture):
 
 def test_a_crotch_far_below_where_the_hips_put_it_is_set_aside(capture):
     _, depths, cams, segs, joints, _ = capture
-    raised = {k: dataclasses.replace(j, xyz=np.asarray(j.xyz) + [0.0, 0.03, 0.0]) if k.startswith("hip") else j
+    raised = {k: dataclasses.replace(j, xyz=np.asarray(j.xyz) + np.array([0.0, 0.03, 0.0])) if k.startswith("hip") else j
               for k, j in joints.items()}  # hips 3 cm higher: the same crotch lies 3 cm lower than they expect
     assert groin.crotch_from_depth(segs, depths, cams, raised) is None
     assert groin.crotch_from_depth(segs, depths, cams, raised, gate=False) is not None

@@ -209,7 +209,8 @@ def register(
     (and those :func:`bsv.posed_template.posed_template` poses) carry joints; the fitted-to-measured distances are in ``volumes["registration"]["keypoints"]``.
     A measured segment boundary of :data:`bsv.keypoints.BOUNDARY_RINGS` (``hip_loop_l``, ``hip_loop_r``: the
     centre of a thigh's boundary with the torso, :mod:`bsv.frontend.groin`) pulls the ring the template's
-    labels give it (:func:`bsv.keypoints.boundary_rings`) along its axis.
+    labels give it (:func:`bsv.keypoints.boundary_rings`). A keypoint with a ``direction`` (a
+    :class:`bsv.frontend.groin.LoopTarget`, or a dict's ``"direction"``) is pulled along that direction alone.
     """
     cloud = as_cloud(points, labels=labels)
     tmpl = default_template() if template is None else as_mesh(template)

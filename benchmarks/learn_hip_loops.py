@@ -12,7 +12,7 @@ below the crotch) are left out of both fits, and the fit of CROTCH_BELOW_HIPS is
 The true loop centre of each thigh is the centre of the ring of thigh vertices next to the torso on the true
 body (bsv.keypoints.boundary_rings, the ring the template's loop is pulled by). Its offset from the crotch, in
 the body frame of the measured joints (lateral outward, up, forward; both sides pooled), is fitted by least
-squares on the capture's sex score and build score (bsv.frontend.sex.build_score). The script prints the table
+squares on the capture's sex score, build score (bsv.frontend.sex.build_score) and measured thighs' length. The script prints the table
 and the evaluation cohorts' residuals (mean, sd per component) with the constant alone and with the fit, and how
 many captures gave no crotch.
 
@@ -45,7 +45,7 @@ from bsv.keypoints import boundary_rings
 #: frame (3x3) or None, sex score, build score, the crotch's depth below the measured hips (m, NaN without
 #: it), the measured thighs' length (m, NaN without it)).
 Row = tuple[np.ndarray | None, dict[str, np.ndarray], np.ndarray | None, float, float, float, float]
-PREDICTORS = ("1", "sex", "build")
+PREDICTORS = ("1", "sex", "build", "thigh")
 BELOW_PREDICTORS = ("1", "sex", "thigh")
 
 
@@ -106,14 +106,14 @@ def offsets(rows: list[Row]) -> tuple[np.ndarray, np.ndarray]:
     """(predictor rows (M, 3), offsets (M, 3) in metres, body frame, lateral outward) of every loop of the
     rows with a crotch and a frame."""
     x, y = [], []
-    for crotch, loops, frame, sex, build, _, _ in rows:
-        if crotch is None or frame is None:
+    for crotch, loops, frame, sex, build, _, thigh in rows:
+        if crotch is None or frame is None or not np.isfinite(thigh):
             continue
         for name, p in loops.items():
             local = frame @ (p - crotch)
             if name.endswith("_r"):
                 local[0] = -local[0]
-            x.append([1.0, sex, build])
+            x.append([1.0, sex, build, thigh])
             y.append(local)
     return np.array(x), np.array(y)
 

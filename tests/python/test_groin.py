@@ -105,9 +105,9 @@ def test_a_crotch_far_below_where_the_hips_put_it_is_set_aside(capture):
 
 
 def test_the_offsets_mirror_the_right_thigh_and_follow_the_table():
-    table = {"1": (0.09, 0.02, 0.0), "sex": (0.0, -0.01, 0.0), "build": (0.0, 0.0, 0.005)}
-    off = groin.hip_loop_offsets(1.0, 2.0, table)
-    assert np.allclose(off, [0.09, 0.01 + groin.HIP_LOOP_PULL_RAISE_M, 0.01])
+    table = {"1": (0.09, 0.02, 0.0), "sex": (0.0, -0.01, 0.0), "build": (0.0, 0.0, 0.005), "thigh": (0.0, 0.1, 0.0)}
+    off = groin.hip_loop_offsets(1.0, 2.0, 0.4, table)
+    assert np.allclose(off, [0.09, 0.05 + groin.HIP_LOOP_PULL_RAISE_M, 0.01])
 
 
 def test_boundary_rings_are_read_from_the_labels():

@@ -68,13 +68,15 @@ CROTCH_BELOW_HIPS: dict[str, float] = {"1": 0.0234, "sex": 0.0031, "thigh": 0.13
 CROTCH_LOW_MARGIN_M = 0.015
 #: Where each thigh's loop centre lies from the measured crotch, in the body frame (metres: lateral, outward
 #: from the midline; up; forward): ``"1"`` plus ``"sex"`` per unit of the capture's sex score (+1 a woman, -1 a
-#: man) plus ``"build"`` per unit of its build score (:func:`bsv.frontend.sex.build_score`). Learned by
+#: man) plus ``"build"`` per unit of its build score (:func:`bsv.frontend.sex.build_score`) plus ``"thigh"`` per
+#: metre of the measured thighs' length (:func:`thigh_length`). Learned by
 #: ``benchmarks/learn_hip_loops.py`` on the 60 subjects of seeds 11-16 (room, noer; one whose crotch lay beyond
-#: :data:`CROTCH_LOW_MARGIN_M` left out): held out (seeds 0 and 2) the height scatters 3.5 mm (sd) around it, 4.4
-#: with the constant alone. Only the height is pulled
+#: :data:`CROTCH_LOW_MARGIN_M` left out): held out (seeds 0 and 2) the height scatters 3.1 mm (sd) around it, 3.5
+#: without the thighs' length, 4.4 with the constant alone. Only the height is pulled
 #: (:class:`LoopTarget`), and the target is set :data:`HIP_LOOP_PULL_RAISE_M` higher.
 HIP_LOOP_OFFSETS_M: dict[str, tuple[float, float, float]] = {
-    "1": (0.0909, 0.0228, 0.0037), "sex": (0.0012, -0.0023, 0.0107), "build": (0.0005, 0.0001, 0.0023)}
+    "1": (0.0670, 0.0030, 0.0262), "sex": (0.0028, -0.0010, 0.0092), "build": (0.0009, 0.0005, 0.0020),
+    "thigh": (0.0594, 0.0493, -0.0560)}
 #: How much higher than the learned place the target is set (metres, along the body's up axis): the pulled loop stops short of its target, 1-2 mm distal of it on average, held by the points and the
 #: template's stiffness. Of -2, 0 and +2 mm on the camera path's room seeds 0-1 (noer and l515), +2 mm
 #: brought the loops' mean nearest 0 and the thighs' mean error lowest (benchmarks/BENCH.md, round 2 session 38).
@@ -195,27 +197,34 @@ def crotch_from_depth(segs: Mapping[str, Segmentation], depths: Mapping[str, np.
     return crotch
 
 
+def thigh_length(joints: Mapping[str, JointCentre]) -> float | None:
+    """The measured thighs' length (metres, hip to knee, the mean of both sides), or None without both hips and
+    knees."""
+    if any(f"{k}_{s}" not in joints for k in ("hip", "knee") for s in "lr"):
+        return None
+    return float(np.mean([np.linalg.norm(np.asarray(joints[f"hip_{s}"].xyz) - np.asarray(joints[f"knee_{s}"].xyz))
+                          for s in "lr"]))
+
+
 def expected_crotch_below_hips(joints: Mapping[str, JointCentre], sex_score: float,
                                table: Mapping[str, float] | None = None) -> float | None:
     """How far below the measured hips' midpoint the crotch the depth shows is expected (metres, along the
     body's up axis; :data:`CROTCH_BELOW_HIPS` or ``table``), or None without both hips and knees."""
-    need = ("hip_l", "hip_r", "knee_l", "knee_r")
-    if any(k not in joints for k in need):
+    thigh = thigh_length(joints)
+    if thigh is None:
         return None
-    thigh = float(np.mean([np.linalg.norm(np.asarray(joints[f"hip_{s}"].xyz) - np.asarray(joints[f"knee_{s}"].xyz))
-                           for s in "lr"]))
     t = CROTCH_BELOW_HIPS if table is None else table
     return float(t["1"]) + float(t["sex"]) * float(sex_score) + float(t["thigh"]) * thigh
 
 
-def hip_loop_offsets(sex_score: float, build: float,
+def hip_loop_offsets(sex_score: float, build: float, thigh: float,
                      table: Mapping[str, tuple[float, float, float]] | None = None) -> np.ndarray:
     """The left thigh's loop target from the crotch in the body frame (metres: lateral outward, up, forward):
-    :data:`HIP_LOOP_OFFSETS_M` (or ``table``) at this sex score and build score, raised by
-    :data:`HIP_LOOP_PULL_RAISE_M`; the right thigh's mirrors the lateral component."""
+    :data:`HIP_LOOP_OFFSETS_M` (or ``table``) at this sex score, build score and thighs' length (metres), raised
+    by :data:`HIP_LOOP_PULL_RAISE_M`; the right thigh's mirrors the lateral component."""
     t = HIP_LOOP_OFFSETS_M if table is None else table
     out = np.asarray(t["1"], dtype=np.float64) + float(sex_score) * np.asarray(t["sex"], dtype=np.float64) \
-        + float(build) * np.asarray(t["build"], dtype=np.float64)
+        + float(build) * np.asarray(t["build"], dtype=np.float64) + float(thigh) * np.asarray(t["thigh"], dtype=np.float64)
     out[1] += HIP_LOOP_PULL_RAISE_M
     return out
 
@@ -226,15 +235,16 @@ def hip_loop_targets(segs: Mapping[str, Segmentation], depths: Mapping[str, np.n
     """Targets of the thighs' loop centres (``hip_loop_l``, ``hip_loop_r``; :data:`bsv.keypoints.BOUNDARY_RINGS`)
     from the crotch the depth images show (:func:`crotch_from_depth`), for the registration's keypoint term:
     heights along the body's up axis (the measured joints' body frame); empty where the crotch is not seen or
-    the body frame (hips and shoulders) is not measured."""
+    the body frame (hips and shoulders) or the thighs' length is not measured."""
     crotch = crotch_from_depth(segs, depths, cameras, joints)
     frame = body_frame({k: np.asarray(j.xyz) for k, j in joints.items()})
-    if crotch is None or frame is None:
+    thigh = thigh_length(joints)
+    if crotch is None or frame is None or thigh is None:
         return {}
     seg = next((s for s in segs.values() if s.sex is not None), None)
     sex = 0.0 if seg is None or seg.sex is None else float(seg.sex.score)
     build = 0.0 if seg is None or seg.sex is None else build_score(seg.sex.measurements)
-    off = hip_loop_offsets(sex, build, table)
+    off = hip_loop_offsets(sex, build, thigh, table)
     source = "+".join(crotch.views) + " depth (crotch)"
     out = {}
     for name, lateral in (("hip_loop_l", 1.0), ("hip_loop_r", -1.0)):
@@ -259,4 +269,5 @@ __all__ = [
     "expected_crotch_below_hips",
     "hip_loop_offsets",
     "hip_loop_targets",
+    "thigh_length",
 ]

@@ -149,8 +149,8 @@ def as_keypoints(keypoints: Mapping[str, Any]) -> list[tuple[str, list[float], f
 #: knees (their vertical error, sd 11-13 mm, exceeds the 2-D labels' knee loop's; the shins got worse on
 #: every try, last in session 25). The thighs' loops (``hip_loop``, :data:`BOUNDARY_RINGS`) joined in round 2
 #: session 38, each pulled to the height the crotch in the depth images gives (:mod:`bsv.frontend.groin`): held
-#: out (room seeds 20-21) the hip loop's sd 4.4-5.5 -> 3.4-4.5 mm, the thighs 1.62-2.25 -> 1.34-1.90 %, the
-#: torso 0.97-1.20 -> 0.67-0.82 % (benchmarks/BENCH.md).
+#: out (room seeds 20-21) the hip loop's sd 4.4-5.5 -> 3.5-4.5 mm, the thighs 1.62-2.25 -> 1.20-1.82 %, the
+#: torso 0.97-1.20 -> 0.64-0.79 % (benchmarks/BENCH.md).
 CAMERA_KEYPOINT_KINDS: tuple[str, ...] = ("shoulder", "elbow", "wrist", "hip", "hip_loop")
 
 

@@ -57,9 +57,9 @@ def joint_rings(mesh: Mesh) -> list[tuple[str, list[int], list[float]]] | None:
 #: Segment boundaries the camera path can pull like joints (``bsv.register``'s keypoint term): name -> (the
 #: segment whose vertices form the ring, the segment across the boundary). A boundary ring is the ring of the
 #: first segment's vertices that share an edge with a vertex of the second (uniform weights), read from any
-#: labelled template, so it is the same anatomical loop on every MakeHuman template; its centre is pulled along
-#: the ring's axis (the keypoint term's axial setting) to a target the capture measures
-#: (:mod:`bsv.frontend.groin`: the thighs' proximal boundary from the crotch the depth images show).
+#: labelled template, so it is the same anatomical loop on every MakeHuman template; its centre is pulled to a
+#: height the capture measures, along the target's direction (:mod:`bsv.frontend.groin`: the thighs' proximal
+#: boundary from the crotch the depth images show, along the body's up axis).
 BOUNDARY_RINGS: dict[str, tuple[str, str]] = {"hip_loop_l": ("thigh_l", "torso"), "hip_loop_r": ("thigh_r", "torso")}
 
 

@@ -263,6 +263,8 @@ __all__ = [
     "TARGET_MEDIAN_MM",
     "WARNINGS_KEY",
     "camera_segmentations",
+    "capture_hip_loops",
+    "capture_views_geometry",
     "degraded_captures",
     "joint_errors",
     "joint_figure",

@@ -14,9 +14,9 @@ depth's own silhouette of the body, in the box between the knees below the hips 
 lifts it at the body's depth just above it and averages the views; :func:`hip_loop_targets` places each
 thigh's loop centre (the centre of the ring of thigh vertices next to the torso,
 :data:`bsv.keypoints.BOUNDARY_RINGS`) at the learned offset :data:`HIP_LOOP_OFFSETS_M` from it, in the body
-frame, for the capture's sex and build. ``bsv process`` and ``bsv bench synth --segmentation camera`` give
-them to the registration with the measured joints, and its keypoint term pulls each template loop's centre
-along the loop's axis to its target.
+frame, for the capture's sex and build and the measured thighs' length. ``bsv process`` and ``bsv bench synth
+--segmentation camera`` give them to the registration with the measured joints, and its keypoint term pulls
+each template loop's centre up or down to its target, along the body's up axis only (:class:`LoopTarget`).
 
 No target is given (and the registration does as before) where the crotch is not seen: thighs that touch
 below it in either view (the gap opens lower than :func:`bsv.frontend.segment.expected_crotch_depth` allows,
@@ -115,6 +115,13 @@ class Crotch:
     views: dict[str, np.ndarray]
 
 
+def _sex_score(segs: Mapping[str, Segmentation]) -> tuple[float, float]:
+    """The capture's sex score and build score (:mod:`bsv.frontend.sex`; both views hold the same estimate),
+    0 and 0 without one."""
+    sex = next((s.sex for s in segs.values() if s.sex is not None), None)
+    return (0.0, 0.0) if sex is None else (float(sex.score), build_score(sex.measurements))
+
+
 def _view_gap_top(seg: Segmentation, depth: np.ndarray, camera: Camera, hips_mid: np.ndarray) -> np.ndarray | None:
     """One view's crotch (world, metres): the top of the gap between the legs in the depth's silhouette of the
     body, lifted at the body's depth just above it; None without the gap, with thighs that touch below the
@@ -189,8 +196,7 @@ def crotch_from_depth(segs: Mapping[str, Segmentation], depths: Mapping[str, np.
     crotch = Crotch(np.mean(list(found.values()), axis=0), found)
     if gate:
         frame = body_frame({k: np.asarray(j.xyz) for k, j in joints.items()})
-        seg = next((s for s in segs.values() if s.sex is not None), None)
-        expected = expected_crotch_below_hips(joints, 0.0 if seg is None or seg.sex is None else float(seg.sex.score))
+        expected = expected_crotch_below_hips(joints, _sex_score(segs)[0])
         if frame is not None and expected is not None \
                 and float((hips_mid - crotch.xyz) @ frame[1]) > expected + CROTCH_LOW_MARGIN_M:
             return None
@@ -241,10 +247,7 @@ def hip_loop_targets(segs: Mapping[str, Segmentation], depths: Mapping[str, np.n
     thigh = thigh_length(joints)
     if crotch is None or frame is None or thigh is None:
         return {}
-    seg = next((s for s in segs.values() if s.sex is not None), None)
-    sex = 0.0 if seg is None or seg.sex is None else float(seg.sex.score)
-    build = 0.0 if seg is None or seg.sex is None else build_score(seg.sex.measurements)
-    off = hip_loop_offsets(sex, build, thigh, table)
+    off = hip_loop_offsets(*_sex_score(segs), thigh, table)
     source = "+".join(crotch.views) + " depth (crotch)"
     out = {}
     for name, lateral in (("hip_loop_l", 1.0), ("hip_loop_r", -1.0)):

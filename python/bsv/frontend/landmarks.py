@@ -112,6 +112,9 @@ _KINDS: dict[str, tuple[tuple[str, str], tuple[str, str], float]] = {
     "knee": (("thigh", "shin"), ("hip", "ankle"), 0.5),
     "ankle": (("shin", "foot"), ("knee", "ankle"), 1.0),
 }
+#: A body is thinner than this (metres) between the front and back surfaces at any joint: a surface behind a
+#: landmark farther than that is not the same limb's (:func:`_lift_across`).
+MAX_THICKNESS_M = 0.6
 #: A view that stands in for another (:func:`detection_from_other_view`) leaves out of the person the pixels
 #: lower than this above the floor (metres): the floor around the feet lies within the person's depth.
 FLOOR_CLEARANCE_M = 0.01
@@ -641,8 +644,9 @@ def _lift_across(det: Detection, cam: Camera, depth: np.ndarray, name: str, targ
     """3-D point of a confident landmark of one view, to stand in for the ``target`` view's: on the ray through
     the landmark, halfway in depth between the surface under it (the person mask's) and the surface the target
     view's depth shows behind it (its person mask's, around where that surface point falls in its image): the
-    middle of the limb's cross-section. Without that depth, the half-thickness push of :func:`_lift_from`. None
-    without depth under the landmark.
+    middle of the limb's cross-section. Without that depth, or with a surface behind it nearer than this one or
+    farther than :data:`MAX_THICKNESS_M`, the half-thickness push of :func:`_lift_from`. None without depth under
+    the landmark.
 
     Why not the half-thickness push alone: at a shoulder or a hip, the mask's width across the limb runs on into
     the torso or the other thigh (a 'half thickness' of 0.18-0.30 m), which put the stand-in landmark centimetres
@@ -662,7 +666,9 @@ def _lift_across(det: Detection, cam: Camera, depth: np.ndarray, name: str, targ
             d_t = _surface_depth(np.asarray(target_depth, dtype=np.float64), region, uv_t)
             if np.isfinite(d_t):
                 opposite = np.asarray(target_cam.deproject(uv_t[None], d_t)[0])
-                return np.asarray(cam.deproject(uv[None], d + float((opposite - surf) @ cam.axis()) / 2)[0])
+                thickness = float((opposite - surf) @ cam.axis())
+                if 0.0 < thickness < MAX_THICKNESS_M:
+                    return np.asarray(cam.deproject(uv[None], d + thickness / 2)[0])
     return _lift_from(det, cam, depth, name)
 
 
@@ -1071,6 +1077,7 @@ __all__ = [
     "JOINTS",
     "JOINT_OFFSETS_M",
     "LIMBS",
+    "MAX_THICKNESS_M",
     "OFFSET_PREDICTORS",
     "OFFSET_PREDICTOR_RANGE",
     "TRUNK_REF_M",

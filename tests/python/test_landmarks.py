@@ -227,24 +227,30 @@ def _assert_back_took_the_fronts(segs, clean, data, cams, names, why: str, tol_p
         assert joints[f"{kind}_{side[0]}"].source == "front", name
 
 
+def _back_mirror_lowered(monkeypatch, data, cams, names) -> tuple[dict, dict]:
+    """Both views segmented as captured, then again with the back view's ``names`` detected 60 px lower in its
+    mirror image than in the image (not repeatable there): the clean and the faked segmentations."""
+    _lower(monkeypatch, data, {})
+    clean = lm.segment_views(_images(data), cams)
+    mirrored_back = {_key(x[:, ::-1]) for x in _shown(data, "back")}
+    rows = [seg.POSE_NAMES.index(n) for n in names]
+
+    def fake(rgb, params=None):
+        r = _cached(rgb, params)
+        if _key(rgb) in mirrored_back:
+            r["pose"][rows, 1] += 60.0
+        return r
+
+    monkeypatch.setattr(seg, "run_holistic", fake)
+    return clean, lm.segment_views(_images(data), cams)
+
+
 def test_a_landmark_one_view_does_not_repeat_is_labelled_from_the_other(capture, monkeypatch):
     """The back view's elbows detected 60 px lower in its mirror image than in the image (a dim back lit
     from one side does that; the front's two detections agree): the back view's labels take the front's
     elbows through the calibration, each a warning, and come out as with the clean detection."""
     _, data, cams, _ = capture
-    _lower(monkeypatch, data, {})
-    clean = lm.segment_views(_images(data), cams)
-    mirrored_back = {_key(x[:, ::-1]) for x in _shown(data, "back")}
-    elbows = [seg.POSE_NAMES.index("left_elbow"), seg.POSE_NAMES.index("right_elbow")]
-
-    def fake(rgb, params=None):
-        r = _cached(rgb, params)
-        if _key(rgb) in mirrored_back:
-            r["pose"][elbows, 1] += 60.0
-        return r
-
-    monkeypatch.setattr(seg, "run_holistic", fake)
-    segs = lm.segment_views(_images(data), cams)
+    clean, segs = _back_mirror_lowered(monkeypatch, data, cams, ("left_elbow", "right_elbow"))
     _assert_back_took_the_fronts(segs, clean, data, cams, ("left_elbow", "right_elbow"), "not repeatable", 12.0)
 
 
@@ -255,20 +261,8 @@ def test_shoulders_and_hips_taken_from_the_other_view_land_on_the_body(capture, 
     back-view landmark. (Pushed from the front surface by the mask's width across the limb, which at a shoulder
     or a hip runs on into the torso, they landed 30-40 px off the body, and with them the shoulder boundary.)"""
     _, data, cams, _ = capture
-    _lower(monkeypatch, data, {})
-    clean = lm.segment_views(_images(data), cams)
-    mirrored_back = {_key(x[:, ::-1]) for x in _shown(data, "back")}
     names = ("left_shoulder", "right_shoulder", "left_hip", "right_hip")
-    rows = [seg.POSE_NAMES.index(n) for n in names]
-
-    def fake(rgb, params=None):
-        r = _cached(rgb, params)
-        if _key(rgb) in mirrored_back:
-            r["pose"][rows, 1] += 60.0
-        return r
-
-    monkeypatch.setattr(seg, "run_holistic", fake)
-    segs = lm.segment_views(_images(data), cams)
+    clean, segs = _back_mirror_lowered(monkeypatch, data, cams, names)
     assert segs["back"].sources == dict.fromkeys(names, "other view")
     for name in names:
         got, own = segs["back"].landmark(name), clean["back"].landmark(name)

@@ -623,16 +623,24 @@ def _region(labels: np.ndarray, kind: str, side: str) -> np.ndarray:
     return np.isin(labels, ids)
 
 
-def _lift_from(det: Detection, cam: Camera, depth: np.ndarray, name: str) -> np.ndarray | None:
-    """3-D point of a confident landmark of one view, before labelling (the person mask, the surface depth
-    under it pushed inward by the limb's half-thickness); None without depth there."""
+def _under(det: Detection, depth: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """A view's person mask, its landmark ``name`` (pixels) and the surface depth under it (the mask's); None
+    without a mask or depth there."""
     if det.mask_soft is None:
         return None
     mask = np.asarray(det.mask_soft > det.params.mask_threshold)
     uv = _xy(det.pose, name)
     d = _surface_depth(depth, mask, uv)
-    if not np.isfinite(d):
+    return (mask, uv, d) if np.isfinite(d) else None
+
+
+def _lift_from(det: Detection, cam: Camera, depth: np.ndarray, name: str) -> np.ndarray | None:
+    """3-D point of a confident landmark of one view, before labelling (the person mask, the surface depth
+    under it pushed inward by the limb's half-thickness); None without depth there."""
+    under = _under(det, depth, name)
+    if under is None:
         return None
+    mask, uv, d = under
     side, kind = name.split("_", 1)
     joint = f"{kind}_{side[0]}"
     half = _half_thickness(mask, det.pose, joint, d, cam.intrinsics.fx)
@@ -651,13 +659,10 @@ def _lift_across(det: Detection, cam: Camera, depth: np.ndarray, name: str, targ
     Why not the half-thickness push alone: at a shoulder or a hip, the mask's width across the limb runs on into
     the torso or the other thigh (a 'half thickness' of 0.18-0.30 m), which put the stand-in landmark centimetres
     off the body (round 2 session 39)."""
-    if det.mask_soft is None:
+    under = _under(det, depth, name)
+    if under is None:
         return None
-    mask = np.asarray(det.mask_soft > det.params.mask_threshold)
-    uv = _xy(det.pose, name)
-    d = _surface_depth(depth, mask, uv)
-    if not np.isfinite(d):
-        return None
+    _, uv, d = under
     surf = np.asarray(cam.deproject(uv[None], d)[0])
     if target.mask_soft is not None:
         region = np.asarray(target.mask_soft > target.params.mask_threshold)

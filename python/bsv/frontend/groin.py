@@ -115,7 +115,7 @@ class Crotch:
     views: dict[str, np.ndarray]
 
 
-def _sex_score(segs: Mapping[str, Segmentation]) -> tuple[float, float]:
+def _sex_and_build(segs: Mapping[str, Segmentation]) -> tuple[float, float]:
     """The capture's sex score and build score (:mod:`bsv.frontend.sex`; both views hold the same estimate),
     0 and 0 without one."""
     sex = next((s.sex for s in segs.values() if s.sex is not None), None)
@@ -196,7 +196,7 @@ def crotch_from_depth(segs: Mapping[str, Segmentation], depths: Mapping[str, np.
     crotch = Crotch(np.mean(list(found.values()), axis=0), found)
     if gate:
         frame = body_frame({k: np.asarray(j.xyz) for k, j in joints.items()})
-        expected = expected_crotch_below_hips(joints, _sex_score(segs)[0])
+        expected = expected_crotch_below_hips(joints, _sex_and_build(segs)[0])
         if frame is not None and expected is not None \
                 and float((hips_mid - crotch.xyz) @ frame[1]) > expected + CROTCH_LOW_MARGIN_M:
             return None
@@ -247,7 +247,7 @@ def hip_loop_targets(segs: Mapping[str, Segmentation], depths: Mapping[str, np.n
     thigh = thigh_length(joints)
     if crotch is None or frame is None or thigh is None:
         return {}
-    off = hip_loop_offsets(*_sex_score(segs), thigh, table)
+    off = hip_loop_offsets(*_sex_and_build(segs), thigh, table)
     source = "+".join(crotch.views) + " depth (crotch)"
     out = {}
     for name, lateral in (("hip_loop_l", 1.0), ("hip_loop_r", -1.0)):

@@ -23,12 +23,17 @@ So the camera path poses the template first, exactly as the MakeHuman rig poses 
    (:func:`bsv.bodies.template_joints.template_joints`). The segments are the skinning weights', as on
    every MakeHuman body. With the default pose it reproduces the embedded template.
 
+An arm is posed no lower than :data:`ARM_POSE_MAX_DOWN_DEG` below the horizontal: from there the registration's
+articulation lowers it. Posed all the way down to an arm hanging 50-60 deg, the template's shoulder boundary
+landed 2.7 mm distal of the subject's and the upper arm came out 2.5 % too small (BENCH.md, round 2 session 40).
+
 The rest bodies and the rig come from ``bsv/data/template_rig.npz`` (about 1 MB, written with the templates
 by ``python -m bsv.bodies.template``), not from the 17 MB MakeHuman asset.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import zipfile
 import zlib
 from collections.abc import Mapping
@@ -52,6 +57,14 @@ POSABLE_KINDS: tuple[str, ...] = tuple(POSABLE)
 #: An angle measured this far (deg) outside the pose's range is clipped without a warning (the measured
 #: elbow flexion scatters by 1.5 deg: a straight arm reads -1 deg).
 CLIP_SILENT_DEG = 3.0
+#: The lowest the camera path poses the template's arms (degrees below the horizontal; its own A-pose is 40).
+#: An arm measured hanging lower is posed at this angle, and the registration's articulation takes it the rest
+#: of the way. Posed all the way to 50-60 deg, the template's shoulder boundary came out 2.7 mm distal of the
+#: subject's and those upper arms -2.5 % signed (|error| 2.5 %); posed at 45 deg, +0.8 mm and -1.2 % (|error|
+#: 1.4 %). Raised arms are posed as measured: there full posing is right (+0.8 % signed at 15-25 deg) and less
+#: posing makes them too small. Wide A-poses (``bench synth --arm-down 15,60``), seeds 0-1 (BENCH.md, round 2
+#: session 40).
+ARM_POSE_MAX_DOWN_DEG = 45.0
 
 
 def rig_path() -> Path:
@@ -204,7 +217,8 @@ def camera_template(template: Mesh | None, sex: str | None, joints: Mapping[str,
     """The template the camera path registers, as ``bsv process`` and ``bsv bench synth --segmentation camera``
     choose it: ``template`` (None: the embedded template of ``sex``, or the average one, of MakeHuman's
     ``gender`` when given: the sex read from the capture, :attr:`bsv.frontend.sex.SexEstimate.gender`) posed
-    like the subject (:func:`pose_from_joints`, :func:`posed_template`), and the notes on what was not as
+    like the subject (:func:`pose_from_joints`, :func:`posed_template`; an arm no lower than
+    :data:`ARM_POSE_MAX_DOWN_DEG`), and the notes on what was not as
     measured (a clipped angle; a joint missing, when the template stays in its own pose). A template that
     cannot be posed (a user's mesh, the fine or full template) is returned as it is, without notes."""
     from .keypoints import template_kind
@@ -223,6 +237,8 @@ def camera_template(template: Mesh | None, sex: str | None, joints: Mapping[str,
         return template, [f"the template kept its own A-pose: {which} not measured"]
     except ValueError as e:
         return template, [f"the template kept its own A-pose: {e}"]
+    pose = dataclasses.replace(pose, arm_down_l=min(pose.arm_down_l, ARM_POSE_MAX_DOWN_DEG),
+                               arm_down_r=min(pose.arm_down_r, ARM_POSE_MAX_DOWN_DEG))
     return posed_template(kind, pose, blend), notes
 
 
@@ -241,6 +257,7 @@ def template_record(template: Mesh | None, sex: str | None) -> dict[str, Any]:
 
 
 __all__ = [
+    "ARM_POSE_MAX_DOWN_DEG",
     "POSABLE_KINDS",
     "POSE_JOINTS",
     "PosedTemplate",

@@ -123,6 +123,23 @@ def test_the_camera_paths_template():
     assert pt.template_record(None, "male") == {"kind": "default", "sex": "male"}
 
 
+def test_an_arm_hanging_low_is_posed_no_lower_than_the_limit():
+    """An arm measured hanging lower than ARM_POSE_MAX_DOWN_DEG (55 deg) is posed at the limit and the
+    registration takes it the rest of the way; the other arm (30 deg), the elbows and the legs are posed as
+    measured, and the measured angles are left as they are (pose_from_joints reads them exactly)."""
+    pose = POSES[2]
+    joints = rig_joints(Phenotype(), pose)
+    assert pt.pose_from_joints(joints)[0].arm_down_l == pytest.approx(55.0, abs=1e-6)
+    posed, notes = pt.camera_template(None, None, joints)
+    assert isinstance(posed, pt.PosedTemplate) and notes == []
+    assert pt.ARM_POSE_MAX_DOWN_DEG < 55.0
+    assert posed.pose.arm_down_l == pytest.approx(pt.ARM_POSE_MAX_DOWN_DEG)
+    assert posed.pose.arm_down_r == pytest.approx(30.0, abs=1e-6)
+    for name in ("elbow_l", "elbow_r", "hip_abduction_l", "hip_abduction_r"):
+        assert getattr(posed.pose, name) == pytest.approx(getattr(pose, name), abs=1.0), name
+    assert pt.template_record(posed, None)["pose"]["arm_down_l"] == pytest.approx(pt.ARM_POSE_MAX_DOWN_DEG, abs=0.05)
+
+
 def _real_rig_path():
     from pathlib import Path
 

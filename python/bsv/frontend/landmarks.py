@@ -666,15 +666,22 @@ def _lift_across(det: Detection, cam: Camera, depth: np.ndarray, name: str, targ
     surf = np.asarray(cam.deproject(uv[None], d)[0])
     if target.mask_soft is not None:
         region = np.asarray(target.mask_soft > target.params.mask_threshold)
-        uv_t = np.asarray(target_cam.project(surf[None]))[0]
-        if np.all(np.isfinite(uv_t)):
-            d_t = _surface_depth(np.asarray(target_depth, dtype=np.float64), region, uv_t)
-            if np.isfinite(d_t):
-                opposite = np.asarray(target_cam.deproject(uv_t[None], d_t)[0])
-                thickness = float((opposite - surf) @ cam.axis())
-                if 0.0 < thickness < MAX_THICKNESS_M:
-                    return np.asarray(cam.deproject(uv[None], d + thickness / 2)[0])
+        opposite = _surface_behind(surf, target_cam, target_depth, region)
+        if opposite is not None:
+            thickness = float((opposite - surf) @ cam.axis())
+            if 0.0 < thickness < MAX_THICKNESS_M:
+                return np.asarray(cam.deproject(uv[None], d + thickness / 2)[0])
     return _lift_from(det, cam, depth, name)
+
+
+def _surface_behind(point: np.ndarray, camera: Camera, depth: np.ndarray, region: np.ndarray) -> np.ndarray | None:
+    """The surface another view sees where ``point`` (world, metres) falls in its image: that view's ``region``
+    pixels' median depth around the projection, deprojected; None off its image or without depth there."""
+    uv = np.asarray(camera.project(point[None]))[0]
+    if not np.all(np.isfinite(uv)):
+        return None
+    d = _surface_depth(np.asarray(depth, dtype=np.float64), region, uv)
+    return np.asarray(camera.deproject(uv[None], d)[0]) if np.isfinite(d) else None
 
 
 def detection_from_other_view(view: str, shape: tuple[int, int], other: Detection, other_camera: Camera,
@@ -964,10 +971,7 @@ def joint_centres(segs: Mapping[str, Segmentation], depths: Mapping[str, np.ndar
         if len(per) == 1 and len(views) == 2:
             (kept, (surf, _, _, _, _)), = per.items()
             other = next(v for v in views if v != kept)
-            uv_o = np.asarray(cameras[other].project(surf[None]))[0]
-            d_o = _surface_depth(np.asarray(depths[other], dtype=np.float64), segs[other].mask, uv_o)
-            if np.isfinite(d_o):
-                opposite = np.asarray(cameras[other].deproject(uv_o[None], d_o)[0])
+            opposite = _surface_behind(surf, cameras[other], depths[other], segs[other].mask)
         if len(per) == 2:
             (sf, _, vf, _, wf), (sb, _, vb, _, wb) = per["front"], per["back"]
             ax = cameras["front"].axis()

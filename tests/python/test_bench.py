@@ -304,6 +304,15 @@ def test_hip_abduction_option_reaches_the_synth_config() -> None:
     assert synth_config(default).bmi_shift == 0.0
     with pytest.raises(SystemExit):
         parser().parse_args(["synth", "--bmi-shift", "40"])
+    wide = parser().parse_args(["synth", "--macros", "wide"])
+    assert synth_config(wide).macros == "wide" and synth_record(synth_config(wide), wide)["macros"] == "wide"
+    assert synth_config(default).macros == "standard"
+    with pytest.raises(SystemExit):
+        parser().parse_args(["synth", "--macros", "extreme"])
+    bad = synth_config(default)
+    bad.macros = "extreme"
+    with pytest.raises(BenchError, match="--macros"):
+        bad.validate()
 
 
 def test_arm_down_option_reaches_the_synth_config() -> None:

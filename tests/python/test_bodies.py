@@ -245,6 +245,32 @@ def test_a_bmi_shift_draws_the_same_subject_heavier():
             bodies.subject(0, seed=5, bmi_shift=bad)
 
 
+def test_wide_macros_draw_the_same_subject_with_other_macros():
+    """--macros wide keeps every other draw (sex, stature, BMI, modifiers, pose) and maps the same gender, muscle and
+    proportions draws onto the wide ranges: a woman on the female half of the gender scale, a man on the male half;
+    an unknown name is a PoseError naming the known ones."""
+    from bsv.bodies import MACRO_RANGES
+    from bsv.bodies.variants import hard_subject
+
+    wide = MACRO_RANGES["wide"]
+    for index in (0, 1):
+        std = bodies.subject(index, seed=5, check=False)
+        w = bodies.subject(index, seed=5, check=False, macros="wide")
+        assert w.sex == std.sex and w.stature_target == std.stature_target and w.pose == std.pose
+        assert w.bmi_target == std.bmi_target and w.phenotype.local == std.phenotype.local
+        lo, hi = wide.gender_female if std.sex == "female" else wide.gender_male
+        assert lo <= w.phenotype.gender <= hi and w.phenotype.gender != std.phenotype.gender
+        assert wide.proportions[0] <= w.phenotype.proportions <= wide.proportions[1]
+        assert w.body.stature == pytest.approx(std.body.stature, abs=0.01)
+        assert w.info()["macros"] == "wide" and std.info()["macros"] == "standard"
+    assert bodies.check_macros("standard") is MACRO_RANGES["standard"]
+    for bad in ("widest", ""):
+        with pytest.raises(bodies.PoseError, match="macro ranges .*standard, wide"):
+            bodies.subject(0, seed=5, macros=bad)
+        with pytest.raises(bodies.PoseError, match="macro ranges"):
+            hard_subject(0, seed=5, macros=bad)
+
+
 def test_bad_arm_ranges_are_pose_errors():
     from bsv.bodies.variants import hard_subject
 

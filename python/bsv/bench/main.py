@@ -12,6 +12,7 @@ from ..bodies.cohort import (
     ARM_DOWN_RANGE_DEG,
     HEAVY_BMI_SHIFT,
     HIP_ABDUCTION_RANGE_DEG,
+    MACRO_RANGES,
     arm_down_help,
     arm_range_arg,
     bmi_shift_arg,
@@ -108,6 +109,10 @@ def parser() -> argparse.ArgumentParser:
     s.add_argument("--bmi-shift", type=bmi_shift_arg, default=0.0, metavar="KG_M2",
                    help=f"added to every subject's drawn BMI (default 0: 25 +- 4 within 18.5-35; {HEAVY_BMI_SHIFT:g} for a "
                         "heavier cohort)")
+    s.add_argument("--macros", choices=tuple(MACRO_RANGES), default="standard",
+                   help="the ranges MakeHuman's gender, muscle and proportions are drawn from (default standard: each "
+                        "sex at its end of the gender scale, muscle 0.3-0.6, proportions 0.3-0.7; wide: gender anywhere "
+                        "on the sex's half, androgynous bodies included, muscle and proportions 0.1-0.9)")
     s.add_argument("--cohort", choices=COHORTS, default="standard",
                    help="standard: bsv.bodies.cohort; hard: the same subjects reshaped into the registration's "
                    "hard classes (deep upper arms, bumps, a swollen segment, extreme segment modifiers; "
@@ -141,7 +146,7 @@ def synth_config(args: argparse.Namespace) -> SynthConfig:
                        long_hair=args.long_hair, top=args.top,
                        cloud_params=dict(args.cloud_param), cohort=args.cohort,
                        refine_calibration=args.refine_calibration, arm_range=args.arm_down,
-                       leg_range=args.hip_abduction, bmi_shift=args.bmi_shift)
+                       leg_range=args.hip_abduction, bmi_shift=args.bmi_shift, macros=args.macros)
 
 
 def synth_record(cfg: SynthConfig, args: argparse.Namespace) -> dict[str, Any]:
@@ -154,7 +159,8 @@ def synth_record(cfg: SynthConfig, args: argparse.Namespace) -> dict[str, Any]:
             "cloud_params": cfg.cloud_params, "template": cfg.template, "methods": ",".join(cfg.methods),
             "params": cfg.params, "local_modifiers": cfg.local, "jobs": args.jobs,
             "cohort": cfg.cohort, "arm_down_deg": list(cfg.arm_range),
-            "hip_abduction_deg": list(cfg.leg_range), "bmi_shift": cfg.bmi_shift, "scheduler": args.scheduler,
+            "hip_abduction_deg": list(cfg.leg_range), "bmi_shift": cfg.bmi_shift, "macros": cfg.macros,
+            "scheduler": args.scheduler,
             "refine_calibration": cfg.refine_calibration}
 
 

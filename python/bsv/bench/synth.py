@@ -37,6 +37,7 @@ from ..bodies.cohort import (
     check_arm_range,
     check_bmi_shift,
     check_leg_range,
+    check_macros,
 )
 from ..errors import BsvError, PoseError
 from ..types import Mesh, PointCloud
@@ -76,6 +77,9 @@ class SynthConfig:
     #: The BMI added to every subject's draw (``--bmi-shift``; :data:`bsv.bodies.cohort.HEAVY_BMI_SHIFT` for a
     #: heavier cohort).
     bmi_shift: float = 0.0
+    #: The ranges MakeHuman's gender, muscle and proportions are drawn from (``--macros``:
+    #: :data:`bsv.bodies.cohort.MACRO_RANGES`).
+    macros: str = "standard"
     cloud: str = "raw"
     #: Cloud-building keywords for the lab path (``bsv process``'s defaults when empty), e.g. {"sor": True}.
     cloud_params: dict[str, Any] = field(default_factory=dict)
@@ -131,6 +135,10 @@ class SynthConfig:
             check_bmi_shift(self.bmi_shift)
         except PoseError as exc:
             raise BenchError(f"--bmi-shift: {exc}") from None
+        try:
+            check_macros(self.macros)
+        except PoseError as exc:
+            raise BenchError(f"--macros: {exc}") from None
         if self.cohort not in COHORTS:
             raise BenchError(f"--cohort {self.cohort}: use one of {', '.join(COHORTS)}")
         if self.segmentation not in SEGMENTATIONS:
@@ -430,7 +438,7 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] |
     try:
         make = hard_subject if cfg.cohort == "hard" else subject
         s = make(index, cfg.seed, local=cfg.local, arm_range=cfg.arm_range, leg_range=cfg.leg_range,
-                 bmi_shift=cfg.bmi_shift)
+                 bmi_shift=cfg.bmi_shift, macros=cfg.macros)
     except Exception as exc:
         err = f"subject generation failed: {type(exc).__name__}: {exc}"
         runs: list[Run] = [Run(name, c, m, False, error=err) for c in cfg.conditions for m in cfg.methods]

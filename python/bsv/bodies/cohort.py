@@ -2,8 +2,9 @@
 
 Subject i of seed s depends only on (s, i): even indices are women, odd indices men. Stature is drawn
 from normal distributions (women 1.63 +- 0.065 m, men 1.77 +- 0.07 m, clipped at 2.5 sd), BMI from a
-normal 25 +- 4 truncated to [18.5, 35], age 20-65 years, a muscle start value 0.3-0.6, proportions
-0.3-0.7, random race mix; A-pose: arms 25-50 deg below horizontal (``arm_range``, e.g. 15-60 for wide
+normal 25 +- 4 truncated to [18.5, 35], age 20-65 years, MakeHuman's gender 0-0.15 (women) or 0.85-1 (men), a
+muscle start value 0.3-0.6, proportions 0.3-0.7 (``macros``: :data:`MACRO_RANGES`; ``wide`` draws gender 0-0.5 /
+0.5-1, muscle and proportions 0.1-0.9), random race mix; A-pose: arms 25-50 deg below horizontal (``arm_range``, e.g. 15-60 for wide
 A-poses: :data:`ARM_DOWN_RANGE_DEG`, :data:`WIDE_ARM_DOWN_RANGE_DEG`), elbows 0-20 deg, hips 0-6 deg
 (small left/right differences). MakeHuman LOCAL modifiers (stomach, buttocks, hip, pelvis, torso,
 breast, arms, legs) are applied by default: each modifier with probability 1/2, value uniform in
@@ -71,6 +72,41 @@ _ARM_DOWN_LIMITS_DEG: tuple[float, float] = (0.0, 80.0)
 _HIP_ABDUCTION_LIMITS_DEG: tuple[float, float] = (0.0, 20.0)
 
 
+@dataclass(frozen=True)
+class MacroRanges:
+    """The intervals a cohort draws MakeHuman's macro modifiers from (each one uniform draw, so that every
+    other draw of a subject stays the same whatever the ranges)."""
+
+    #: A woman's gender (0 female ... 1 male).
+    gender_female: tuple[float, float]
+    #: A man's gender.
+    gender_male: tuple[float, float]
+    #: The muscle start value (the solve for stature and BMI may move it).
+    muscle: tuple[float, float]
+    #: MakeHuman's "proportions" (0 uncommon ... 1 ideal).
+    proportions: tuple[float, float]
+
+
+#: The macro ranges a cohort may be drawn with (``macros`` of :func:`subject`, ``bsv bench synth --macros``):
+#: ``standard``, the cohort as it always was, each sex at its end of MakeHuman's gender scale and the middle of
+#: the muscle and proportions scales; ``wide``, women and men anywhere on their half of the gender scale
+#: (androgynous bodies included) and muscle and proportions from 0.1 to 0.9, as a generator drawing the
+#: macros over their whole range would (BENCH.md, round 2 session 41: the camera path's boundaries move with
+#: them).
+MACRO_RANGES: dict[str, MacroRanges] = {
+    "standard": MacroRanges((0.0, 0.15), (0.85, 1.0), (0.3, 0.6), (0.3, 0.7)),
+    "wide": MacroRanges((0.0, 0.5), (0.5, 1.0), (0.1, 0.9), (0.1, 0.9)),
+}
+
+
+def check_macros(macros: str) -> MacroRanges:
+    """The :data:`MACRO_RANGES` entry named ``macros``; a PoseError naming the known ones otherwise."""
+    try:
+        return MACRO_RANGES[macros]
+    except (KeyError, TypeError):
+        raise PoseError(f"macro ranges {macros!r}: use one of {', '.join(MACRO_RANGES)}") from None
+
+
 @dataclass
 class Subject:
     """One cohort member: its draws, the solved phenotype, the pose and the posed labelled body."""
@@ -92,6 +128,8 @@ class Subject:
     leg_range: tuple[float, float] = HIP_ABDUCTION_RANGE_DEG
     #: The BMI added to the drawn one (``bmi_shift`` of :func:`subject`).
     bmi_shift: float = 0.0
+    #: The macro ranges the subject was drawn with (``macros`` of :func:`subject`: :data:`MACRO_RANGES`).
+    macros: str = "standard"
 
     def volumes_l(self) -> dict[str, float]:
         """Ground-truth volumes (litres): 14 segments and aggregates."""
@@ -99,7 +137,7 @@ class Subject:
 
     def info(self) -> dict:
         """JSON-ready description (draws, phenotype, pose, the arm range ``arm_down_deg``, the hips'
-        ``hip_abduction_deg``, measured stature/BMI)."""
+        ``hip_abduction_deg``, the ``macros`` ranges, measured stature/BMI)."""
         return {"index": self.index, "seed": self.seed, "sex": self.sex,
                 "stature_target_m": self.stature_target, "bmi_target": self.bmi_target,
                 "stature_m": self.body.stature, "bmi": self.body.bmi, "volume_l": self.body.volume_l,
@@ -107,6 +145,7 @@ class Subject:
                 "arm_down_deg": [float(a) for a in self.arm_range],
                 "hip_abduction_deg": [float(a) for a in self.leg_range],
                 "bmi_shift": float(self.bmi_shift),
+                "macros": self.macros,
                 **({"variant": self.variant} if self.variant else {})}
 
 
@@ -244,7 +283,8 @@ def _free_step(pose: Pose, hits: Iterable[str], arm_floor: float) -> Pose:
 
 def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
             arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG,
-            leg_range: tuple[float, float] = HIP_ABDUCTION_RANGE_DEG, bmi_shift: float = 0.0) -> Subject:
+            leg_range: tuple[float, float] = HIP_ABDUCTION_RANGE_DEG, bmi_shift: float = 0.0,
+            macros: str = "standard") -> Subject:
     """Subject ``index`` of the cohort of ``seed`` (deterministic). ``arm_range``: the interval (degrees
     below the horizontal, :func:`check_arm_range`) the arms' angle is drawn from; the default keeps the
     cohort as it always was, a wider one (:data:`WIDE_ARM_DOWN_RANGE_DEG`) draws the same random numbers,
@@ -253,10 +293,13 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
     ``leg_range`` likewise for the hips' abduction (degrees, :func:`check_leg_range`; a narrower stance,
     :data:`NARROW_HIP_ABDUCTION_RANGE_DEG`, draws the same random numbers); a collision spreads the legs past
     it. ``bmi_shift`` (:func:`check_bmi_shift`) is added to the drawn BMI, every draw the same (a BMI the body
-    cannot reach is brought into its reachable range, as always)."""
+    cannot reach is brought into its reachable range, as always). ``macros`` names the :data:`MACRO_RANGES`
+    the gender, muscle and proportions are drawn from (the same draws, scaled to other intervals; a PoseError
+    for an unknown name)."""
     lo, hi = check_arm_range(arm_range)
     llo, lhi = check_leg_range(leg_range)
     shift = check_bmi_shift(bmi_shift)
+    ranges = check_macros(macros)
     rng = np.random.default_rng([int(seed), int(index)])
     female = index % 2 == 0
     mu, sd = (1.63, 0.065) if female else (1.77, 0.07)
@@ -266,9 +309,9 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
         bmi = float(rng.normal(25.0, 4.0))
     years = float(rng.uniform(20.0, 65.0))
     race = rng.dirichlet([1.0, 1.0, 1.0])
-    ph = Phenotype(gender=float(rng.uniform(0.0, 0.15) if female else rng.uniform(0.85, 1.0)),
-                   age=Phenotype.age_from_years(years), muscle=float(rng.uniform(0.3, 0.6)),
-                   proportions=float(rng.uniform(0.3, 0.7)), african=float(race[0]), asian=float(race[1]),
+    ph = Phenotype(gender=float(rng.uniform(*(ranges.gender_female if female else ranges.gender_male))),
+                   age=Phenotype.age_from_years(years), muscle=float(rng.uniform(*ranges.muscle)),
+                   proportions=float(rng.uniform(*ranges.proportions)), african=float(race[0]), asian=float(race[1]),
                    caucasian=float(race[2]))
     arm, elbow, hip = rng.uniform(lo, hi), rng.uniform(0, 20), rng.uniform(llo, lhi)
     d = rng.normal(0, 1.5, size=3)
@@ -296,7 +339,7 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
         if check and penetrations(body.vertices, body.faces, body.face_labels):
             raise SolveError(f"cohort subject {index} (seed {seed}) still self-intersects after pose changes")
     return Subject(index, int(seed), "female" if female else "male", stature, bmi_used, ph, pose, body,
-                   arm_range=(lo, hi), leg_range=(llo, lhi), bmi_shift=shift)
+                   arm_range=(lo, hi), leg_range=(llo, lhi), bmi_shift=shift, macros=macros)
 
 
 def cohort(n: int, seed: int = 0, local: bool = True, check: bool = True,
@@ -406,8 +449,10 @@ __all__ = [
     "HIP_ABDUCTION_RANGE_DEG",
     "LOCAL_CENTRAL",
     "LOCAL_SIDED",
+    "MACRO_RANGES",
     "NARROW_HIP_ABDUCTION_RANGE_DEG",
     "WIDE_ARM_DOWN_RANGE_DEG",
+    "MacroRanges",
     "Subject",
     "arm_down_help",
     "arm_range_arg",
@@ -415,6 +460,7 @@ __all__ = [
     "check_arm_range",
     "check_bmi_shift",
     "check_leg_range",
+    "check_macros",
     "cohort",
     "iter_cohort",
     "leg_range_arg",

@@ -265,7 +265,7 @@ def test_wide_macros_draw_the_same_subject_with_other_macros():
         assert w.info()["macros"] == "wide" and std.info()["macros"] == "standard"
     assert bodies.check_macros("standard") is MACRO_RANGES["standard"]
     for bad in ("widest", ""):
-        with pytest.raises(bodies.PoseError, match="macro ranges .*standard, wide"):
+        with pytest.raises(bodies.PoseError, match=r"macro ranges .*standard, wide"):
             bodies.subject(0, seed=5, macros=bad)
         with pytest.raises(bodies.PoseError, match="macro ranges"):
             hard_subject(0, seed=5, macros=bad)

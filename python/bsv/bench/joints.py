@@ -38,9 +38,11 @@ def camera_segmentations(capture_dir: str | Path, correct: bool = True,
                          sex: str | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
     """The camera path's segmentations of both views of a (virtual) capture folder, made together
     (:func:`bsv.frontend.landmarks.segment_views`, the cameras' calibrated ``camera_to_world`` of
-    camera.json), and their joint centres; ``correct``: with the learned joint offsets; ``sex``: the subject's
+    camera.json), and their joint centres; ``correct``: with the learned joint offsets and the knee lines moved by
+    the body's proportions (:mod:`bsv.frontend.kneelines`), as ``bsv process`` has them; ``sex``: the subject's
     sex as a user gives it (None: read from the capture, :mod:`bsv.frontend.sex`)."""
     from ..frontend.capture import read_capture
+    from ..frontend.kneelines import knee_line_shift_mm, recut_knee_lines
     from ..frontend.landmarks import Camera, joint_centres, segment_views
     from ..frontend.segment import VIEWS
 
@@ -51,7 +53,10 @@ def camera_segmentations(capture_dir: str | Path, correct: bool = True,
 
     params: dict[str, Any] = {} if sex is None else {"sex_score": SEX_SCORES[sex]}
     segs = segment_views({v: {"colour": data[v]["colour"], "depth_m": data[v]["depth_m"]} for v in VIEWS}, cams, **params)
-    return segs, joint_centres(segs, {v: data[v]["depth_m"] for v in VIEWS}, cams, correct=correct)
+    joints = joint_centres(segs, {v: data[v]["depth_m"] for v in VIEWS}, cams, correct=correct)
+    if correct:  # as bsv process: the knee lines moved by the body's proportions
+        segs = recut_knee_lines(segs, joints, cams, knee_line_shift_mm(joints, segs), **params)
+    return segs, joints
 
 
 def capture_views_geometry(capture_dir: str | Path) -> tuple[dict[str, np.ndarray], dict[str, Any]]:

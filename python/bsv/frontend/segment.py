@@ -463,6 +463,9 @@ class Segmentation:
     extra_sd: dict[str, float] = field(default_factory=dict)
     #: What MediaPipe saw around the subject (:attr:`Detection.background`).
     background: str = "as_captured"
+    #: How far (mm, + towards the feet) the thigh / shin line was moved from where :func:`knee_line` draws it
+    #: for the body's proportions (:func:`bsv.frontend.kneelines.recut_knee_lines`); None when not moved.
+    knee_line_shift_mm: float | None = None
 
     def landmark(self, name: str) -> np.ndarray:
         """(x, y, visibility) of one landmark by name (KeyError naming it if unknown)."""
@@ -1017,6 +1020,23 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / n if n > 1e-9 else np.array([0.0, 1.0])
 
 
+def _knee_line(P: Mapping[str, np.ndarray], params: SegmentParams) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`knee_line` of the landmarks by name."""
+    _, _, down, _ = body_axes(P)
+    k_mid = (P["left_knee"] + P["right_knee"]) / 2
+    shin_len = 0.5 * sum(float(np.hypot(*(P[f"{s}_ankle"] - P[f"{s}_knee"]))) for s in ("left", "right"))
+    sex = params.sex_score or 0.0
+    return k_mid + down * (params.knee_shift + sex * params.knee_shift_sex) * shin_len, down
+
+
+def knee_line(pose: np.ndarray, params: SegmentParams) -> tuple[np.ndarray, np.ndarray]:
+    """The thigh / shin line :func:`label_pixels` draws for subject-oriented pose landmarks (33, >= 2 pixels):
+    a point on it (pixels, x y: below the mid-knee by ``knee_shift`` plus ``sex_score`` times
+    ``knee_shift_sex`` of the shin's length) and the body's unit ``down`` (:func:`body_axes`), its normal. A
+    pixel ``p`` lies on the shin's side when ``(p - point) @ down > 0``."""
+    return _knee_line({n: pose[i, :2].astype(np.float64) for i, n in enumerate(POSE_NAMES)}, params)
+
+
 def label_pixels(mask: np.ndarray, pose: np.ndarray, hands: list, params: SegmentParams = SegmentParams(),
                  crotch: np.ndarray | None = None) -> np.ndarray:
     """(H, W) uint8 segment ids of the mask pixels from subject-oriented pose landmarks (33, >=2 pixels)
@@ -1091,7 +1111,7 @@ def label_pixels(mask: np.ndarray, pose: np.ndarray, hands: list, params: Segmen
         arm = on & ((group == 1) | (group == 2))
         out[arm] = np.where(past_wr[arm], SEGMENT_IDS["hand" + sfx],
                             np.where(past_el[arm], SEGMENT_IDS["forearm" + sfx], SEGMENT_IDS["upper_arm" + sfx]))
-        knee_c = k_mid + down * (params.knee_shift + sex * params.knee_shift_sex) * shin_len
+        knee_c, _ = _knee_line(P, params)
         ank_c = P[f"{side}_ankle"] + down * params.ankle_shift * shin_len
         below_knee = (p - knee_c) @ down > 0
         below_ankle = (p - ank_c) @ down > 0
@@ -1701,6 +1721,7 @@ __all__ = [
     "disagreeing_arm_angles",
     "expected_crotch_depth",
     "gap_top",
+    "knee_line",
     "label_accuracy",
     "label_detection",
     "label_pixels",

@@ -9,9 +9,15 @@ their errors: exactly those ``bsv process`` had. The target is the mean of the t
 line, :func:`bsv.frontend.segment.knee_line`); the features are :data:`bsv.frontend.kneelines.FEATURES`.
 Least squares over the training runs (both conditions pooled), each feature's range the training range
 widened by a quarter of its span on each side; ``mean`` the mean prediction over the training runs. The runs
-must come from an engine without the correction (``KNEE_LINE_GAIN`` 0), or its loops carry it already.
+must come from an engine without the correction (``bsv.frontend.kneelines.KNEE_LINE_GAIN`` set to 0), or their
+loops carry it already. The shipped table (round 2 session 41):
 
-    .venv/bin/python benchmarks/learn_knee_lines.py --train room_0 ... --eval room_20 room_21 wide_0 wide_1
+    for s in 0 1 2 3 4 5 6 7 11 12 13 14 15 16 17 18 20 21; do .venv/bin/bsv bench synth --n 10 --seed $s \
+        --conditions noer,l515 --segmentation camera --out runs/room_$s; done
+    for s in 0 1 2 3 4 5 6 7; do .venv/bin/bsv bench synth --n 10 --seed $s --conditions noer,l515 \
+        --segmentation camera --macros wide --out runs/wide_$s; done
+    .venv/bin/python benchmarks/learn_knee_lines.py --train runs/room_{0,1,2,3,4,5,6,7,11,12,13,14,15,16,17,18} \
+        runs/wide_{2,3,4,5,6,7} --eval runs/room_20 runs/room_21 runs/wide_0 runs/wide_1
 
 Prints the table for bsv/frontend/kneelines.py and, per evaluation folder, the loops' rms about the training
 mean against the residual's.

@@ -3,9 +3,9 @@
 **Why.** A shin's volume follows where the fitted mesh's knee loop lands: -0.5 % per mm distal (BENCH.md,
 round 2 session 37). The camera path places that loop through the thigh / shin line each view draws near
 MediaPipe's knees (:func:`bsv.frontend.segment.label_pixels`, ``knee_shift``). Where the template's knee loop
-lies against what MediaPipe sees moves with the body's proportions and build: over 520 fits of the standard and
-the wide-macro cohorts (``bsv bench synth --macros wide``), MakeHuman's muscle and proportions macros correlate
-+0.47 and +0.44 with the loop's shift, and a muscular body's knee loop came out up to 17 mm distal (its shin
+lies against what MediaPipe sees moves with the body's proportions and build: over 240 fits of the standard and
+the wide-macro cohorts (``bsv bench synth --macros wide``, noer), MakeHuman's muscle and proportions macros
+correlate +0.47 and +0.44 with the loop's shift, and a muscular body's knee loop came out up to 17 mm distal (its shin
 -5 %). The two knees share one line (the mid-knee's), so the shift is common to both legs (left and right
 correlate 0.93).
 

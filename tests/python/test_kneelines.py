@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -100,3 +102,14 @@ def test_a_recut_moves_the_thigh_shin_line_by_the_millimetres_at_the_knees_depth
     assert up.knee_line_shift_mm == -10.0 and seg.knee_line_shift_mm is None
     same = kl.recut_knee_lines({"front": seg}, joints, {"front": cam}, None)["front"]
     assert same is seg
+
+
+def test_a_view_without_its_knee_landmarks_or_in_front_of_the_knees_keeps_its_line():
+    seg, cam = _view()
+    joints = {f"knee_{s}": np.array([0.0, 0.0, DEPTH_M]) for s in "lr"}
+    pose = seg.pose.copy()
+    pose[POSE_NAMES.index("left_knee"), :2] = np.nan
+    blind = dataclasses.replace(seg, pose=pose)
+    assert kl.recut_knee_lines({"front": blind}, joints, {"front": cam}, -10.0)["front"] is blind
+    behind = {f"knee_{s}": np.array([0.0, 0.0, -DEPTH_M]) for s in "lr"}
+    assert kl.recut_knee_lines({"front": seg}, behind, {"front": cam}, -10.0)["front"] is seg

@@ -118,7 +118,8 @@ def recut_knee_lines(segs: Mapping[str, Segmentation], joints: Mapping[str, Any]
     and its shin below it. The millimetres become pixels at the knees' depth in that camera (``joints``: the
     joint centres, :class:`bsv.frontend.landmarks.JointCentre` or arrays; ``cameras``: calibrated
     :class:`bsv.frontend.landmarks.Camera`); each records the shift (``knee_line_shift_mm``). Unchanged when
-    ``shift_mm`` is None or 0, or without knees."""
+    ``shift_mm`` is None or 0, or without knees; a view whose knee landmarks are not placed, or that does not
+    see the knees in front of it, keeps its line."""
     if not shift_mm or any(f"knee_{s}" not in joints for s in "lr"):
         return dict(segs)
     knees = np.mean([_xyz(joints[f"knee_{s}"]) for s in "lr"], axis=0)
@@ -133,6 +134,9 @@ def recut_knee_lines(segs: Mapping[str, Segmentation], joints: Mapping[str, Any]
         if seg.sex is not None:
             prm = dataclasses.replace(prm, sex_score=seg.sex.score)
         point, down = knee_line(seg.pose, prm)
+        if not (np.isfinite(depth) and depth > 0.0 and np.all(np.isfinite(point))):
+            out[v] = seg  # the knees not in front of this camera, or its landmarks not placed: its line stays
+            continue
         point = point + down * (shift_mm / 1000.0) * cam.intrinsics.fx / depth
         labels = seg.labels.copy()
         ys, xs = np.nonzero(np.isin(labels, [SEGMENT_IDS[f"{k}_{s}"] for k in ("thigh", "shin") for s in "lr"]))

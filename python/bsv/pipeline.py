@@ -265,7 +265,7 @@ def _segment_cameras(data: dict[str, dict[str, Any]], extrinsics: dict[str, dict
     the joint centres in 3-D, the knee lines moved by the body's proportions (:mod:`bsv.frontend.kneelines`)
     and the thighs' loop targets (:mod:`bsv.frontend.groin`); a single camera is segmented alone."""
     from .frontend.groin import hip_loop_targets
-    from .frontend.kneelines import knee_line_shift_mm, recut_knee_lines
+    from .frontend.kneelines import with_proportional_knee_lines
     from .frontend.landmarks import Camera, joint_centres, segment_views
     from .frontend.segment import segment_image
 
@@ -276,7 +276,7 @@ def _segment_cameras(data: dict[str, dict[str, Any]], extrinsics: dict[str, dict
     segs = segment_views({c: data[c] for c in cameras}, cams, **params)
     depths = {c: data[c]["depth_m"] for c in cameras}
     joints = joint_centres(segs, depths, cams)
-    segs = recut_knee_lines(segs, joints, cams, knee_line_shift_mm(joints, segs), **params)
+    segs = with_proportional_knee_lines(segs, joints, cams, **params)
     return segs, joints, hip_loop_targets(segs, depths, cams, joints)
 
 

@@ -42,7 +42,7 @@ def camera_segmentations(capture_dir: str | Path, correct: bool = True,
     the body's proportions (:mod:`bsv.frontend.kneelines`), as ``bsv process`` has them; ``sex``: the subject's
     sex as a user gives it (None: read from the capture, :mod:`bsv.frontend.sex`)."""
     from ..frontend.capture import read_capture
-    from ..frontend.kneelines import knee_line_shift_mm, recut_knee_lines
+    from ..frontend.kneelines import with_proportional_knee_lines
     from ..frontend.landmarks import Camera, joint_centres, segment_views
     from ..frontend.segment import VIEWS
 
@@ -55,7 +55,7 @@ def camera_segmentations(capture_dir: str | Path, correct: bool = True,
     segs = segment_views({v: {"colour": data[v]["colour"], "depth_m": data[v]["depth_m"]} for v in VIEWS}, cams, **params)
     joints = joint_centres(segs, {v: data[v]["depth_m"] for v in VIEWS}, cams, correct=correct)
     if correct:  # as bsv process: the knee lines moved by the body's proportions
-        segs = recut_knee_lines(segs, joints, cams, knee_line_shift_mm(joints, segs), **params)
+        segs = with_proportional_knee_lines(segs, joints, cams, **params)
     return segs, joints
 
 

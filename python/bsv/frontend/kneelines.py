@@ -148,5 +148,12 @@ def recut_knee_lines(segs: Mapping[str, Segmentation], joints: Mapping[str, Any]
     return out
 
 
+def with_proportional_knee_lines(segs: Mapping[str, Segmentation], joints: Mapping[str, Any],
+                                 cameras: Mapping[str, Any], **params: Any) -> dict[str, Segmentation]:
+    """The camera path's step (``bsv process`` and ``bsv bench synth`` alike): each view's knee line moved by
+    :func:`knee_line_shift_mm` of the capture's joint centres (:func:`recut_knee_lines`)."""
+    return recut_knee_lines(segs, joints, cameras, knee_line_shift_mm(joints, segs), **params)
+
+
 __all__ = ["FEATURES", "KNEE_LINE_GAIN", "KNEE_LOOP_MODEL", "MAX_SHIFT_MM", "knee_line_shift_mm", "predicted_loop_mm",
-           "proportions", "recut_knee_lines"]
+           "proportions", "recut_knee_lines", "with_proportional_knee_lines"]

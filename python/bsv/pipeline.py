@@ -225,13 +225,18 @@ def segmentation_build_score(segmentations: Iterable[Segmentation]) -> float | N
     return None
 
 
-def segmentation_extra_sd(segmentations: Iterable[Segmentation]) -> dict[str, float]:
+def segmentation_extra_sd(segmentations: Iterable[Segmentation],
+                          hip_loops: Mapping[str, Any] | None = None) -> dict[str, float]:
     """The sd the views' degraded boundaries add to each quantity
-    (:attr:`bsv.frontend.segment.Segmentation.extra_sd`): the largest of the views' per quantity (the two views
-    of one capture describe the same boundary)."""
+    (:attr:`bsv.frontend.segment.Segmentation.extra_sd`), and the thighs' when the camera path found no hip-loop
+    targets (``hip_loops`` given and empty: :func:`bsv.frontend.groin.hip_loop_extra_sd`): the largest per
+    quantity (the two views of one capture, and the crotch they place, describe the same boundary)."""
+    from .frontend.groin import hip_loop_extra_sd
+
     out: dict[str, float] = {}
-    for seg in segmentations:
-        for name, sd in seg.extra_sd.items():
+    extra = [seg.extra_sd for seg in segmentations] + ([hip_loop_extra_sd(hip_loops)] if hip_loops is not None else [])
+    for sds in extra:
+        for name, sd in sds.items():
             out[name] = max(out.get(name, 0.0), float(sd))
     return out
 
@@ -572,6 +577,10 @@ def process(
                           "colors": np.ascontiguousarray(d["colour"], dtype=np.uint8)})
         pdf_renderer.check()  # a worker that could not load WeasyPrint (pango missing) says so before the fit
         landmark_warnings = [w for seg in camera_segs.values() for w in seg.warnings]
+        if segmentation == "camera" and not loops:  # the thighs' boundaries from the colour labels alone
+            from .frontend.groin import NO_TARGET_WARNING
+
+            landmark_warnings.append(NO_TARGET_WARNING)
         if progress and sex_estimate is not None:
             print(f"[bsv]   {sex_estimate.sentence()}", flush=True)
         if progress:
@@ -601,6 +610,7 @@ def process(
                 for w in template_notes:
                     print(f"[bsv]   warning: {w}", flush=True)
         measured = camera_joints({**joints, **loops}, keypoints)
+        pulled_loops = {name: t for name, t in loops.items() if measured and name in measured}  # the thighs' targets used
         reg: Registration = steps.run(
             "register", "registering the template (ARAP)",
             lambda: bsv_register(cloud, template=template, progress=False, density=density, label_source=label_source,
@@ -620,7 +630,7 @@ def process(
         vols["intervals"] = steps.run(
             "intervals", "95 % intervals (calibration Monte Carlo + error model)",
             lambda: _intervals(reg, [_camera_spread(c, extrinsics[c]) for c in cameras], segmentation, density,
-                               segmentation_extra_sd(camera_segs.values()),
+                               segmentation_extra_sd(camera_segs.values(), pulled_loops if segmentation == "camera" else None),
                                segmentation_build_score(camera_segs.values()))).to_json()
         if refined:
             vols["calibration_refinement"] = {"method": "floor plane (pitch, roll, height)", "cameras": refined}
@@ -628,7 +638,7 @@ def process(
                          "upper_arm_points_relabelled_torso": arm_relabelled}
         vols["joints_m"] = {name: j.to_json() for name, j in joints.items()}
         if segmentation == "camera":
-            vols["boundaries_m"] = {name: t.to_json() for name, t in loops.items() if measured and name in measured}
+            vols["boundaries_m"] = {name: t.to_json() for name, t in pulled_loops.items()}
         vols["warnings"] = landmark_warnings + template_notes
         vols["template"] = template_record(template, sex)
         if sex_estimate is not None:

@@ -104,6 +104,22 @@ def test_a_crotch_far_below_where_the_hips_put_it_is_set_aside(capture):
     assert groin.expected_crotch_below_hips({k: j for k, j in joints.items() if k != "knee_r"}, 0.0) is None
 
 
+def test_a_capture_without_hip_loop_targets_widens_the_thighs_intervals():
+    """No hip-loop target (the crotch not seen): the thighs, legs and their ratios (and a little the torso) carry
+    a crotch depth's sd of NO_TARGET_CROTCH_SD through CROTCH_DEPTH_SENSITIVITY; a capture with targets adds
+    nothing; the sd is wider than a crotch placed at its expected depth (the touching views' own)."""
+    extra = groin.hip_loop_extra_sd({})
+    assert extra == groin.NO_TARGET_SD
+    assert extra["thigh_l"] == pytest.approx(groin.NO_TARGET_CROTCH_SD * seg.CROTCH_DEPTH_SENSITIVITY["thigh_l"])
+    assert extra["thigh_l"] == pytest.approx(0.02, abs=0.001)  # what 500 captures measured (BENCH.md session 42)
+    assert set(extra) == set(seg.CROTCH_DEPTH_SENSITIVITY) and not any(k.startswith("asymmetry") for k in extra)
+    assert all(extra[k] > seg.EXPECTED_CROTCH_SD[k] for k in extra)
+    target = groin.LoopTarget(np.zeros(3), 1.0, "test", np.array([0.0, 1.0, 0.0]))
+    assert groin.hip_loop_extra_sd({"hip_loop_l": target, "hip_loop_r": target}) == {}
+    extra["thigh_l"] = 1.0  # a copy: the table stays
+    assert groin.NO_TARGET_SD["thigh_l"] < 0.1
+
+
 def test_the_offsets_mirror_the_right_thigh_and_follow_the_table():
     table = {"1": (0.09, 0.02, 0.0), "sex": (0.0, -0.01, 0.0), "build": (0.0, 0.0, 0.005), "thigh": (0.0, 0.1, 0.0)}
     off = groin.hip_loop_offsets(1.0, 2.0, 0.4, table)

@@ -391,6 +391,30 @@ def test_process_keeps_a_capture_whose_back_view_shows_no_person(capture, monkey
     assert abs(err) < 1.0, err  # measured -0.25 % (the limbs within 6 %: degraded, said so)
 
 
+def test_process_says_when_the_crotch_was_not_seen_and_widens_the_thighs(capture, monkeypatch, tmp_path):
+    """No hip-loop target (the crotch not seen, as where the thighs touch): bsv process says so, keeps no
+    boundary target and widens the thighs' intervals (bsv.frontend.groin.NO_TARGET_SD), not the arms'."""
+    folder, _, _, _ = capture
+    from bsv.frontend import groin
+    from bsv.pipeline import process
+
+    process(folder, folder / "calibration.json", tmp_path / "seen", progress=False)
+    seen = json.loads((tmp_path / "seen" / "volumes.json").read_text())
+    assert seen["boundaries_m"] and groin.NO_TARGET_WARNING not in seen["warnings"]
+    monkeypatch.setattr(groin, "hip_loop_targets", lambda *a, **k: {})
+    process(folder, folder / "calibration.json", tmp_path / "unseen", progress=False)
+    unseen = json.loads((tmp_path / "unseen" / "volumes.json").read_text())
+    assert groin.NO_TARGET_WARNING in unseen["warnings"] and unseen["boundaries_m"] == {}
+    assert "thigh_l" in unseen["intervals"]["method"]
+
+    def width(v: dict, name: str) -> float:
+        lo, hi = v["intervals"]["volumes_l"][name]
+        return (hi - lo) / v["volumes_l"][name]
+
+    assert width(unseen, "thigh_l") > 1.15 * width(seen, "thigh_l")
+    assert width(unseen, "forearm_l") == pytest.approx(width(seen, "forearm_l"), rel=0.05)
+
+
 def test_no_person_in_either_view_is_a_typed_error(capture, monkeypatch):
     _, data, cams, _ = capture
     _lose(monkeypatch, data, seg.VIEWS)

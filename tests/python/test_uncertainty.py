@@ -155,6 +155,13 @@ def test_a_degraded_boundary_widens_only_its_quantities():
              Segmentation(z, z > 0, np.zeros((71, 3)), view="back", extra_sd={"thigh_l": 0.02}),
              Segmentation(z, z > 0, np.zeros((71, 3)))]
     assert segmentation_extra_sd(views) == {"thigh_l": 0.02, "torso": 0.004}
+    # a camera capture without hip-loop targets: the thighs' sd joins, the largest per quantity kept
+    from bsv.frontend.groin import NO_TARGET_SD
+
+    no_target = segmentation_extra_sd(views, {})
+    assert no_target == {**NO_TARGET_SD, "thigh_l": max(0.02, NO_TARGET_SD["thigh_l"]),
+                         "torso": max(0.004, NO_TARGET_SD["torso"])}
+    assert segmentation_extra_sd(views, {"hip_loop_l": object()}) == {"thigh_l": 0.02, "torso": 0.004}
     assert set(EXPECTED_CROTCH_SD) >= {"thigh_l", "thigh_r", "torso"}
     assert not any(k.startswith("asymmetry_") for k in EXPECTED_CROTCH_SD)
 
@@ -226,6 +233,23 @@ def test_coverage_rows_count_truth_inside_and_false_asymmetries(tmp_path):
     assert "| noer | exact | exact | 3 |" in "\n".join(coverage_markdown(rows, models))
     png = coverage_figure(rows, tmp_path / "coverage.png")
     assert png.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_coverage_scores_the_intervals_bsv_process_writes_widened_where_a_boundary_was_degraded():
+    """A run's recorded extra sd (the capture's degraded boundaries, as bsv process adds them) widens its
+    scored intervals: a thigh 8 % off lies outside the model's interval and inside the widened one."""
+    from bsv.bench.coverage import coverage_rows, record
+
+    model = unc.ErrorModel({"thigh_l": (0.0, 0.025)}, "test")
+
+    def run(extra: dict[str, float]) -> Run:
+        return Run("s", "noer", "bsv", True, info={"uncertainty": {
+            "estimate": {"thigh_l": 7.56}, "truth": {"thigh_l": 7.0}, "calibration_sd": {}, "extra_sd": extra}})
+
+    assert coverage_rows([run({})], {"exact": model}, ("paper",))[0]["segment_coverage_pct"] == 0.0
+    assert coverage_rows([run({"thigh_l": 0.04})], {"exact": model}, ("paper",))[0]["segment_coverage_pct"] == 100.0
+    body = bsv.bodies.subject(0).body.mesh()
+    assert record(body, body, None, samples=2, extra_sd={"thigh_l": 0.02})["extra_sd"] == {"thigh_l": 0.02}
 
 
 # ----------------------------------------------------------------------------------------------------

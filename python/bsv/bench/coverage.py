@@ -65,11 +65,14 @@ BENCH_SAMPLES: int = 100
 
 def record(fitted: Mesh, truth: Mesh, cameras: Sequence[CameraPose] | None, density: float = 1000.0,
            samples: int = BENCH_SAMPLES, segmentation: str = "oracle",
-           covariances: Sequence[np.ndarray] | None = None, source: str = "paper default") -> dict[str, Any]:
+           covariances: Sequence[np.ndarray] | None = None, source: str = "paper default",
+           extra_sd: Mapping[str, float] | None = None) -> dict[str, Any]:
     """What :func:`coverage_rows` needs from one registration (JSON-ready). ``cameras``: the capture's
     true and estimated extrinsics in a calibrated condition (None: exact calibration); ``covariances``:
     their 6 x 6 covariances (default: the paper's, :func:`bsv.uncertainty.paper_covariance`) from
-    ``source``; ``segmentation`` selects the error model (:func:`model_name`)."""
+    ``source``; ``segmentation`` selects the error model (:func:`model_name`); ``extra_sd``: the sd the
+    capture's degraded boundaries add per quantity, as ``bsv process`` adds it
+    (:func:`bsv.pipeline.segmentation_extra_sd`)."""
     from .. import volumes
 
     t0 = time.perf_counter()
@@ -80,7 +83,8 @@ def record(fitted: Mesh, truth: Mesh, cameras: Sequence[CameraPose] | None, dens
     cal = calibration_spread(fitted, spread, samples=samples, density=density) if spread else {}
     return {"estimate": quantities(volumes(fitted, islands=True, density=density)),
             "truth": quantities(volumes(truth, density=density)), "calibration_sd": cal,
-            "segmentation": segmentation, "seconds": time.perf_counter() - t0}
+            "segmentation": segmentation, "extra_sd": {k: float(v) for k, v in (extra_sd or {}).items()},
+            "seconds": time.perf_counter() - t0}
 
 
 def model_name(condition: str, segmentation: str = "oracle") -> str:
@@ -139,7 +143,7 @@ def coverage_rows(runs: Iterable[Run], models: Mapping[str, ErrorModel],
         inside_v, inside_a, hw_tl, hw_a, sym = [], [], [], [], []
         for u, build in recs:
             est, truth = u["estimate"], u["truth"]
-            iv = combine(est, model, u.get("calibration_sd"), build_score=build)
+            iv = combine(est, model, u.get("calibration_sd"), u.get("extra_sd"), build_score=build)
             for n in SCORED_VOLUMES:
                 if n in iv and n in truth:
                     inside_v.append(iv[n][0] <= truth[n] <= iv[n][1])

@@ -198,6 +198,7 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
     joint_errs: dict[str, list[float]] | None = None
     joints: dict[str, Any] | None = None
     loops: dict[str, Any] = {}  # the thighs' loop targets of the camera path (bsv.frontend.groin)
+    extra_sd: dict[str, float] = {}  # the sd degraded boundaries add to the intervals, as bsv process adds it
     lab = cloud_mode == "lab" or segmentation == "camera"
     need_files = condition in CALIBRATED or lab
     refined: Refined | None = None
@@ -224,6 +225,9 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
 
                 segs, joints = camera_segmentations(tmp, sex=sex)
                 loops = capture_hip_loops(tmp, segs, joints)
+                from ..pipeline import segmentation_extra_sd
+
+                extra_sd = segmentation_extra_sd(segs.values(), loops)
                 sex_estimate = segs["front"].sex
                 landmark_warnings = [w for s in segs.values() for w in s.warnings]
                 views = capture_views(tmp, segmentation, labels={v: s.labels for v, s in segs.items()})
@@ -278,7 +282,8 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
             if method == "bsv":  # the intervals' ingredients (bench/coverage.py)
                 from .coverage import record
 
-                run.info["uncertainty"] = record(fit.mesh, truth_surface, cams, segmentation=segmentation)
+                run.info["uncertainty"] = record(fit.mesh, truth_surface, cams, segmentation=segmentation,
+                                                 extra_sd=extra_sd)
                 from .boundaries import INFO_KEY, boundary_errors, end_errors
 
                 try:  # a metric that cannot be read (a diverged fit) is said, the run keeps its volumes

@@ -22,7 +22,8 @@ No target is given (and the registration does as before) where the crotch is not
 below it in either view (the gap opens lower than :func:`bsv.frontend.segment.expected_crotch_depth` allows,
 the rule of :func:`bsv.frontend.segment.agreeing_crotches`, or lower than the measured hips and thighs put the
 crotch by more than :data:`CROTCH_LOW_MARGIN_M`), no gap, views that disagree by more than
-:data:`CROTCH_VIEWS_DISAGREE_M`, a missing hip or knee, or no depth at the gap.
+:data:`CROTCH_VIEWS_DISAGREE_M`, a missing hip or knee, or no depth at the gap. Such thighs are less certain
+(:func:`hip_loop_extra_sd` widens their intervals; ``bsv process`` says so, :data:`NO_TARGET_WARNING`).
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ import numpy as np
 
 from .landmarks import Camera, JointCentre, body_frame
 from .segment import (
+    CROTCH_DEPTH_SENSITIVITY,
     CROTCH_TOUCH_MARGIN,
     POSE_NAMES,
     VIEWS,
@@ -83,6 +85,18 @@ HIP_LOOP_OFFSETS_M: dict[str, tuple[float, float, float]] = {
 HIP_LOOP_PULL_RAISE_M = 0.002
 #: The confidence a hip-loop target pulls with (the keypoint term's per-keypoint weight, 0..1).
 HIP_LOOP_CONFIDENCE = 1.0
+#: Where no hip-loop target is given (the crotch not seen: thighs that touch, mostly the heaviest bodies), the
+#: thighs' loops follow the 2-D labels' crotch alone, as uncertain as a crotch depth with this sd (a fraction of
+#: the hip-knee length, through :data:`bsv.frontend.segment.CROTCH_DEPTH_SENSITIVITY`). Measured on session 41's
+#: engine (benchmarks/BENCH.md, round 2 session 42; 500 camera-path captures of the room, the wide macros, the
+#: heavier cohort and the looks): the thighs' log errors scatter 0.031-0.035 (rms) without a target against the
+#: error model's 0.0255 and 0.020 with one, so their 95 % intervals held 86-91 % of the truths against 99 %;
+#: 0.045 adds the difference (0.020 to a thigh).
+NO_TARGET_CROTCH_SD = 0.045
+#: The sd a capture without hip-loop targets adds to the quantities its thighs' boundaries move, in the error
+#: models' comparison space (natural log): :data:`NO_TARGET_CROTCH_SD` times
+#: :data:`bsv.frontend.segment.CROTCH_DEPTH_SENSITIVITY`.
+NO_TARGET_SD: dict[str, float] = {k: NO_TARGET_CROTCH_SD * v for k, v in CROTCH_DEPTH_SENSITIVITY.items()}
 
 
 @dataclass(frozen=True)
@@ -256,6 +270,18 @@ def hip_loop_targets(segs: Mapping[str, Segmentation], depths: Mapping[str, np.n
     return out
 
 
+def hip_loop_extra_sd(targets: Mapping[str, LoopTarget]) -> dict[str, float]:
+    """The sd (comparison space, per quantity) the thighs' boundaries add to the intervals when the capture has
+    no hip-loop targets (:func:`hip_loop_targets` gave none): :data:`NO_TARGET_SD`; none when it has them."""
+    return {} if targets else dict(NO_TARGET_SD)
+
+
+#: What ``volumes.json`` and the report say when a camera capture has no hip-loop targets.
+NO_TARGET_WARNING = ("thighs: the crotch was not seen in the depth images (the thighs touch, or the views disagree), "
+                     "so the thighs' boundaries with the torso follow the colour images' labels alone; their "
+                     "intervals are widened")
+
+
 __all__ = [
     "ABOVE_FLOOR_M",
     "BODY_RADIUS_M",
@@ -266,10 +292,14 @@ __all__ = [
     "HIP_LOOP_OFFSETS_M",
     "HIP_LOOP_PULL_RAISE_M",
     "LIFT_WINDOW_PX",
+    "NO_TARGET_CROTCH_SD",
+    "NO_TARGET_SD",
+    "NO_TARGET_WARNING",
     "Crotch",
     "LoopTarget",
     "crotch_from_depth",
     "expected_crotch_below_hips",
+    "hip_loop_extra_sd",
     "hip_loop_offsets",
     "hip_loop_targets",
     "thigh_length",

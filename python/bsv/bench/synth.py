@@ -291,7 +291,8 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
                 except (BsvError, ValueError) as exc:
                     run.info[INFO_KEY + "_error"] = f"{type(exc).__name__}: {exc}"
                 if refined is not None:
-                    run.info["refined"] = refined.register(kinds, seed, template, params, pulls, segmentation)
+                    run.info["refined"] = refined.register(kinds, seed, template, params, pulls, segmentation,
+                                                           extra_sd)
         except Exception as exc:  # a failed registration is reported, the run goes on
             run.error = f"{type(exc).__name__}: {exc}"
             run.info = {"traceback": traceback.format_exc(limit=3)}
@@ -364,11 +365,12 @@ class Refined:
         return PointCloud(pts, None, cloud.colors, cloud.labels)
 
     def register(self, kinds: Any, seed: int, template: Mesh, params: dict[str, Any],
-                 joints: dict[str, Any] | None, segmentation: str) -> dict[str, Any]:
+                 joints: dict[str, Any] | None, segmentation: str,
+                 extra_sd: dict[str, float] | None = None) -> dict[str, Any]:
         """The bsv registration of the refined cloud and what the refined intervals need (JSON-ready):
         ``estimated_l``, ``floor_l``, ``seconds``, per camera the refinements' figures and the remaining
         error in the paper's and in the posterior's SDs, ``uncertainty`` (:func:`bsv.bench.coverage.record`
-        with the refined covariances); or ``error``."""
+        with the refined covariances and the capture's ``extra_sd``); or ``error``."""
         import numpy as np
 
         from ..uncertainty import PAPER_STD, pose_delta
@@ -395,7 +397,8 @@ class Refined:
         if self.truth is None:
             raise BenchError("refined capture without its true surface")
         unc = record(fit.mesh, self.truth, [c.pose for c in self.cameras], segmentation=segmentation,
-                     covariances=[c.covariance for c in self.cameras], source=self.cameras[0].source)
+                     covariances=[c.covariance for c in self.cameras], source=self.cameras[0].source,
+                     extra_sd=extra_sd)
         return {"estimated_l": fit.volumes_l, "floor_l": self.floor_l, "seconds": fit.seconds,
                 "refine_seconds": self.seconds, "cameras": cams, "uncertainty": unc}
 

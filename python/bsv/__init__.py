@@ -314,7 +314,9 @@ def scan(
     ``look`` (with a room): looks beyond what ``seed`` draws, keeping its other draws: ``{"long_hair": True}``
     hangs a subject's hair (not a bald one's) 0.30-0.45 m below the top of the head, over the neck and the
     upper back (the back camera's view); ``{"top": True}`` dresses the chest in a top of the underwear's
-    colour (0.38-0.56 of the height from the crotch to the top of the head). Unknown keys raise
+    colour (0.38-0.56 of the height from the crotch to the top of the head); ``{"smooth_shading": True}``
+    lights the body with normals interpolated from the mesh's vertex normals, as skin looks and most renderers
+    draw a mesh, instead of the faceted default (depth and labels unchanged). Unknown keys raise
     :class:`bsv.InputError`.
     """
     m = as_mesh(mesh)
@@ -323,7 +325,7 @@ def scan(
     if not isinstance(room, (bool, Mapping)):
         raise InputError(f"room must be True, False or a dict of room keys, got {type(room).__name__}")
     if look is not None and not isinstance(look, Mapping):
-        raise InputError(f"look must be None or a dict of look keys (long_hair, top), got {type(look).__name__}")
+        raise InputError(f"look must be None or a dict of look keys (long_hair, top, smooth_shading), got {type(look).__name__}")
     img = None if images is None else str(images)
     if img is not None and Path(img).exists():
         if not Path(img).is_dir():

@@ -21,7 +21,8 @@ def test_a_room_scan_records_its_look_and_a_plain_one_does_not(tmp_path: Path) -
     bsv.scan(body, "noer", 3, images=tmp_path / "room", room=True)
     bsv.scan(body, "noer", 3, images=tmp_path / "plain")
     look = read_look(tmp_path / "room")
-    assert look is not None and set(look) == {"lights", "light_colour", "skin", "underwear", "hair", "top"}
+    assert look is not None and set(look) == {"lights", "light_colour", "skin", "underwear", "hair", "top",
+                                                 "shading"}
     assert look["lights"] in {"key_front_left", "key_front_right", "overhead", "side"}
     assert read_look(tmp_path / "plain") is None
     assert read_look(tmp_path / "nowhere") is None
@@ -33,7 +34,7 @@ def test_a_room_scan_records_its_look_and_a_plain_one_does_not(tmp_path: Path) -
 def test_look_of_names_the_levels() -> None:
     rec = {"skin": [80, 52, 36], "tint": [1.0, 0.92, 0.78], "light_setup": "side", "underwear_style": "trunks"}
     assert look_of(rec) == {"lights": "side", "light_colour": "warm", "skin": "darker", "underwear": "trunks",
-                            "hair": "none", "top": "none"}
+                            "hair": "none", "top": "none", "shading": "flat"}
     rec = {"skin": [255, 224, 196], "tint": [0.88, 0.95, 1.05], "light_setup": "overhead", "underwear_style": "briefs"}
     assert look_of(rec)["light_colour"] == "cool" and look_of(rec)["skin"] == "lighter"
     rec["tint"] = [1.0, 1.0, 1.0]
@@ -41,6 +42,7 @@ def test_look_of_names_the_levels() -> None:
     assert look_of(rec | {"hair_length_m": 0.06})["hair"] == "short"
     assert look_of(rec | {"hair_length_m": 0.06, "hair_down_m": 0.35})["hair"] == "long"
     assert look_of(rec | {"top": True})["top"] == "top"
+    assert look_of(rec | {"smooth_shading": True})["shading"] == "smooth"
 
 
 def test_long_hair_is_drawn_on_the_back_view_only_when_asked(tmp_path: Path) -> None:
@@ -98,3 +100,34 @@ def test_the_table_shows_the_look_that_is_worse() -> None:
     md = "\n".join(looks_markdown(runs))
     assert "| light set-up | side | 2 | 2.25 | 0.00 | -6.0 (s1 shin_l) |" in md
     assert looks_markdown([Run("s0", "noer", "bsv", True)]) == []
+
+
+def _image(folder: Path, cam: str, name: str) -> np.ndarray:
+    from PIL import Image
+
+    return np.asarray(Image.open(folder / cam / name))
+
+
+def _kinks(colour: np.ndarray, body_px: np.ndarray) -> float:
+    """The share of body pixels whose brightness kinks (second difference along the row over 2 levels)."""
+    y = colour.astype(np.float64).mean(axis=2)
+    inner = body_px[:, 2:] & body_px[:, 1:-1] & body_px[:, :-2]
+    return float((np.abs(np.diff(y, n=2, axis=1))[inner] > 2.0).mean())
+
+
+def test_smooth_shading_changes_the_skins_colour_only(tmp_path: Path) -> None:
+    body = bsv.bodies.make_body().mesh()
+    flat, smooth = tmp_path / "flat", tmp_path / "smooth"
+    bsv.scan(body, "noer", 4, images=flat, room=True)
+    bsv.scan(body, "noer", 4, images=smooth, room=True, look={"smooth_shading": True})
+    assert read_look(smooth)["shading"] == "smooth" and read_look(flat)["shading"] == "flat"
+    for cam in ("front", "back"):
+        assert np.array_equal(_image(flat, cam, "depth.png"), _image(smooth, cam, "depth.png"))
+        assert np.array_equal(_image(flat, cam, "labels.png"), _image(smooth, cam, "labels.png"))
+        f, s = _image(flat, cam, "color.png"), _image(smooth, cam, "color.png")
+        changed = np.any(f != s, axis=2)
+        body_px = _image(flat, cam, "labels.png") > 0
+        assert changed[body_px].mean() > 0.3  # the skin's shading moves on most of the body ...
+        assert not changed[~body_px].any()  # ... and nothing else does
+        # The facets' edges are gone: the brightness kinks between triangles of different normals.
+        assert _kinks(s, body_px) < 0.5 * _kinks(f, body_px)

@@ -297,11 +297,18 @@ fn view_points(
     per_row.into_iter().flatten().collect()
 }
 
+/// What every camera of a scan casts its rays at: the body (its BVH, face labels and, for smooth shading, its
+/// vertex normals) and the room.
+struct Scene<'a> {
+    bvh: &'a parry3d_f64::shape::TriMesh,
+    labels: &'a [u8],
+    smooth: Option<cast::SmoothNormals<'a>>,
+    room: Option<&'a RoomScene>,
+}
+
 /// One camera's view and its points (world frame, estimated extrinsics).
 fn scan_camera(
-    bvh: &parry3d_f64::shape::TriMesh,
-    labels: &[u8],
-    room: Option<&RoomScene>,
+    scene: &Scene<'_>,
     rig: &Rig,
     ci: usize,
     condition: Condition,
@@ -309,8 +316,9 @@ fn scan_camera(
 ) -> (CameraView, Vec<(u32, [f64; 3], u8)>) {
     let cam = &rig.cameras[ci];
     let intr = cam.intrinsics;
-    let rays = match room {
-        Some(r) => cast::cast_camera_room(bvh, labels, r, &intr, &cam.camera_to_world),
+    let (bvh, labels) = (scene.bvh, scene.labels);
+    let rays = match scene.room {
+        Some(r) => cast::cast_camera_room(bvh, labels, scene.smooth.as_ref(), r, &intr, &cam.camera_to_world),
         None => cast::cast_camera(bvh, labels, &intr, &cam.camera_to_world),
     };
     let depth = if condition.has_depth_noise() {
@@ -359,11 +367,18 @@ pub fn scan(mesh: &TriMesh, rig: &Rig, condition: Condition, seed: u64) -> Resul
     let labels = face_labels(mesh)?;
     let bvh = parry_mesh(mesh)?;
     let room = rig.room.as_ref().map(RoomScene::build).transpose()?;
+    let normals = (room.is_some() && rig.look.smooth_shading).then(|| bsv_core::geometry::vertex_normals(mesh));
+    let scene = Scene {
+        bvh: &bvh,
+        labels: &labels,
+        smooth: normals.as_deref().map(|normals| cast::SmoothNormals { normals }),
+        room: room.as_ref(),
+    };
     let mut cloud = PointCloud::new(Vec::new());
     let mut cloud_labels = Vec::new();
     let mut views = Vec::with_capacity(rig.cameras.len());
     for ci in 0..rig.cameras.len() {
-        let (mut view, points) = scan_camera(&bvh, &labels, room.as_ref(), rig, ci, condition, seed);
+        let (mut view, points) = scan_camera(&scene, rig, ci, condition, seed);
         let start = cloud.points.len();
         for (i, p, l) in points {
             view.pixels.push(i);

@@ -214,3 +214,62 @@ fn a_top_covers_the_chest_front_and_back_in_the_underwears_colour() {
     let belly = at(TOP_BAND.0 - 0.05, Segment::Torso, 1.0);
     assert_eq!(with.shade(&heights, &belly), plain.shade(&heights, &belly));
 }
+
+/// The largest angle (radians) between the colour normals of two 4-neighbouring body pixels of a view, away
+/// from the outline (both pixels and their neighbours on the body).
+fn largest_normal_step(s: &bsv_capture::scanner::Scan, view: usize) -> f64 {
+    let v = &s.views[view];
+    let surf = v.surface.as_ref().unwrap();
+    let w = v.intrinsics.width as usize;
+    let body = |i: usize| surf.kind[i] == SurfaceKind::Body as u8;
+    let mut worst: f64 = 0.0;
+    for i in (w + 1)..(surf.kind.len() - w - 1) {
+        if ![i, i - 1, i + 1, i - w, i + w, i + 1 + w].iter().all(|&j| body(j)) {
+            continue;
+        }
+        let (a, b) = (surf.normal[i], surf.normal[i + 1]);
+        let dot: f32 = a.iter().zip(&b).map(|(x, y)| x * y).sum();
+        worst = worst.max(f64::from(dot.clamp(-1.0, 1.0)).acos());
+    }
+    worst
+}
+
+#[test]
+fn smooth_shading_changes_the_colour_normals_only_and_hides_the_facets() {
+    // A coarse ball (80 faces, about 25 deg between neighbouring face normals) in front of the rig.
+    let mut ball = shapes::icosphere(0.3, 1);
+    shapes::translate(&mut ball, [0.0, 1.0, 0.0]);
+    ball.vertex_labels = Some(vec![Segment::Torso as u8; ball.n_vertices()]);
+    let flat_rig = Rig::paper_default().with_room(Room::clinic());
+    let smooth_rig = Rig { look: Look { smooth_shading: true, ..Look::default() }, ..flat_rig.clone() };
+    let flat = scan(&ball, &flat_rig, Condition::L515, 2).unwrap();
+    let smooth = scan(&ball, &smooth_rig, Condition::L515, 2).unwrap();
+    assert_eq!(smooth.cloud, flat.cloud);
+    assert!(
+        smooth.appearance.as_ref().unwrap().0.smooth_shading && !flat.appearance.as_ref().unwrap().0.smooth_shading
+    );
+    assert_eq!(
+        Appearance { smooth_shading: false, ..smooth.appearance.as_ref().unwrap().0.clone() },
+        flat.appearance.as_ref().unwrap().0
+    );
+    for vi in 0..flat.views.len() {
+        let (f, s) = (&flat.views[vi], &smooth.views[vi]);
+        assert_eq!((&f.depth, &f.labels, &f.pixels), (&s.depth, &s.labels, &s.pixels));
+        let (fs, ss) = (f.surface.as_ref().unwrap(), s.surface.as_ref().unwrap());
+        assert_eq!(fs.kind, ss.kind);
+        // Room pixels keep their normals; body pixels face the camera either way.
+        for (i, &k) in fs.kind.iter().enumerate() {
+            if k == SurfaceKind::Body as u8 {
+                let n = ss.normal[i];
+                let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                assert!((len - 1.0).abs() < 1e-4, "pixel {i}: |n| = {len}");
+            } else {
+                assert_eq!(fs.normal[i], ss.normal[i]);
+            }
+        }
+        // Flat: the normal jumps by a facet's angle between neighbouring pixels; smooth: by a pixel's worth.
+        let (jf, js) = (largest_normal_step(&flat, vi), largest_normal_step(&smooth, vi));
+        assert!(jf > 0.3, "{} flat step {jf}", f.name);
+        assert!(js < 0.1, "{} smooth step {js}", f.name);
+    }
+}

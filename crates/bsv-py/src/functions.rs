@@ -169,7 +169,11 @@ fn room_from(room: Option<&Bound<'_, PyAny>>, seed: u64) -> PyResult<Option<Room
 fn look_from(look: Option<&Bound<'_, PyAny>>) -> PyResult<Look> {
     let Some(l) = look.filter(|l| !l.is_none()) else { return Ok(Look::default()) };
     let Ok(d) = l.cast::<PyDict>() else {
-        return Err(input_error("look", None, "look must be None or a dict of Look keys (long_hair, top)".into()));
+        return Err(input_error(
+            "look",
+            None,
+            "look must be None or a dict of Look keys (long_hair, top, smooth_shading)".into(),
+        ));
     };
     from_kwargs("look", d)
 }

@@ -92,6 +92,9 @@ class SynthConfig:
     long_hair: bool = False
     #: With a room: every subject wears a top in the underwear's colour over the chest (``--top``).
     top: bool = False
+    #: With a room: the subject shaded smoothly, normals interpolated from the vertex normals
+    #: (``--smooth-shading``; :func:`bsv.scan`'s ``look``), instead of the rig's faceted default.
+    smooth_shading: bool = False
     #: ``standard`` or ``hard`` (:data:`COHORTS`).
     cohort: str = "standard"
     #: In cali and l5ca, also refine each capture's calibration as a user would (``--refine-calibration``,
@@ -107,7 +110,8 @@ class SynthConfig:
 
     def look_arg(self) -> dict[str, Any] | None:
         """The ``look`` argument of :func:`bsv.scan` for this configuration."""
-        look = {k: True for k, on in (("long_hair", self.long_hair), ("top", self.top)) if on}
+        look = {k: True for k, on in (("long_hair", self.long_hair), ("top", self.top),
+                                      ("smooth_shading", self.smooth_shading)) if on}
         return look if look and self.uses_room() else None
 
     def uses_room(self) -> bool:

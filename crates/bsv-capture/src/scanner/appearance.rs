@@ -95,6 +95,10 @@ pub struct Look {
     pub long_hair: bool,
     /// A top in the underwear's colour over the chest ([`TOP_BAND`] of the torso), front and back.
     pub top: bool,
+    /// Smooth shading: the body is lit with normals interpolated across each triangle from the mesh's
+    /// vertex normals, as skin looks and as most renderers draw a mesh, instead of each triangle's own
+    /// flat normal (the rig's default, which shows the mesh's facets). Depth and labels are unchanged.
+    pub smooth_shading: bool,
 }
 
 /// The look of a scan with a room.
@@ -120,6 +124,9 @@ pub struct Appearance {
     /// A top in the underwear's colour over the chest ([`Look::top`]).
     #[serde(default)]
     pub top: bool,
+    /// The body lit with interpolated vertex normals ([`Look::smooth_shading`]).
+    #[serde(default)]
+    pub smooth_shading: bool,
     /// Floor albedo (sRGB).
     pub floor: [u8; 3],
     /// Floor tile size, metres.
@@ -179,6 +186,7 @@ impl Appearance {
             hair_length_m,
             hair_down_m: 0.0,
             top: false,
+            smooth_shading: false,
             floor,
             floor_tile_m: tile,
             wall,
@@ -199,6 +207,7 @@ impl Appearance {
             a.hair_down_m = lo + (hi - lo) * hash01(seed as i64, 0x4A1);
         }
         a.top = look.top;
+        a.smooth_shading = look.smooth_shading;
         a
     }
 }

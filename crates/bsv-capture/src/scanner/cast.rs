@@ -88,9 +88,56 @@ struct PixelHit {
 const NO_HIT: PixelHit =
     PixelHit { depth: 0.0, label: 0, shade: 0.0, kind: SurfaceKind::None as u8, normal: [0.0; 3], point: [0.0; 3] };
 
+/// The body's vertex normals for smooth shading ([`super::Look::smooth_shading`]): the normal at a hit is
+/// interpolated across its triangle with the hit's barycentric coordinates.
+pub(super) struct SmoothNormals<'a> {
+    /// Unit vertex normals, one per vertex of the mesh the BVH was built from.
+    pub normals: &'a [[f64; 3]],
+}
+
+impl SmoothNormals<'_> {
+    /// The interpolated unit normal at `p` on triangle `t` of `bvh`, or None for a degenerate triangle or a
+    /// zero interpolated normal.
+    fn at(&self, bvh: &parry3d_f64::shape::TriMesh, t: u32, p: Vector) -> Option<Vector> {
+        let tri = bvh.indices().get(t as usize)?;
+        let v = bvh.vertices();
+        let [a, b, c] = tri.map(|i| v[i as usize]);
+        let (e0, e1, ep) = (b - a, c - a, p - a);
+        let (d00, d01, d11, d20, d21) = (e0.dot(e0), e0.dot(e1), e1.dot(e1), ep.dot(e0), ep.dot(e1));
+        let den = d00 * d11 - d01 * d01;
+        if den.abs() < 1e-300 {
+            return None;
+        }
+        let (wb, wc) = ((d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den);
+        let w = [1.0 - wb - wc, wb, wc].map(|x| x.clamp(0.0, 1.0));
+        let mut n = Vector::ZERO;
+        for (k, &i) in tri.iter().enumerate() {
+            let vn = self.normals.get(i as usize)?;
+            n += w[k] * Vector::new(vn[0], vn[1], vn[2]);
+        }
+        let len = n.length();
+        (len > 1e-12).then(|| n / len)
+    }
+}
+
 fn pixel_hit(hit: &RayIntersection, ray: &Ray, d: [f64; 3], label: u8, kind: SurfaceKind) -> PixelHit {
-    let n = hit.normal / hit.normal.length().max(1e-300);
-    let n = if n.dot(ray.dir) > 0.0 { -n } else { n };
+    pixel_hit_with_normal(hit, ray, d, label, kind, None)
+}
+
+/// [`pixel_hit`] whose colour normal is `smooth` where given (the depth, label and shade are the hit's own).
+fn pixel_hit_with_normal(
+    hit: &RayIntersection,
+    ray: &Ray,
+    d: [f64; 3],
+    label: u8,
+    kind: SurfaceKind,
+    smooth: Option<Vector>,
+) -> PixelHit {
+    // Turned toward the camera by the triangle's own normal: an interpolated normal near the outline may
+    // face slightly away, and stays so (turning it alone would flip it across a pixel).
+    let face = hit.normal / hit.normal.length().max(1e-300);
+    let n = smooth.unwrap_or(face);
+    let n = if face.dot(ray.dir) > 0.0 { -n } else { n };
     let p = ray.point_at(hit.time_of_impact);
     PixelHit {
         depth: hit.time_of_impact,
@@ -102,10 +149,12 @@ fn pixel_hit(hit: &RayIntersection, ray: &Ray, d: [f64; 3], label: u8, kind: Sur
     }
 }
 
-/// The body and the room: the nearer hit per pixel (the body wins a tie); room pixels have label 0.
+/// The body and the room: the nearer hit per pixel (the body wins a tie); room pixels have label 0. With
+/// `smooth`, the body's colour normals are interpolated from its vertex normals.
 pub(super) fn cast_camera_room(
     bvh: &parry3d_f64::shape::TriMesh,
     labels: &[u8],
+    smooth: Option<&SmoothNormals<'_>>,
     room: &RoomScene,
     intr: &Intrinsics,
     ext: &Extrinsics,
@@ -127,7 +176,8 @@ pub(super) fn cast_camera_room(
                         }
                         (_, Some(b)) => {
                             let label = labels.get(b.subshape as usize).copied().unwrap_or(0);
-                            pixel_hit(&b, &ray, d, label, SurfaceKind::Body)
+                            let n = smooth.and_then(|s| s.at(bvh, b.subshape, ray.point_at(b.time_of_impact)));
+                            pixel_hit_with_normal(&b, &ray, d, label, SurfaceKind::Body, n)
                         }
                         _ => NO_HIT,
                     }
@@ -163,7 +213,7 @@ mod tests {
         let rig = Rig::paper_default();
         for cam in &rig.cameras {
             let (intr, ext) = (cam.intrinsics, cam.camera_to_world);
-            let img = cast_camera_room(&bvh, &labels, &room, &intr, &ext);
+            let img = cast_camera_room(&bvh, &labels, None, &room, &intr, &ext);
             let surf = img.surface.as_ref().unwrap();
             let w = intr.width as usize;
             let mut floor = 0;

@@ -316,7 +316,9 @@ def scan(
     upper back (the back camera's view); ``{"top": True}`` dresses the chest in a top of the underwear's
     colour (0.38-0.56 of the height from the crotch to the top of the head); ``{"smooth_shading": True}``
     lights the body with normals interpolated from the mesh's vertex normals, as skin looks and most renderers
-    draw a mesh, instead of the faceted default (depth and labels unchanged). Unknown keys raise
+    draw a mesh, instead of the faceted default (depth and labels unchanged); ``{"colour_sensor": True}`` records
+    the colour as a camera's sensor does, blurred (a Gaussian of 0.7 px) and noisy (shot and read noise, about 3
+    levels at mid-grey; deterministic for ``seed``). Unknown keys raise
     :class:`bsv.InputError`.
     """
     m = as_mesh(mesh)
@@ -325,7 +327,7 @@ def scan(
     if not isinstance(room, (bool, Mapping)):
         raise InputError(f"room must be True, False or a dict of room keys, got {type(room).__name__}")
     if look is not None and not isinstance(look, Mapping):
-        raise InputError(f"look must be None or a dict of look keys (long_hair, top, smooth_shading), got {type(look).__name__}")
+        raise InputError(f"look must be None or a dict of look keys (long_hair, top, smooth_shading, colour_sensor), got {type(look).__name__}")
     img = None if images is None else str(images)
     if img is not None and Path(img).exists():
         if not Path(img).is_dir():

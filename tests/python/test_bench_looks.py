@@ -22,7 +22,7 @@ def test_a_room_scan_records_its_look_and_a_plain_one_does_not(tmp_path: Path) -
     bsv.scan(body, "noer", 3, images=tmp_path / "plain")
     look = read_look(tmp_path / "room")
     assert look is not None and set(look) == {"lights", "light_colour", "skin", "underwear", "hair", "top",
-                                                 "shading"}
+                                                 "shading", "colour"}
     assert look["lights"] in {"key_front_left", "key_front_right", "overhead", "side"}
     assert read_look(tmp_path / "plain") is None
     assert read_look(tmp_path / "nowhere") is None
@@ -34,7 +34,8 @@ def test_a_room_scan_records_its_look_and_a_plain_one_does_not(tmp_path: Path) -
 def test_look_of_names_the_levels() -> None:
     rec = {"skin": [80, 52, 36], "tint": [1.0, 0.92, 0.78], "light_setup": "side", "underwear_style": "trunks"}
     assert look_of(rec) == {"lights": "side", "light_colour": "warm", "skin": "darker", "underwear": "trunks",
-                            "hair": "none", "top": "none", "shading": "flat"}
+                            "hair": "none", "top": "none", "shading": "flat",
+                            "colour": "exact"}
     rec = {"skin": [255, 224, 196], "tint": [0.88, 0.95, 1.05], "light_setup": "overhead", "underwear_style": "briefs"}
     assert look_of(rec)["light_colour"] == "cool" and look_of(rec)["skin"] == "lighter"
     rec["tint"] = [1.0, 1.0, 1.0]
@@ -43,6 +44,7 @@ def test_look_of_names_the_levels() -> None:
     assert look_of(rec | {"hair_length_m": 0.06, "hair_down_m": 0.35})["hair"] == "long"
     assert look_of(rec | {"top": True})["top"] == "top"
     assert look_of(rec | {"smooth_shading": True})["shading"] == "smooth"
+    assert look_of(rec | {"colour_sensor": True})["colour"] == "sensor"
 
 
 def test_long_hair_is_drawn_on_the_back_view_only_when_asked(tmp_path: Path) -> None:
@@ -131,3 +133,17 @@ def test_smooth_shading_changes_the_skins_colour_only(tmp_path: Path) -> None:
         assert not changed[~body_px].any()  # ... and nothing else does
         # The facets' edges are gone: the brightness kinks between triangles of different normals.
         assert _kinks(s, body_px) < 0.5 * _kinks(f, body_px)
+
+
+def test_the_colour_sensor_changes_the_colour_images_only(tmp_path: Path) -> None:
+    body = bsv.bodies.make_body().mesh()
+    exact, sensor = tmp_path / "exact", tmp_path / "sensor"
+    bsv.scan(body, "noer", 4, images=exact, room=True)
+    bsv.scan(body, "noer", 4, images=sensor, room=True, look={"colour_sensor": True})
+    assert read_look(sensor)["colour"] == "sensor" and read_look(exact)["colour"] == "exact"
+    for cam in ("front", "back"):
+        assert np.array_equal(_image(exact, cam, "depth.png"), _image(sensor, cam, "depth.png"))
+        assert np.array_equal(_image(exact, cam, "labels.png"), _image(sensor, cam, "labels.png"))
+        diff = _image(sensor, cam, "color.png").astype(np.float64) - _image(exact, cam, "color.png")
+        assert 1.5 < float(np.sqrt(np.mean(diff ** 2))) < 6.0  # a few levels of noise, and the blurred edges
+        assert abs(float(diff.mean())) < 0.5  # no change of brightness

@@ -21,8 +21,8 @@ mod rig;
 mod room;
 
 pub use appearance::{
-    Appearance, BodyHeights, Light, LightSetup, Look, SurfacePixel, UnderwearStyle, LONG_HAIR_DOWN_M,
-    LONG_HAIR_HALF_WIDTH_M, SKIN_TONES, TOP_BAND,
+    Appearance, BodyHeights, Light, LightSetup, Look, SurfacePixel, UnderwearStyle, COLOUR_BLUR_PX, COLOUR_READ_NOISE,
+    COLOUR_SHOT_NOISE, LONG_HAIR_DOWN_M, LONG_HAIR_HALF_WIDTH_M, SKIN_TONES, TOP_BAND,
 };
 pub use capture::{write_capture, CaptureCamera, ExtrinsicsCovariance, DEPTH_SCALE};
 pub use cast::SurfaceImage;

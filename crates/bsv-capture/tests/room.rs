@@ -273,3 +273,73 @@ fn smooth_shading_changes_the_colour_normals_only_and_hides_the_facets() {
         assert!(js < 0.1, "{} smooth step {js}", f.name);
     }
 }
+
+#[test]
+fn the_colour_sensor_blurs_and_adds_noise_that_grows_with_the_level() {
+    let body = shapes::capsule_body(false, false);
+    let dir = std::env::temp_dir().join(format!("bsv-sensor-{}", std::process::id()));
+    let rig = Rig::paper_default().with_room(Room::clinic());
+    let sensor = Rig { look: Look { colour_sensor: true, ..Look::default() }, ..rig.clone() };
+    let read = |name: &str| -> Vec<image::RgbImage> {
+        ["front", "back"]
+            .iter()
+            .map(|c| image::open(dir.join(name).join(c).join("color.png")).unwrap().to_rgb8())
+            .collect()
+    };
+    for (name, r, seed) in [("exact", &rig, 3), ("sensor", &sensor, 3), ("again", &sensor, 3), ("other", &sensor, 4)] {
+        let s = scan(&body, r, Condition::NoEr, seed).unwrap();
+        assert_eq!(s.appearance.as_ref().unwrap().0.colour_sensor, name != "exact");
+        write_capture(&s, &dir.join(name)).unwrap();
+    }
+    let (exact, noisy, again) = (read("exact"), read("sensor"), read("again"));
+    assert_eq!(noisy, again, "deterministic for a seed");
+    for (e, n) in exact.iter().zip(&noisy) {
+        // The noise's sd per level: sqrt(READ^2 + SHOT x level) on flat regions (the
+        // wall, the floor's tiles): 2.7 at level 96, 3.3 at 174.
+        let (mut dark, mut bright) = (Vec::new(), Vec::new());
+        let (w, h) = e.dimensions();
+        for y in 2..h - 2 {
+            for x in 2..w - 2 {
+                let level = e.get_pixel(x, y)[1];
+                // flat: the exact render is the same level 2 pixels around, so the blur leaves it as it is
+                let flat = [(0, 2), (2, 0), (0, -2), (-2, 0), (2, 2), (-2, -2), (2, -2), (-2, 2)].iter().all(
+                    |&(dx, dy): &(i32, i32)| {
+                        e.get_pixel(x.saturating_add_signed(dx), y.saturating_add_signed(dy))[1] == level
+                    },
+                );
+                if !flat {
+                    continue;
+                }
+                let d = f64::from(n.get_pixel(x, y)[1]) - f64::from(level);
+                if level < 100 {
+                    dark.push(d)
+                } else if level > 165 {
+                    bright.push(d)
+                }
+            }
+        }
+        let sd = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
+        assert!(dark.len() > 10_000 && bright.len() > 10_000, "{} {}", dark.len(), bright.len());
+        let (sd_dark, sd_bright) = (sd(&dark), sd(&bright));
+        assert!(sd_dark > 2.2 && sd_bright > sd_dark + 0.3 && sd_bright < 4.0, "{sd_dark} {sd_bright}");
+    }
+    // The blur softens the render's hard edges: where the exact image steps by more than 40 levels from one
+    // pixel to the next, the recorded one steps by a good deal less.
+    for (e, n) in exact.iter().zip(&noisy) {
+        let (mut before, mut after, mut count) = (0.0, 0.0, 0);
+        for (x, y, p) in e.enumerate_pixels() {
+            if x + 1 < e.width() {
+                let step = (f64::from(e.get_pixel(x + 1, y)[1]) - f64::from(p[1])).abs();
+                if step > 40.0 {
+                    before += step;
+                    after += (f64::from(n.get_pixel(x + 1, y)[1]) - f64::from(n.get_pixel(x, y)[1])).abs();
+                    count += 1;
+                }
+            }
+        }
+        assert!(count > 100 && after < 0.8 * before, "{count} edges: {before} -> {after}");
+    }
+    // Another seed draws other noise.
+    assert_ne!(read("other"), noisy);
+    std::fs::remove_dir_all(&dir).ok();
+}

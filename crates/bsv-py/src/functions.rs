@@ -172,7 +172,7 @@ fn look_from(look: Option<&Bound<'_, PyAny>>) -> PyResult<Look> {
         return Err(input_error(
             "look",
             None,
-            "look must be None or a dict of Look keys (long_hair, top, smooth_shading)".into(),
+            "look must be None or a dict of Look keys (long_hair, top, smooth_shading, colour_sensor)".into(),
         ));
     };
     from_kwargs("look", d)

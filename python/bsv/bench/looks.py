@@ -25,7 +25,7 @@ INFO_KEY = "look"
 #: The factors of a look, in table order, with their title.
 FACTORS: dict[str, str] = {"lights": "light set-up", "light_colour": "light colour", "skin": "skin tone",
                            "underwear": "underwear", "hair": "hair", "top": "top",
-                           "shading": "shading"}
+                           "shading": "shading", "colour": "colour images"}
 #: A skin albedo with at least this luminance (Rec. 709 Y of the sRGB values) is "lighter": the rig's four
 #: lighter tones (Y 150-228) against its three darker ones (Y 57-114).
 LIGHTER_SKIN_Y = 130.0
@@ -41,7 +41,8 @@ def look_of(appearance: Mapping[str, Any]) -> dict[str, str]:
     return {"lights": str(appearance["light_setup"]), "light_colour": colour,
             "skin": "lighter" if skin_y >= LIGHTER_SKIN_Y else "darker", "underwear": str(appearance["underwear_style"]),
             "hair": hair, "top": "top" if appearance.get("top") else "none",
-            "shading": "smooth" if appearance.get("smooth_shading") else "flat"}
+            "shading": "smooth" if appearance.get("smooth_shading") else "flat",
+            "colour": "sensor" if appearance.get("colour_sensor") else "exact"}
 
 
 def read_look(capture_dir: str | Path) -> dict[str, str] | None:

@@ -95,6 +95,8 @@ class SynthConfig:
     #: With a room: the subject shaded smoothly, normals interpolated from the vertex normals
     #: (``--smooth-shading``; :func:`bsv.scan`'s ``look``), instead of the rig's faceted default.
     smooth_shading: bool = False
+    #: With a room: the colour images blurred and noisy as a sensor records them (``--colour-sensor``).
+    colour_sensor: bool = False
     #: ``standard`` or ``hard`` (:data:`COHORTS`).
     cohort: str = "standard"
     #: In cali and l5ca, also refine each capture's calibration as a user would (``--refine-calibration``,
@@ -111,7 +113,8 @@ class SynthConfig:
     def look_arg(self) -> dict[str, Any] | None:
         """The ``look`` argument of :func:`bsv.scan` for this configuration."""
         look = {k: True for k, on in (("long_hair", self.long_hair), ("top", self.top),
-                                      ("smooth_shading", self.smooth_shading)) if on}
+                                      ("smooth_shading", self.smooth_shading),
+                                      ("colour_sensor", self.colour_sensor)) if on}
         return look if look and self.uses_room() else None
 
     def uses_room(self) -> bool:

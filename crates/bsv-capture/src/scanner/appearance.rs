@@ -99,7 +99,19 @@ pub struct Look {
     /// vertex normals, as skin looks and as most renderers draw a mesh, instead of each triangle's own
     /// flat normal (the rig's default, which shows the mesh's facets). Depth and labels are unchanged.
     pub smooth_shading: bool,
+    /// The colour as a camera's sensor records it: the optics' blur ([`COLOUR_BLUR_PX`]) and shot and read
+    /// noise ([`COLOUR_READ_NOISE`], [`COLOUR_SHOT_NOISE`]) instead of the render's exact pixels.
+    pub colour_sensor: bool,
 }
+
+/// The colour sensor's blur ([`Look::colour_sensor`]): a Gaussian of this sigma, pixels (the optics and the
+/// demosaicing of an RGB camera at its native resolution spread an edge over about two pixels).
+pub const COLOUR_BLUR_PX: f32 = 0.7;
+/// The colour sensor's read noise: sigma in 8-bit levels, at every level.
+pub const COLOUR_READ_NOISE: f64 = 1.5;
+/// The colour sensor's shot noise: the variance grows by this many squared levels per level of signal
+/// (2.9 levels sd at mid-grey with the read noise; an indoor RGB camera's).
+pub const COLOUR_SHOT_NOISE: f64 = 0.05;
 
 /// The look of a scan with a room.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -127,6 +139,9 @@ pub struct Appearance {
     /// The body lit with interpolated vertex normals ([`Look::smooth_shading`]).
     #[serde(default)]
     pub smooth_shading: bool,
+    /// The colour blurred and noisy as a sensor records it ([`Look::colour_sensor`]).
+    #[serde(default)]
+    pub colour_sensor: bool,
     /// Floor albedo (sRGB).
     pub floor: [u8; 3],
     /// Floor tile size, metres.
@@ -187,6 +202,7 @@ impl Appearance {
             hair_down_m: 0.0,
             top: false,
             smooth_shading: false,
+            colour_sensor: false,
             floor,
             floor_tile_m: tile,
             wall,
@@ -208,6 +224,7 @@ impl Appearance {
         }
         a.top = look.top;
         a.smooth_shading = look.smooth_shading;
+        a.colour_sensor = look.colour_sensor;
         a
     }
 }

@@ -4,7 +4,8 @@
 //! Layout of `dir`:
 //! - `<camera>/depth.png`: 16-bit depth, metres = value x `depth_scale` (0.00025, like the L515), 0 = none;
 //! - `<camera>/color.png`: 8-bit RGB, the body in a Lambert-shaded skin tone on a mid-grey background,
-//!   or, for a scan with a room, the subject and the room as its [`super::Appearance`] paints them;
+//!   or, for a scan with a room, the subject and the room as its [`super::Appearance`] paints them (blurred
+//!   and noisy as a sensor records it with [`super::Look::colour_sensor`]);
 //! - `<camera>/labels.png`: 8-bit grey, the segment id of each pixel (0 = background/unlabelled);
 //! - `<camera>/camera.json`: [`CaptureCamera`] (intrinsics, the estimated extrinsics a calibration
 //!   would give, the true ones, the applied error, the depth scale, file names);
@@ -15,12 +16,16 @@
 //!   (`camera_points`: name -> [start, end)) and, with a room, the subject's look and the lights
 //!   (`appearance`: [`super::Appearance`]).
 
+use super::appearance::{COLOUR_BLUR_PX, COLOUR_READ_NOISE, COLOUR_SHOT_NOISE};
 use super::{
     Appearance, CameraView, ExtrinsicError, ExtrinsicSigma, Scan, ScanError, SurfaceKind, SurfacePixel,
     COVARIANCE_FRAME, COVARIANCE_PARAMETERS,
 };
 use crate::camera::{CameraCalibration, Extrinsics, Intrinsics};
 use image::{ImageBuffer, Luma, Rgb};
+use rand::{Rng, SeedableRng};
+use rand_distr::StandardNormal;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -146,9 +151,33 @@ fn plain_colour(view: &CameraView) -> Vec<u8> {
     rgb
 }
 
-/// The colour image of `view`: with a room, every pixel shaded by the scan's [`Appearance`] (the
-/// true surface, so a flying pixel keeps its surface's colour); else [`plain_colour`].
-fn colour_image(scan: &Scan, view: &CameraView) -> Vec<u8> {
+/// Stream id of the colour sensor's noise draws.
+const STREAM_COLOUR: u64 = 0xC010;
+
+/// The colour a sensor records of the exact render `rgb` (`width` pixels a row): blurred by
+/// [`COLOUR_BLUR_PX`], then per pixel and channel Gaussian noise of variance `READ^2 + SHOT x level`;
+/// deterministic for `seed` (one generator per image row).
+fn sensor_colour(rgb: Vec<u8>, width: u32, height: u32, seed: u64) -> Vec<u8> {
+    // A buffer of the wrong size comes back empty, and writing it fails with the size error.
+    let Some(img) = ImageBuffer::<Rgb<u8>, _>::from_raw(width, height, rgb) else { return Vec::new() };
+    let mut out = image::imageops::blur(&img, COLOUR_BLUR_PX).into_raw();
+    let row = 3 * width as usize;
+    out.par_chunks_mut(row).enumerate().for_each(|(v, px)| {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(super::mix_seed(seed, STREAM_COLOUR, v as u64));
+        for c in px.iter_mut() {
+            let level = f64::from(*c);
+            let n: f64 = rng.sample(StandardNormal);
+            let sd = (COLOUR_READ_NOISE * COLOUR_READ_NOISE + COLOUR_SHOT_NOISE * level).sqrt();
+            *c = (level + n * sd).round().clamp(0.0, 255.0) as u8;
+        }
+    });
+    out
+}
+
+/// The colour image of `view` (the scan's camera `index`): with a room, every pixel shaded by the scan's
+/// [`Appearance`] (the true surface, so a flying pixel keeps its surface's colour), as a sensor records it
+/// with [`super::Look::colour_sensor`]; else [`plain_colour`].
+fn colour_image(scan: &Scan, view: &CameraView, index: usize) -> Vec<u8> {
     let (Some((app, heights)), Some(surf)) = (&scan.appearance, &view.surface) else {
         return plain_colour(view);
     };
@@ -163,6 +192,10 @@ fn colour_image(scan: &Scan, view: &CameraView) -> Vec<u8> {
         };
         rgb.extend(app.shade(heights, &px));
     }
+    if app.colour_sensor {
+        let seed = super::mix_seed(scan.seed, STREAM_COLOUR, index as u64);
+        return sensor_colour(rgb, view.intrinsics.width, view.intrinsics.height, seed);
+    }
     rgb
 }
 
@@ -170,7 +203,7 @@ fn colour_image(scan: &Scan, view: &CameraView) -> Vec<u8> {
 pub fn write_capture(scan: &Scan, dir: &Path) -> Result<(), ScanError> {
     std::fs::create_dir_all(dir).map_err(io_err(dir))?;
     let mut calibration = BTreeMap::new();
-    for view in &scan.views {
+    for (index, view) in scan.views.iter().enumerate() {
         let cdir = dir.join(&view.name);
         std::fs::create_dir_all(&cdir).map_err(io_err(&cdir))?;
         let (w, h) = (view.intrinsics.width, view.intrinsics.height);
@@ -189,7 +222,7 @@ pub fn write_capture(scan: &Scan, dir: &Path) -> Result<(), ScanError> {
         img.save(&depth_path).map_err(image_err(&depth_path))?;
 
         let color_path = cdir.join("color.png");
-        let rgb = colour_image(scan, view);
+        let rgb = colour_image(scan, view, index);
         let img: ImageBuffer<Rgb<u8>, _> = ImageBuffer::from_raw(w, h, rgb).ok_or_else(|| size_err(&color_path))?;
         img.save(&color_path).map_err(image_err(&color_path))?;
 

@@ -328,6 +328,44 @@ def test_ankles_are_placed_at_the_height_the_stature_gives(capture, monkeypatch)
             assert 8.0 < own[1] - got[1] < 34.0, (v, name, got, own)
 
 
+def test_a_views_ankles_up_the_shins_with_no_person_under_them_come_from_the_other_view(capture, monkeypatch):
+    """The back view's ankles detected at mid-shin (120 px up, in the image and its mirror image alike) where
+    MediaPipe's mask lost the lower legs, so neither the mask nor the depth lifts them (a colour sensor's
+    noise once did this to a back view and took half of both shins away): the height of their pixels' rays
+    at the front view's depth judges them implausible, they are taken from the front view with a warning,
+    and the back view's shins are labelled about as with the clean detection."""
+    _, data, cams, _ = capture
+    _lower(monkeypatch, data, {})
+    clean = lm.segment_views(_images(data), cams)
+    ankles = [seg.POSE_NAMES.index("left_ankle"), seg.POSE_NAMES.index("right_ankle")]
+    back = {_key(img) for img in _shown(data, "back")}
+    back |= {_key(np.ascontiguousarray(img[:, ::-1])) for img in _shown(data, "back")}
+
+    def fake(rgb, params=None):
+        r = _cached(rgb, params)
+        if _key(rgb) not in back:
+            return r
+        r["pose"][ankles, 1] -= 120.0
+        mask = np.array(r["mask"], copy=True)
+        lowest = int(r["pose"][ankles, 1].min())  # the lower legs lost from the moved ankles down
+        mask[lowest - 15:] = 0.0
+        r["mask"] = mask
+        return r
+
+    monkeypatch.setattr(seg, "run_holistic", fake)
+    segs = lm.segment_views(_images(data), cams)
+    assert segs["front"].warnings == clean["front"].warnings
+    for name in ("left_ankle", "right_ankle"):
+        assert segs["back"].sources.get(name) == "other view", segs["back"].sources
+        assert any(name in w and "above the front view's" in w for w in segs["back"].warnings), segs["back"].warnings
+        got, own = segs["back"].landmark(name), clean["back"].landmark(name)
+        assert np.hypot(*(got[:2] - own[:2])) < 12.0, (name, got, own)
+    for shin in ("shin_l", "shin_r"):
+        k = bsv.SEGMENT_IDS[shin]
+        n_clean, n_got = int((clean["back"].labels == k).sum()), int((segs["back"].labels == k).sum())
+        assert abs(n_got - n_clean) < 0.2 * n_clean, (shin, n_got, n_clean)
+
+
 def test_the_stature_is_read_from_the_depth_of_the_person(capture, monkeypatch):
     """person_stature: the top of the head above the floor, within 3 cm of the body's true height (the mask's
     spill onto the wall behind the head does not raise it)."""

@@ -560,7 +560,10 @@ def implausible_landmarks(dets: Mapping[str, Detection], cameras: Mapping[str, C
     ``fallback_visibility``: a view may be the better one without being confident) but lift
     to 3-D (:func:`_lift_from`) at heights more than :data:`VIEWS_DISAGREE_M` apart, in the view whose
     height lies farther from the fraction of the stature (:func:`person_stature`): ``{view: {name: why}}``,
-    ``why`` a phrase for the warning. Landmarks in ``skip`` (``{view: names}``, e.g. the
+    ``why`` a phrase for the warning. A view whose landmark has no person under it (MediaPipe's mask lost the
+    lower legs, or the landmark lies off them) is judged by the height of its pixel's ray at the other view's
+    depth (:func:`_height_at_depth_of`): confident but lifted nowhere, it would otherwise stay unjudged (a back
+    view's ankles at mid-shin once took half of both shins away). Landmarks in ``skip`` (``{view: names}``, e.g. the
     :func:`unrepeatable_landmarks`) of either view are not judged; ``stature`` (metres) saves reading it
     again. Needs both views."""
     out: dict[str, dict[str, str]] = {v: {} for v in dets}
@@ -580,9 +583,16 @@ def implausible_landmarks(dets: Mapping[str, Detection], cameras: Mapping[str, C
                 continue
             lifts = {v: _lift_from(dets[v], cameras[v], np.asarray(depths[v], dtype=np.float64), name)
                      for v in VIEWS}
-            if any(p is None or not np.all(np.isfinite(p)) for p in lifts.values()):
+            found = {v: p for v, p in lifts.items() if p is not None and np.all(np.isfinite(p))}
+            if len(found) == 1:  # the other view's landmark has no person (mask and depth) under it
+                seen = next(iter(found))
+                off = "back" if seen == "front" else "front"
+                ray = _height_at_depth_of(dets[off], cameras[off], name, float(found[seen][2]))
+                if ray is not None:
+                    found[off] = np.array([found[seen][0], ray, found[seen][2]])
+            if len(found) < 2:
                 continue
-            height = {v: float(p[1]) for v, p in lifts.items() if p is not None}
+            height = {v: float(p[1]) for v, p in found.items()}
             gap = height["front"] - height["back"]
             if abs(gap) <= VIEWS_DISAGREE_M:
                 continue
@@ -594,6 +604,22 @@ def implausible_landmarks(dets: Mapping[str, Detection], cameras: Mapping[str, C
                               f"farther from the {1000 * expected:.0f} mm the body's proportions give "
                               f"({fraction:.3f} of the stature {stature:.2f} m),")
     return out
+
+
+def _height_at_depth_of(det: Detection, cam: Camera, name: str, z_world: float) -> float | None:
+    """The height (world y, metres) of landmark ``name``'s pixel ray of one view where it reaches the world depth
+    ``z_world`` (the other view's lift of the same landmark): for a landmark with no person under it (MediaPipe's
+    mask lost the limb, or the landmark lies beside it), whose own depth says nothing. None where the ray runs
+    parallel to that plane or the landmark has no pixel."""
+    uv = _xy(det.pose, name)
+    if not np.all(np.isfinite(uv)):
+        return None
+    near, far = np.asarray(cam.deproject(np.stack([uv, uv]), np.array([1.0, 2.0])))
+    step = far - near  # the ray per metre of the camera's depth
+    if abs(step[2]) < 1e-6:
+        return None
+    p = near + (z_world - near[2]) / step[2] * step
+    return float(p[1]) if np.all(np.isfinite(p)) else None
 
 
 def place_ankles(det: Detection, pose: np.ndarray, camera: Camera, depth: np.ndarray, stature: float) -> None:

@@ -809,10 +809,12 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
         own_bad = [n for n, _ in _unconfident(dets[v])]
         own_bad += [n for n in [*unrepeatable[v], *implausible[v]] if n not in own_bad]
         other_bad = {n for n, _ in _unconfident(dets[o])}
+        other_weak = {n for n, _ in unconfident_landmarks(dets[o].pose, dets[o].shape,
+                                                          dets[o].params.fallback_visibility)}
         from_other: dict[str, np.ndarray] = {}
         for name in own_bad:
-            if name in other_bad and name not in implausible[v]:
-                continue  # neither view sees it confidently: the hand model or the lower threshold may
+            if name in other_bad and name not in implausible[v] and name in other_weak:
+                continue  # neither view sees it even at the lower threshold: the hand model may
             p = _lift_across(dets[o], cameras[o], depths[o], name, dets[v], cameras[v], depths[v])
             if p is not None:
                 uv = cameras[v].project(p[None])[0]

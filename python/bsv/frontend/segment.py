@@ -857,7 +857,8 @@ def resolve_landmarks(det: Detection, from_other: dict[str, np.ndarray] | None =
     (visibility >= ``min_visibility``); the other view's (``from_other``: name -> (x, y, visibility) already
     projected into this image through the calibration, :mod:`bsv.frontend.landmarks`); the hand model's
     wrist (MediaPipe Holistic's hand landmark 0, for a wrist); this view's own landmark if its visibility is
-    at least the documented lower threshold ``fallback_visibility``. A landmark seen confidently but not
+    at least the documented lower threshold ``fallback_visibility``; the other view's if its visibility there is
+    (a heavy body's ankles, seen at 0.47 from the front and 0.6 from the back, once lost the whole capture). A landmark seen confidently but not
     repeatably (``unrepeatable``: name -> the pixels between its image and mirror-image detections, while
     the other view's agree: :func:`bsv.frontend.landmarks.unrepeatable_landmarks`) is taken from the other
     view when ``from_other`` has it, and kept otherwise; so is one the two views place at heights that
@@ -905,6 +906,11 @@ def resolve_landmarks(det: Detection, from_other: dict[str, np.ndarray] | None =
             sources[name] = "low visibility"
             warnings.append(f"{det.view} image: {name} used with {why} (accepted down to the lower threshold "
                             f"{prm.fallback_visibility:.2f}): check its segment boundaries")
+        elif other is not None and _landmark_problem(other, det.shape, prm.fallback_visibility) is None:
+            pose[i] = other
+            sources[name] = "other view"
+            warnings.append(f"{det.view} image: {name} ({why}) taken from the other view, where it is seen only "
+                            f"down to the lower threshold {prm.fallback_visibility:.2f}: check its segment boundaries")
         else:
             missing.append((name, why))
     return pose, sources, warnings, missing

@@ -208,6 +208,18 @@ class PersonNotFoundError(SegmentationError):
     """No person was detected in the colour image."""
 
 
+class PoseTooSmallError(PersonNotFoundError):
+    """MediaPipe's pose of a view spans too little of the person the depth image shows (it found a part of the
+    person, or something else): the view is treated as one with no person found."""
+
+    #: The largest span found, as a share of the person's height in the depth image.
+    span: float = 0.0
+
+    def __init__(self, message: str, span: float) -> None:
+        super().__init__(message)
+        self.span = float(span)
+
+
 class LandmarkMissingError(SegmentationError):
     """A landmark needed for the segmentation (an ankle, a wrist, ...) was not detected confidently."""
 
@@ -308,7 +320,7 @@ __all__ = [
     "AssetError", "BatchInputError", "BenchError", "BlurredImageError", "BoardDepthError", "BsipError", "BsvError", "BsvWarning", "CalibrationError", "CalibrationFileError",
     "CaptureError", "FloorError", "FormatError", "FrontendError", "ImplausibleCaptureError", "ImplausibleCloudError", "InputError", "LabelError",
     "LandmarkMissingError", "LoginRequired", "MarkerNotFoundError", "MeshError", "MissingExtraError", "NoCameraError", "OutputExistsError",
-    "PersonIsolationError", "PersonNotFoundError", "PhenotypeError", "PoseError", "RecordingError", "RegistrationError",
+    "PersonIsolationError", "PersonNotFoundError", "PhenotypeError", "PoseError", "PoseTooSmallError", "RecordingError", "RegistrationError",
     "RegistrationInputError", "RegistrationNumericError", "RegistrationParameterError",
     "RegistrationResourceError", "RegistrationStopped", "ReportError", "ScanError", "SegmentationError", "SolveError",
     "TemplateError", "UncertaintyError", "VolumeError", "WriteError", "WrongMarkerError",

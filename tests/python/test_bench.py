@@ -470,15 +470,17 @@ BOUND_CAMERA_JOINT_MEDIAN_MM = 15.0
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("look", ["room", "studio"])
+@pytest.mark.parametrize("look", ["room", "studio", "realistic"])
 def test_reduced_camera_path_regression_guard(tmp_path: Path, look: str) -> None:
-    """The user's path on two subjects, in the clinic room and in the studio (the set-up of an independent
-    renderer: nothing but the subject returns depth), held to the bounds above."""
+    """The user's path on two subjects, in the clinic room, in the studio (the set-up of an independent
+    renderer: nothing but the subject returns depth) and in the room rendered as a camera records it (smooth
+    shading, the colour sensor's blur and noise), held to the bounds above."""
     pytest.importorskip("mediapipe", reason="the camera path needs the front-end extra (MediaPipe)")
     from bsv.bench.joints import summarise
 
+    extra = {"room": [], "studio": ["--studio"], "realistic": ["--smooth-shading", "--colour-sensor"]}[look]
     code = bench_main(["synth", "--n", "2", "--conditions", "noer", "--segmentation", "camera",
-                       *(["--studio"] if look == "studio" else []), "--out", str(tmp_path), "--quiet"])
+                       *extra, "--out", str(tmp_path), "--quiet"])
     assert code == 0
     doc = json.loads((tmp_path / "results.json").read_text())
     assert len(doc["runs"]) == 2 and not doc["failures"]
@@ -578,6 +580,10 @@ def test_look_options_reach_the_scans() -> None:
     assert cfg.look_arg() == {"long_hair": True, "top": True}
     assert synth_record(cfg, args)["long_hair"] is True and synth_record(cfg, args)["top"] is True
     assert synth_config(parser().parse_args(["synth", "--segmentation", "camera"])).look_arg() is None
+    args = parser().parse_args(["synth", "--segmentation", "camera", "--smooth-shading", "--colour-sensor"])
+    cfg = synth_config(args)
+    assert cfg.look_arg() == {"smooth_shading": True, "colour_sensor": True}
+    assert synth_record(cfg, args)["smooth_shading"] is True and synth_record(cfg, args)["colour_sensor"] is True
     # without a room there is no look to draw
     assert synth_config(parser().parse_args(["synth", "--long-hair", "--no-room"])).look_arg() is None
 

@@ -387,6 +387,61 @@ def test_a_views_ankles_up_the_shins_with_no_person_under_them_come_from_the_oth
         assert abs(n_got - n_clean) < 0.2 * n_clean, (shin, n_got, n_clean)
 
 
+def test_a_view_whose_pose_covers_a_part_of_the_person_is_replaced_by_the_other_view(capture, monkeypatch):
+    """The back view's pose shrunk to a quarter about its nose, mirror image and all, with a mask of the upper
+    back only (a bright back view on a floor of the skin's colour once gave a head-and-shoulders skeleton at
+    visibility 1.0, and every volume of the capture went wrong): detect refuses it against the person's height
+    in the depth image (PoseTooSmallError), and segment_views takes the back view from the front one, saying
+    so, with its legs labelled about as with the clean detection."""
+    from bsv.errors import PersonNotFoundError as NotFound
+    from bsv.errors import PoseTooSmallError
+
+    _, data, cams, _ = capture
+    _lower(monkeypatch, data, {})
+    clean = lm.segment_views(_images(data), cams)
+    back = {_key(img) for img in _shown(data, "back")}
+    back |= {_key(np.ascontiguousarray(img[:, ::-1])) for img in _shown(data, "back")}
+    nose = seg.POSE_NAMES.index("nose")
+
+    def fake(rgb, params=None):
+        r = _cached(rgb, params)
+        if _key(rgb) not in back:
+            return r
+        pose = r["pose"]
+        pose[:, :2] = pose[nose, :2] + 0.25 * (pose[:, :2] - pose[nose, :2])
+        mask = np.zeros_like(r["mask"])
+        y = int(pose[:, 1].max())
+        mask[max(0, y - 60):y] = r["mask"][max(0, y - 60):y]
+        r["mask"] = mask
+        return r
+
+    monkeypatch.setattr(seg, "run_holistic", fake)
+    with pytest.raises(PoseTooSmallError, match="spans") as e:
+        seg.detect(data["back"]["colour"], "back", depth=data["back"]["depth_m"], camera=cams["back"])
+    assert isinstance(e.value, NotFound) and 0.05 < e.value.span < seg.MIN_SKELETON_SPAN
+    segs = lm.segment_views(_images(data), cams)
+    assert segs["front"].warnings == clean["front"].warnings
+    assert any("spans" in w and "front view's through the calibration" in w for w in segs["back"].warnings)
+    for part in ("thigh_l", "thigh_r", "shin_l", "shin_r"):
+        k = bsv.SEGMENT_IDS[part]
+        n_clean, n_got = int((clean["back"].labels == k).sum()), int((segs["back"].labels == k).sum())
+        assert abs(n_got - n_clean) < 0.25 * n_clean, (part, n_got, n_clean)
+
+
+def test_skeleton_span_is_the_required_landmarks_height_over_the_persons():
+    region = np.zeros((100, 50), dtype=bool)
+    region[10:91, 20:30] = True  # the person: rows 10-90
+    pose = np.zeros((len(seg.POSE_NAMES), 3))
+    pose[:, 1] = 50.0
+    pose[seg.POSE_NAMES.index("left_shoulder"), 1] = 25.0
+    pose[seg.POSE_NAMES.index("right_ankle"), 1] = 85.0
+    pose[seg.POSE_NAMES.index("nose"), 1] = 0.0  # not a required landmark
+    assert seg.skeleton_span(pose, region) == pytest.approx(60.0 / 80.0)
+    assert seg.skeleton_span(pose, np.zeros_like(region)) is None
+    pose[seg.POSE_NAMES.index("left_knee"), 1] = np.nan
+    assert seg.skeleton_span(pose, region) is None
+
+
 def test_the_stature_is_read_from_the_depth_of_the_person(capture, monkeypatch):
     """person_stature: the top of the head above the floor, within 3 cm of the body's true height (the mask's
     spill onto the wall behind the head does not raise it)."""

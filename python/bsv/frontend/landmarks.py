@@ -68,7 +68,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, LimbMissingError, PersonNotFoundError, SegmentationError
+from ..errors import InputError, LimbMissingError, PersonNotFoundError, PoseTooSmallError, SegmentationError
 from ..keypoints import JOINT_NAMES
 from .intrinsics import Intrinsics
 from .segment import (
@@ -712,7 +712,7 @@ def _surface_behind(point: np.ndarray, camera: Camera, depth: np.ndarray, region
 
 def detection_from_other_view(view: str, shape: tuple[int, int], other: Detection, other_camera: Camera,
                               other_depth: np.ndarray, camera: Camera, depth: np.ndarray,
-                              params: SegmentParams) -> Detection:
+                              params: SegmentParams, why: str | None = None) -> Detection:
     """A stand-in :class:`Detection` of the ``view`` camera, whose (H, W) = ``shape`` image MediaPipe found no
     person in (not even brightened), made from the ``other`` view's, with the other view's visibilities and
     no hand model (the labels then draw the pose's coarse hands):
@@ -724,7 +724,8 @@ def detection_from_other_view(view: str, shape: tuple[int, int], other: Detectio
       spill onto a wall is left out), and the surface point this view's depth shows behind it; the landmark
       is the midpoint of the two (the middle of the limb's cross-section), projected into this image.
 
-    Its note (the segmentation's first warning) says what was done and what to do."""
+    Its note (the segmentation's first warning) says what was done and what to do; ``why`` replaces its first
+    words, "no person found in it (...)", where MediaPipe's own detection was refused for another reason."""
     import cv2
 
     mask_o = np.asarray(other.mask_soft > other.params.mask_threshold) if other.mask_soft is not None else None
@@ -762,7 +763,8 @@ def detection_from_other_view(view: str, shape: tuple[int, int], other: Detectio
     back = np.array([camera.deproject(uv[None], dd)[0] if np.isfinite(dd := _surface_depth(d, person, uv)) else p
                      for uv, p in zip(first, front, strict=True)])
     pose = np.column_stack([camera.project((front + back) / 2), other.pose[:, 2]])
-    note = (f"{view} image: no person found in it (nor in its mirror image, nor brightened); its landmarks are the "
+    reason = why or "no person found in it (nor in its mirror image, nor brightened)"
+    note = (f"{view} image: {reason}; its landmarks are the "
             f"{other.view} view's through the calibration and its person mask is the depth's: light this side of "
             "the subject and capture again for labels of its own")
     return Detection(view, shape, pose, [None, None], person.astype(np.float32), (), params, None, (note,))
@@ -798,8 +800,11 @@ def segment_views(images: Mapping[str, Mapping[str, Any]], cameras: Mapping[str,
     for v in lost:  # the other view stands in for this one, through the calibration
         o = "back" if v == "front" else "front"
         h, w = np.asarray(images[v]["colour"]).shape[:2]
+        err = lost[v]
+        why = (f"MediaPipe's pose of it spans {100 * err.span:.0f} % of the person's height in the depth image at "
+               "most (a part of the person, or something else)") if isinstance(err, PoseTooSmallError) else None
         dets[v] = detection_from_other_view(v, (h, w), dets[o], cameras[o], depths[o], cameras[v], depths[v],
-                                            view_params(v, **params))
+                                            view_params(v, **params), why)
     unrepeatable = unrepeatable_landmarks(dets, cameras, depths)
     stature = person_stature(dets, cameras, depths)
     implausible = implausible_landmarks(dets, cameras, depths, skip=unrepeatable, stature=stature)

@@ -65,8 +65,8 @@ from .. import _bsv
 from ..extras import require
 from ..types import SEGMENT_IDS as _SEGMENT_IDS
 from ..types import SEGMENT_NAMES as _SEGMENT_NAMES
-from .background import showing
-from .errors import LandmarkMissingError, PersonNotFoundError, SegmentationError
+from .background import showing, subject_region
+from .errors import LandmarkMissingError, PersonNotFoundError, PoseTooSmallError, SegmentationError
 from .pose_model import check_complexity, require_pose_model
 from .sex import SexEstimate
 
@@ -744,6 +744,24 @@ def view_params(view: str, params: SegmentParams | None = None, **overrides: Any
         raise SegmentationError(f"unknown segmentation parameter ({e}); see SegmentParams") from e
 
 
+#: The smallest share of the person's height in the depth image (:func:`bsv.frontend.background.subject_region`:
+#: the top of the head to the floor around the feet) that MediaPipe's required landmarks must span from the
+#: highest to the lowest. A standing subject's shoulders to ankles span 0.65-0.8 of it; a bright back view on a
+#: floor of the skin's colour once gave a skeleton of the head and shoulders, 0.18 of it, with the shoulders
+#: 2 px apart at visibility 1.0, and every volume of the capture came out wrong (forearms -99 %).
+MIN_SKELETON_SPAN = 0.4
+
+
+def skeleton_span(pose: np.ndarray, region: np.ndarray) -> float | None:
+    """The vertical span of a pose's required landmarks (pixels, ``pose`` (33, >= 2)) over the height of the
+    person's ``region`` (a bool image), or None for an empty region or non-finite landmarks."""
+    rows = np.flatnonzero(np.asarray(region, dtype=bool).any(axis=1))
+    ys = np.asarray([pose[POSE_NAMES.index(n), 1] for n in REQUIRED_LANDMARKS], dtype=np.float64)
+    if len(rows) < 2 or not np.all(np.isfinite(ys)):
+        return None
+    return float((ys.max() - ys.min()) / (rows[-1] - rows[0]))
+
+
 def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | None = None, *,
            depth: np.ndarray | None = None, camera: Camera | None = None, **overrides: Any) -> Detection:
     """MediaPipe Holistic on one RGB uint8 (H, W, 3) image of the ``view`` camera, oriented to the subject's
@@ -752,7 +770,8 @@ def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | 
     ``camera``, the calibrated :class:`bsv.frontend.landmarks.Camera`, lets it remove the floor too) on the
     background of :attr:`SegmentParams.background` (by default the rig's empty room where the depth around
     the subject is a void, the image's own where it shows a room). PersonNotFoundError when no person is
-    found."""
+    found; with ``depth``, also when every pose MediaPipe gives spans less than :data:`MIN_SKELETON_SPAN` of the
+    person's height the depth shows (it found a part of the person, or something else)."""
     prm = view_params(view, params, **overrides)
     img = np.asarray(colour_rgb)
     if img.ndim != 3 or img.shape[2] != 3 or img.dtype != np.uint8:
@@ -762,9 +781,22 @@ def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | 
     notes: tuple[str, ...] = () if show.note is None else (f"{view} image: {show.note}",)
     shown = show.image(img)
     flip = view == "back" and prm.flip_back
-    first = _detect_once(shown, view, prm, flip)
+    region = None if depth is None else show.region if show.region is not None else subject_region(depth)
+    small: list[float] = []  # the spans of the poses too small for the person (MIN_SKELETON_SPAN)
+
+    def fits(res: _Oriented | None) -> _Oriented | None:
+        """``res`` unless its pose is too small for the person the depth shows."""
+        if res is None or region is None:
+            return res
+        span = skeleton_span(res[0], region)
+        if span is not None and span < MIN_SKELETON_SPAN:
+            small.append(span)
+            return None
+        return res
+
+    first = fits(_detect_once(shown, view, prm, flip))
     if first is None and prm.flip_average:  # the mirror image is detected anyway: it may find the person
-        first = _detect_once(shown, view, prm, not flip)
+        first = fits(_detect_once(shown, view, prm, not flip))
         flip = not flip
     if first is None:  # a dim subject against a dark background: MediaPipe's detector wants contrast
         stretched, gain = stretch_contrast(img, show.region)
@@ -772,7 +804,7 @@ def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | 
             shown = show.image(stretched)
             flips = (flip, not flip) if prm.flip_average else (flip,)
             for f in flips:
-                first = _detect_once(shown, view, prm, f)
+                first = fits(_detect_once(shown, view, prm, f))
                 if first is not None:
                     flip = f
                     note = (f"{view} image: the person was found only with the image's brightness scaled "
@@ -780,6 +812,10 @@ def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | 
                             "makes the segmentation more reliable)")
                     notes = (*notes, note)
                     break
+    if first is None and small:
+        raise PoseTooSmallError(f"MediaPipe's pose of the {view} image spans {100 * max(small):.0f} % of the person's "
+                                "height in the depth image at most, even mirrored and with its contrast stretched: it "
+                                "found a part of the person or something else", max(small))
     if first is None:
         raise PersonNotFoundError(f"no person found in the {view} image ({w} x {h}), even with its contrast "
                                   "stretched: the subject must stand in full view of the camera, lit, against a "
@@ -787,6 +823,8 @@ def detect(colour_rgb: np.ndarray, view: str = "front", params: SegmentParams | 
     pose, hands, mask_soft, swapped = first
     spread = None
     if prm.flip_average:
+        # not held to MIN_SKELETON_SPAN: a mirror image's pose far from the image's makes its landmarks
+        # unrepeatable (Detection.spread), and the other view stands in for them
         other = _detect_once(shown, view, prm, not flip)
         if other is not None:
             spread = np.hypot(*(pose[:, :2] - other[0][:, :2]).T)

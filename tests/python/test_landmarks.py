@@ -422,6 +422,9 @@ def test_a_view_whose_pose_covers_a_part_of_the_person_is_replaced_by_the_other_
     segs = lm.segment_views(_images(data), cams)
     assert segs["front"].warnings == clean["front"].warnings
     assert any("spans" in w and "front view's through the calibration" in w for w in segs["back"].warnings)
+    # the stood-in view's boundaries are less certain: its intervals widen (the front view's do not)
+    assert all(segs["back"].extra_sd[k] >= sd for k, sd in lm.STAND_IN_SD.items())
+    assert "upper_arm_l" not in segs["front"].extra_sd
     for part in ("thigh_l", "thigh_r", "shin_l", "shin_r"):
         k = bsv.SEGMENT_IDS[part]
         n_clean, n_got = int((clean["back"].labels == k).sum()), int((segs["back"].labels == k).sum())
@@ -503,6 +506,8 @@ def test_process_keeps_a_capture_whose_back_view_shows_no_person(capture, monkey
     truth = s.volumes_l()
     err = 100 * (vols["volumes_l"]["trunk_limbs"] - truth["trunk_limbs"]) / truth["trunk_limbs"]
     assert abs(err) < 1.0, err  # measured -0.25 % (the limbs within 6 %: degraded, said so)
+    # and its intervals say so too: every quantity the stood-in view's boundaries move is widened
+    assert all(k in vols["intervals"]["method"] for k in ("upper_arm_l", "shin_r", "asymmetry_shin_pct"))
 
 
 def test_process_says_when_the_crotch_was_not_seen_and_widens_the_thighs(capture, monkeypatch, tmp_path):

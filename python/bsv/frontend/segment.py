@@ -896,8 +896,8 @@ def resolve_landmarks(det: Detection, from_other: dict[str, np.ndarray] | None =
     projected into this image through the calibration, :mod:`bsv.frontend.landmarks`); the hand model's
     wrist (MediaPipe Holistic's hand landmark 0, for a wrist); this view's own landmark if its visibility is
     at least the documented lower threshold ``fallback_visibility``; the other view's if its visibility there is
-    (a heavy body's ankles, seen at 0.47 from the front and 0.6 from the back, once lost the whole capture). A landmark seen confidently but not
-    repeatably (``unrepeatable``: name -> the pixels between its image and mirror-image detections, while
+    (a heavy body's ankles, seen at 0.47 from the front and 0.6 from the back, once lost the whole capture).
+    A landmark seen confidently but not repeatably (``unrepeatable``: name -> the pixels between its image and mirror-image detections, while
     the other view's agree: :func:`bsv.frontend.landmarks.unrepeatable_landmarks`) is taken from the other
     view when ``from_other`` has it, and kept otherwise; so is one the two views place at heights that
     cannot both be right (``implausible``: name -> why, :func:`bsv.frontend.landmarks.implausible_landmarks`),

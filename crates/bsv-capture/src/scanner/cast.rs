@@ -120,12 +120,8 @@ impl SmoothNormals<'_> {
     }
 }
 
-fn pixel_hit(hit: &RayIntersection, ray: &Ray, d: [f64; 3], label: u8, kind: SurfaceKind) -> PixelHit {
-    pixel_hit_with_normal(hit, ray, d, label, kind, None)
-}
-
-/// [`pixel_hit`] whose colour normal is `smooth` where given (the depth, label and shade are the hit's own).
-fn pixel_hit_with_normal(
+/// One pixel's hit; its colour normal is `smooth` where given (the depth, label and shade are the hit's own).
+fn pixel_hit(
     hit: &RayIntersection,
     ray: &Ray,
     d: [f64; 3],
@@ -172,12 +168,12 @@ pub(super) fn cast_camera_room(
                     match (wall, body) {
                         (Some(r), b) if b.as_ref().is_none_or(|b| r.time_of_impact < b.time_of_impact) => {
                             let kind = room.kinds.get(r.subshape as usize).copied().unwrap_or(SurfaceKind::Wall);
-                            pixel_hit(&r, &ray, d, 0, kind)
+                            pixel_hit(&r, &ray, d, 0, kind, None)
                         }
                         (_, Some(b)) => {
                             let label = labels.get(b.subshape as usize).copied().unwrap_or(0);
                             let n = smooth.and_then(|s| s.at(bvh, b.subshape, ray.point_at(b.time_of_impact)));
-                            pixel_hit_with_normal(&b, &ray, d, label, SurfaceKind::Body, n)
+                            pixel_hit(&b, &ray, d, label, SurfaceKind::Body, n)
                         }
                         _ => NO_HIT,
                     }

@@ -35,6 +35,7 @@ from .argtypes import seed as seed_type
 from .errors import BsipError, InputError, OutputExistsError, PersonIsolationError, ReportError
 from .extras import require
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
+from .frontend.palms import palms_of
 from .frontend.sex import SEX_SCORES, template_gender
 from .interop import as_mesh
 from .keypoints import CAMERA_KEYPOINT_KINDS, camera_joints, confine_cloud_upper_arms
@@ -605,7 +606,8 @@ def process(
         if segmentation == "camera" and label_source == "template" and pose_template:
             template, template_notes = steps.run(
                 "pose", "posing the template like the subject (measured joint angles)",
-                lambda: camera_template(template, sex, joints, gender=template_gender(sex_estimate)))
+                lambda: camera_template(template, sex, joints, gender=template_gender(sex_estimate),
+                                        palms=palms_of(camera_segs) if camera_segs else None))
             if progress:
                 for w in template_notes:
                     print(f"[bsv]   warning: {w}", flush=True)

@@ -173,6 +173,8 @@ def pose_from_joints(joints: Mapping[str, Any]) -> tuple[Pose, list[str]]:
         raise ValueError(f"no angle for {', '.join(bad)} (coincident joints)")
     notes = []
     for name, (lo, hi) in Pose.RANGES.items():
+        if name not in angles:  # the palms: not read from the joints (bsv.frontend.palms)
+            continue
         v = angles[name]
         clipped = min(max(v, lo), hi)
         if abs(v - clipped) > CLIP_SILENT_DEG:
@@ -213,14 +215,17 @@ def posed_template(kind: str, pose: Pose, gender: float | None = None) -> PosedT
 
 
 def camera_template(template: Mesh | None, sex: str | None, joints: Mapping[str, Any],
-                    gender: float | None = None) -> tuple[Mesh | None, list[str]]:
+                    gender: float | None = None,
+                    palms: tuple[float | None, float | None] | None = None) -> tuple[Mesh | None, list[str]]:
     """The template the camera path registers, as ``bsv process`` and ``bsv bench synth --segmentation camera``
     choose it: ``template`` (None: the embedded template of ``sex``, or the average one, of MakeHuman's
     ``gender`` when given: the sex read from the capture, :attr:`bsv.frontend.sex.SexEstimate.gender`) posed
     like the subject (:func:`pose_from_joints`, :func:`posed_template`; an arm no lower than
-    :data:`ARM_POSE_MAX_DOWN_DEG`), and the notes on what was not as
-    measured (a clipped angle; a joint missing, when the template stays in its own pose). A template that
-    cannot be posed (a user's mesh, the fine or full template) is returned as it is, without notes."""
+    :data:`ARM_POSE_MAX_DOWN_DEG`), its palms turned as measured (``palms``: the (left, right) angles of
+    :func:`bsv.frontend.palms.palm_turns`, deg; None for a palm not read, which stays forward with a note; None
+    for both: forward, as the template's own), and the notes on what was not as measured (a clipped angle; a
+    joint missing, when the template stays in its own pose). A template that cannot be posed (a user's mesh,
+    the fine or full template) is returned as it is, without notes."""
     from .keypoints import template_kind
 
     kind = (sex or "default") if template is None else template_kind(template)
@@ -239,6 +244,12 @@ def camera_template(template: Mesh | None, sex: str | None, joints: Mapping[str,
         return template, [f"the template kept its own A-pose: {e}"]
     pose = dataclasses.replace(pose, arm_down_l=min(pose.arm_down_l, ARM_POSE_MAX_DOWN_DEG),
                                arm_down_r=min(pose.arm_down_r, ARM_POSE_MAX_DOWN_DEG))
+    if palms is not None:
+        from .frontend.palms import template_palms
+
+        turned, palm_notes = template_palms(palms)
+        pose = dataclasses.replace(pose, **turned)
+        notes = [*notes, *palm_notes]
     return posed_template(kind, pose, blend), notes
 
 

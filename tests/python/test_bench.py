@@ -329,6 +329,23 @@ def test_arm_down_option_reaches_the_synth_config() -> None:
     assert synth_record(synth_config(default), default)["arm_down_deg"] == list(ARM_DOWN_RANGE_DEG)
 
 
+def test_palm_in_option_reaches_the_synth_config() -> None:
+    from bsv.bench.main import parser, synth_config, synth_record
+    from bsv.bodies import PALM_IN_RANGE_DEG, RELAXED_PALM_IN_RANGE_DEG
+
+    args = parser().parse_args(["synth", "--palm-in", "0,120"])
+    cfg = synth_config(args)
+    cfg.validate()
+    assert cfg.palm_range == RELAXED_PALM_IN_RANGE_DEG == (0.0, 120.0)
+    assert synth_record(cfg, args)["palm_in_deg"] == [0.0, 120.0]
+    default = parser().parse_args(["synth"])
+    assert synth_config(default).palm_range == PALM_IN_RANGE_DEG
+    bad = synth_config(default)
+    bad.palm_range = (100.0, 10.0)
+    with pytest.raises(BenchError, match="--palm-in"):
+        bad.validate()
+
+
 def test_bad_options_are_usage_errors(tmp_path: Path, capsys) -> None:
     with pytest.raises(SystemExit):
         bench_main(["synth", "--conditions", "noer,foggy"])
@@ -336,6 +353,10 @@ def test_bad_options_are_usage_errors(tmp_path: Path, capsys) -> None:
         with pytest.raises(SystemExit):
             bench_main(["synth", "--arm-down", bad])
         assert "--arm-down" in capsys.readouterr().err
+    for bad in ("120,0", "a,b", "-60,10"):
+        with pytest.raises(SystemExit):
+            bench_main(["synth", "--palm-in", bad])
+        assert "--palm-in" in capsys.readouterr().err
     assert bench_main(["faust", "--root", str(tmp_path), "--out", str(tmp_path / "o"), "--quiet"]) == 2
 
 

@@ -227,6 +227,45 @@ def test_a_narrow_stance_draws_the_same_subject_with_the_legs_closer():
             bodies.subject(0, seed=5, leg_range=bad)
 
 
+def test_relaxed_palms_draw_the_same_subject_with_its_palms_turned_in():
+    """--palm-in 0,120 keeps every other draw (sex, modifiers, arms, legs) and turns only the forearms and hands, both
+    palms near one drawn angle; the default keeps the palms forward (the pinned cohort); one angle (LOW = HIGH) is
+    exact; bad ranges are PoseErrors naming the palm range."""
+    import dataclasses
+
+    from bsv.bodies import PALM_IN_RANGE_DEG, RELAXED_PALM_IN_RANGE_DEG
+    from bsv.bodies.variants import hard_subject
+    from bsv.types import SEGMENT_IDS
+
+    lo, hi = RELAXED_PALM_IN_RANGE_DEG
+    turns = []
+    for i in range(6):
+        std = bodies.subject(i, seed=5, check=False)
+        assert (std.pose.palm_in_l, std.pose.palm_in_r) == (0.0, 0.0)
+        relaxed = bodies.subject(i, seed=5, check=False, palm_range=RELAXED_PALM_IN_RANGE_DEG)
+        assert relaxed.phenotype.local == std.phenotype.local and relaxed.sex == std.sex
+        assert dataclasses.replace(relaxed.pose, palm_in_l=0.0, palm_in_r=0.0) == std.pose
+        pl, pr = relaxed.pose.palm_in_l, relaxed.pose.palm_in_r
+        assert lo <= pl <= hi and lo <= pr <= hi and abs(pl - pr) <= 10.0
+        turns.append(pl)
+        moved = np.linalg.norm(relaxed.body.vertices - std.body.vertices, axis=1)
+        arms = np.isin(std.body.vertex_labels, [SEGMENT_IDS[f"{p}_{s}"] for p in ("upper_arm", "forearm", "hand")
+                                                for s in "lr"])
+        hands = np.isin(std.body.vertex_labels, [SEGMENT_IDS[n] for n in ("hand_l", "hand_r")])
+        assert moved[~arms].max() < 1e-3 and (pl < 5.0 or moved[hands].max() > 0.02)  # the body re-solved: microns
+        assert std.info()["palm_in_deg"] == list(PALM_IN_RANGE_DEG) and relaxed.info()["palm_in_deg"] == [lo, hi]
+    assert max(turns) - min(turns) > 20.0, turns
+    fixed = bodies.subject(0, seed=5, check=False, palm_range=(90.0, 90.0))
+    assert (fixed.pose.palm_in_l, fixed.pose.palm_in_r) == (90.0, 90.0)
+    assert hard_subject(3, seed=5, palm_range=(90.0, 90.0)).pose.palm_in_r == 90.0
+    assert bodies.check_palm_range("0,120") == (0.0, 120.0)
+    for bad in ((120.0, 0.0), (-40.0, 10.0), (0.0, 200.0), (), "x,y", (math.nan, 2.0)):
+        with pytest.raises(bodies.PoseError, match="palm range"):
+            bodies.subject(0, seed=5, palm_range=bad)
+        with pytest.raises(bodies.PoseError, match="palm range"):
+            bodies.cohort(0, palm_range=bad)
+
+
 def test_a_bmi_shift_draws_the_same_subject_heavier():
     """--bmi-shift 8 keeps every other draw (sex, stature, modifiers, pose) and solves the body for the drawn BMI
     plus 8; bad shifts are PoseErrors naming the BMI shift."""

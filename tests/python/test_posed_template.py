@@ -17,6 +17,8 @@ from bsv.keypoints import joint_rings
 GENDER = {"default": 0.5, "female": 0.0, "male": 1.0}
 #: Poses inside the cohort's range and at its edges.
 POSES = [Pose(), Pose(25.0, 48.0, 22.0, 12.0, 2.0, 7.0), Pose(55.0, 30.0, 5.0, 30.0, 8.0, 0.0)]
+#: A pose with the palms turned in (the left facing the body, the right past it, as MakeHuman's own hand).
+PALMS_IN = Pose(30.0, 50.0, 12.0, 8.0, 3.0, 5.0, 90.0, 118.0)
 
 
 @pytest.mark.parametrize("kind", pt.POSABLE_KINDS)
@@ -35,7 +37,7 @@ def test_the_default_pose_is_the_embedded_template(kind):
 
 
 @pytest.mark.parametrize("kind", ["default", "female"])
-@pytest.mark.parametrize("pose", POSES[1:])
+@pytest.mark.parametrize("pose", [*POSES[1:], PALMS_IN])
 def test_a_posed_template_is_the_makehuman_body_in_that_pose(kind, pose):
     """The ground truth: bsv.bodies' own body of that gender in that pose, head, hands and feet removed; each
     joint ring reproduces the posed rig's joint centre."""
@@ -65,6 +67,8 @@ def test_the_pose_is_read_back_from_the_rigs_joints(pose):
         est, notes = pt.pose_from_joints({k: turn @ v for k, v in joints.items()})
         assert notes == []
         for name in Pose.RANGES:
+            if name.startswith("palm_in"):  # read from the hand model, not the joints (bsv.frontend.palms)
+                continue
             tol = 1.0 if name.startswith("elbow") else 1e-6
             assert getattr(est, name) == pytest.approx(getattr(pose, name), abs=tol), (yaw, name)
 
@@ -138,6 +142,27 @@ def test_an_arm_hanging_low_is_posed_no_lower_than_the_limit():
     for name in ("elbow_l", "elbow_r", "hip_abduction_l", "hip_abduction_r"):
         assert getattr(posed.pose, name) == pytest.approx(getattr(pose, name), abs=1.0), name
     assert pt.template_record(posed, None)["pose"]["arm_down_l"] == pytest.approx(pt.ARM_POSE_MAX_DOWN_DEG, abs=0.05)
+
+
+def test_the_template_turns_its_palms_as_measured():
+    """Measured palms turn the template's forearms (the pose, its record and the mesh); a palm no view read stays
+    forward with a note naming it; without palms the template keeps them forward, as before."""
+    pose = PALMS_IN
+    joints = rig_joints(Phenotype(), pose)
+    forward, notes = pt.camera_template(None, None, joints)
+    assert isinstance(forward, pt.PosedTemplate) and notes == []
+    assert (forward.pose.palm_in_l, forward.pose.palm_in_r) == (0.0, 0.0)
+    turned, notes = pt.camera_template(None, None, joints, palms=(90.0, 118.0))
+    assert isinstance(turned, pt.PosedTemplate) and notes == []
+    assert (turned.pose.palm_in_l, turned.pose.palm_in_r) == (90.0, 118.0)
+    assert pt.template_record(turned, None)["pose"]["palm_in_r"] == 118.0
+    body = trunk_limbs_mesh(make_body(Phenotype(gender=0.5), turned.pose).mesh())  # an arm posed at 45 deg
+    n = min(len(turned.vertices), len(forward.vertices))  # the body's own vertices come first, then the caps'
+    assert np.abs(turned.vertices[:n] - forward.vertices[:n]).max() > 0.02, "the forearms turned"
+    np.testing.assert_allclose(turned.vertices, body.vertices, rtol=0, atol=1e-9)
+    half, notes = pt.camera_template(None, None, joints, palms=(None, 118.0))
+    assert isinstance(half, pt.PosedTemplate) and half.pose.palm_in_l == 0.0 and half.pose.palm_in_r == 118.0
+    assert notes == ["the template's left palm kept forward: the hand model found that hand in neither view"]
 
 
 def _real_rig_path():

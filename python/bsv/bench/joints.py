@@ -82,15 +82,17 @@ def capture_hip_loops(capture_dir: str | Path, segs: Mapping[str, Any], joints: 
 
 
 def subject_segmentations(subject: Any, condition: str, scan_seed: int, correct: bool = True,
-                          sex: str | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
+                          sex: str | None = None,
+                          look: Mapping[str, Any] | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
     """:func:`camera_segmentations` of a cohort ``subject`` (:func:`bsv.bodies.subject`) captured by the virtual
-    rig in a clinic room (``condition``, ``scan_seed``) into a temporary folder, removed afterwards."""
+    rig in a clinic room (``condition``, ``scan_seed``, the ``look`` of :func:`bsv.scan`) into a temporary folder,
+    removed afterwards."""
     import tempfile
 
     from .. import scan
 
     with tempfile.TemporaryDirectory(prefix="bsv-capture-") as tmp:
-        scan(subject.body.mesh(), condition, scan_seed, images=tmp, overwrite=True, room=True)
+        scan(subject.body.mesh(), condition, scan_seed, images=tmp, overwrite=True, room=True, look=look)
         return camera_segmentations(tmp, correct=correct, sex=sex)
 
 

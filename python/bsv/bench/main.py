@@ -13,10 +13,13 @@ from ..bodies.cohort import (
     HEAVY_BMI_SHIFT,
     HIP_ABDUCTION_RANGE_DEG,
     MACRO_RANGES,
+    PALM_IN_RANGE_DEG,
     arm_down_help,
     arm_range_arg,
     bmi_shift_arg,
     leg_range_arg,
+    palm_in_help,
+    palm_range_arg,
 )
 from .reference import CONDITIONS
 from .synth import COHORTS, SynthConfig
@@ -109,6 +112,8 @@ def parser() -> argparse.ArgumentParser:
     s.add_argument("--no-local", action="store_true", help="cohort without MakeHuman local modifiers")
     s.add_argument("--arm-down", type=arm_range_arg, default=ARM_DOWN_RANGE_DEG, metavar="LOW,HIGH",
                    help=f"{arm_down_help()}; the camera path's shoulder boundary moves with the arms")
+    s.add_argument("--palm-in", type=palm_range_arg, default=PALM_IN_RANGE_DEG, metavar="LOW,HIGH",
+                   help=f"{palm_in_help()}; the camera path turns the template's forearms as it measures the palms")
     lo, hi = HIP_ABDUCTION_RANGE_DEG
     s.add_argument("--hip-abduction", type=leg_range_arg, default=HIP_ABDUCTION_RANGE_DEG, metavar="LOW,HIGH",
                    help=f"the interval each thigh's angle outward of the vertical is drawn from, degrees (default "
@@ -155,7 +160,8 @@ def synth_config(args: argparse.Namespace) -> SynthConfig:
                        colour_sensor=args.colour_sensor,
                        cloud_params=dict(args.cloud_param), cohort=args.cohort,
                        refine_calibration=args.refine_calibration, arm_range=args.arm_down,
-                       leg_range=args.hip_abduction, bmi_shift=args.bmi_shift, macros=args.macros)
+                       leg_range=args.hip_abduction, bmi_shift=args.bmi_shift, macros=args.macros,
+                       palm_range=args.palm_in)
 
 
 def synth_record(cfg: SynthConfig, args: argparse.Namespace) -> dict[str, Any]:
@@ -170,7 +176,8 @@ def synth_record(cfg: SynthConfig, args: argparse.Namespace) -> dict[str, Any]:
             "cloud_params": cfg.cloud_params, "template": cfg.template, "methods": ",".join(cfg.methods),
             "params": cfg.params, "local_modifiers": cfg.local, "jobs": args.jobs,
             "cohort": cfg.cohort, "arm_down_deg": list(cfg.arm_range),
-            "hip_abduction_deg": list(cfg.leg_range), "bmi_shift": cfg.bmi_shift, "macros": cfg.macros,
+            "hip_abduction_deg": list(cfg.leg_range), "palm_in_deg": list(cfg.palm_range),
+            "bmi_shift": cfg.bmi_shift, "macros": cfg.macros,
             "scheduler": args.scheduler,
             "refine_calibration": cfg.refine_calibration}
 

@@ -34,10 +34,12 @@ from typing import Any
 from ..bodies.cohort import (
     ARM_DOWN_RANGE_DEG,
     HIP_ABDUCTION_RANGE_DEG,
+    PALM_IN_RANGE_DEG,
     check_arm_range,
     check_bmi_shift,
     check_leg_range,
     check_macros,
+    check_palm_range,
 )
 from ..errors import BsvError, PoseError
 from ..types import Mesh, PointCloud
@@ -74,6 +76,9 @@ class SynthConfig:
     #: The hips' abduction the subjects are drawn from (degrees; ``--hip-abduction``):
     #: :data:`bsv.bodies.cohort.HIP_ABDUCTION_RANGE_DEG` by default, narrower for thighs that touch.
     leg_range: tuple[float, float] = HIP_ABDUCTION_RANGE_DEG
+    #: The palms' turn in from facing forward the subjects are drawn from (degrees; ``--palm-in``):
+    #: :data:`bsv.bodies.cohort.PALM_IN_RANGE_DEG` (forward) by default.
+    palm_range: tuple[float, float] = PALM_IN_RANGE_DEG
     #: The BMI added to every subject's draw (``--bmi-shift``; :data:`bsv.bodies.cohort.HEAVY_BMI_SHIFT` for a
     #: heavier cohort).
     bmi_shift: float = 0.0
@@ -138,6 +143,10 @@ class SynthConfig:
             check_leg_range(self.leg_range)
         except PoseError as exc:
             raise BenchError(f"--hip-abduction: {exc}") from None
+        try:
+            check_palm_range(self.palm_range)
+        except PoseError as exc:
+            raise BenchError(f"--palm-in: {exc}") from None
         try:
             check_bmi_shift(self.bmi_shift)
         except PoseError as exc:
@@ -206,6 +215,8 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
     joints: dict[str, Any] | None = None
     loops: dict[str, Any] = {}  # the thighs' loop targets of the camera path (bsv.frontend.groin)
     extra_sd: dict[str, float] = {}  # the sd degraded boundaries add to the intervals, as bsv process adds it
+    palms: tuple[float | None, float | None] | None = None  # the palms' turn read from the hand model
+    palm_readings: dict[str, list[float | None]] = {}  # each view's readings of them (deg)
     lab = cloud_mode == "lab" or segmentation == "camera"
     need_files = condition in CALIBRATED or lab
     refined: Refined | None = None
@@ -236,6 +247,11 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
 
                 extra_sd = segmentation_extra_sd(segs.values(), loops)
                 sex_estimate = segs["front"].sex
+                from ..frontend.palms import palm_turns, view_readings
+
+                readings = {v: view_readings(s) for v, s in segs.items()}
+                palms = palm_turns(readings)
+                palm_readings = {v: list(r) for v, r in readings.items()}
                 landmark_warnings = [w for s in segs.values() for w in s.warnings]
                 views = capture_views(tmp, segmentation, labels={v: s.labels for v, s in segs.items()})
                 joint_errs = joint_errors(joints, truth_joints) if truth_joints else None
@@ -272,9 +288,11 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
         try:  # as bsv process: the template posed like the subject
             from ..frontend.sex import template_gender
 
-            posed, notes = camera_template(template, None, joints or {}, gender=template_gender(sex_estimate))
+            posed, notes = camera_template(template, None, joints or {}, gender=template_gender(sex_estimate),
+                                           palms=palms)
             template = posed or template
-            template_info = {"template": template_record(template, None), "template_notes": notes}
+            template_info = {"template": template_record(template, None), "template_notes": notes,
+                             "palm_readings": palm_readings}
         except BsvError as exc:  # the template's own pose, said in each run
             template_info = {"template_notes": [f"the template kept its own A-pose: {type(exc).__name__}: {exc}"]}
     far2, far10 = cloud_far_pct(cloud, truth_surface)
@@ -453,7 +471,7 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] |
     try:
         make = hard_subject if cfg.cohort == "hard" else subject
         s = make(index, cfg.seed, local=cfg.local, arm_range=cfg.arm_range, leg_range=cfg.leg_range,
-                 bmi_shift=cfg.bmi_shift, macros=cfg.macros)
+                 bmi_shift=cfg.bmi_shift, macros=cfg.macros, palm_range=cfg.palm_range)
     except Exception as exc:
         err = f"subject generation failed: {type(exc).__name__}: {exc}"
         runs: list[Run] = [Run(name, c, m, False, error=err) for c in cfg.conditions for m in cfg.methods]

@@ -57,6 +57,15 @@ HIP_ABDUCTION_RANGE_DEG: tuple[float, float] = (0.0, 6.0)
 #: thighs touch below the crotch and the gap between the legs opens only under them (BENCH.md, round 2
 #: session 30).
 NARROW_HIP_ABDUCTION_RANGE_DEG: tuple[float, float] = (0.0, 1.5)
+#: The cohort's palms (degrees turned in from facing forward, :attr:`bsv.bodies.pose.Pose.palm_in_l`): forward,
+#: as the standard cohort has always stood.
+PALM_IN_RANGE_DEG: tuple[float, float] = (0.0, 0.0)
+#: Palms from forward to facing the body and a little past it (``bsv bench synth --palm-in 0,120``), as people
+#: stand when nobody tells them to turn their palms forward; MakeHuman's hand with no twist lies at about 118.
+#: The camera path's template must turn its forearms likewise (BENCH.md, round 2 session 44).
+RELAXED_PALM_IN_RANGE_DEG: tuple[float, float] = (0.0, 120.0)
+#: The bounds a palm range must lie in (degrees; see :func:`check_palm_range`).
+_PALM_IN_LIMITS_DEG: tuple[float, float] = (-30.0, 150.0)
 #: ``bsv bench synth --bmi-shift``: the BMI added to every subject's draw for a heavier cohort (the standard
 #: draw is 25 +- 4 within 18.5-35; +8 gives about 27-41, where the camera path's boundaries drift, BENCH.md round 2
 #: session 30), and the bounds a shift must lie in.
@@ -128,6 +137,8 @@ class Subject:
     leg_range: tuple[float, float] = HIP_ABDUCTION_RANGE_DEG
     #: The BMI added to the drawn one (``bmi_shift`` of :func:`subject`).
     bmi_shift: float = 0.0
+    #: The interval the palms' turn was drawn from (``palm_range`` of :func:`subject`; degrees).
+    palm_range: tuple[float, float] = PALM_IN_RANGE_DEG
     #: The macro ranges the subject was drawn with (``macros`` of :func:`subject`: :data:`MACRO_RANGES`).
     macros: str = "standard"
 
@@ -137,13 +148,14 @@ class Subject:
 
     def info(self) -> dict:
         """JSON-ready description (draws, phenotype, pose, the arm range ``arm_down_deg``, the hips'
-        ``hip_abduction_deg``, the ``macros`` ranges, measured stature/BMI)."""
+        ``hip_abduction_deg``, the palms' ``palm_in_deg``, the ``macros`` ranges, measured stature/BMI)."""
         return {"index": self.index, "seed": self.seed, "sex": self.sex,
                 "stature_target_m": self.stature_target, "bmi_target": self.bmi_target,
                 "stature_m": self.body.stature, "bmi": self.body.bmi, "volume_l": self.body.volume_l,
                 "phenotype": asdict(self.phenotype), "pose": asdict(self.pose),
                 "arm_down_deg": [float(a) for a in self.arm_range],
                 "hip_abduction_deg": [float(a) for a in self.leg_range],
+                "palm_in_deg": [float(a) for a in self.palm_range],
                 "bmi_shift": float(self.bmi_shift),
                 "macros": self.macros,
                 **({"variant": self.variant} if self.variant else {})}
@@ -187,17 +199,19 @@ def check_arm_range(arm_range: Sequence[float] | str) -> tuple[float, float]:
 
 
 def _angle_range(value: Sequence[float] | str, name: str, give: str, limits: tuple[float, float],
-                 unit_note: str = "") -> tuple[float, float]:
-    """``value`` (two angles, or ``"LOW,HIGH"``) as an increasing pair of floats inside ``limits``, or PoseError
-    naming ``name`` and, for a value that is not two numbers, what to ``give``."""
+                 unit_note: str = "", equal_ok: bool = False) -> tuple[float, float]:
+    """``value`` (two angles, or ``"LOW,HIGH"``) as an increasing pair of floats inside ``limits`` (with
+    ``equal_ok``, LOW = HIGH too: one angle), or PoseError naming ``name`` and, for a value that is not two
+    numbers, what to ``give``."""
     parts = value.split(",") if isinstance(value, str) else value
     try:
         lo, hi = (float(x) for x in parts)
     except (TypeError, ValueError) as exc:
         raise PoseError(f"{name} {value!r}: give {give}") from exc
     low, high = limits
-    if not (low <= lo < hi <= high):
-        raise PoseError(f"{name} ({lo:g}, {hi:g}) deg: need {low:g} <= low < high <= {high:g}{unit_note}")
+    if not (low <= lo <= hi <= high and (equal_ok or lo < hi)):
+        raise PoseError(f"{name} ({lo:g}, {hi:g}) deg: need {low:g} <= low {'<=' if equal_ok else '<'} high "
+                        f"<= {high:g}{unit_note}")
     return lo, hi
 
 
@@ -207,6 +221,14 @@ def check_leg_range(leg_range: Sequence[float] | str) -> tuple[float, float]:
     together to a wide stance; the collision loop may spread the legs further)."""
     return _angle_range(leg_range, "hip abduction range", "two angles in degrees, LOW < HIGH, e.g. 0,1.5",
                         _HIP_ABDUCTION_LIMITS_DEG)
+
+
+def check_palm_range(palm_range: Sequence[float] | str) -> tuple[float, float]:
+    """``palm_range`` (two angles the palms are turned in from facing forward, or the command line's
+    ``"LOW,HIGH"``; LOW = HIGH for one angle) as floats, or PoseError when it is not an increasing pair inside
+    [-30, 150] degrees (0 palms forward, 90 facing the body)."""
+    return _angle_range(palm_range, "palm range", "two angles in degrees, LOW <= HIGH, e.g. 0,120",
+                        _PALM_IN_LIMITS_DEG, " (degrees turned in from palms forward)", equal_ok=True)
 
 
 T = TypeVar("T")
@@ -253,6 +275,19 @@ def leg_range_arg(text: str) -> tuple[float, float]:
     return _usage_checked(check_leg_range, text)
 
 
+def palm_range_arg(text: str) -> tuple[float, float]:
+    """The argparse type of ``--palm-in LOW,HIGH`` (``bsv cohort``, ``bsv bench synth``): :func:`check_palm_range`,
+    its message as the usage error."""
+    return _usage_checked(check_palm_range, text)
+
+
+def palm_in_help() -> str:
+    """The help text of ``--palm-in LOW,HIGH`` (``bsv cohort``, ``bsv bench synth``)."""
+    (lo, hi), (rlo, rhi) = PALM_IN_RANGE_DEG, RELAXED_PALM_IN_RANGE_DEG
+    return (f"the interval the palms' turn in from facing forward is drawn from, degrees (default {lo:g},{hi:g}: "
+            f"palms forward; {rlo:g},{rhi:g} for palms as people hold them unasked, up to facing the body)")
+
+
 def arm_down_help() -> str:
     """The help text of ``--arm-down LOW,HIGH`` (``bsv cohort``, ``bsv bench synth``)."""
     (lo, hi), (wlo, whi) = ARM_DOWN_RANGE_DEG, WIDE_ARM_DOWN_RANGE_DEG
@@ -278,13 +313,23 @@ def _free_step(pose: Pose, hits: Iterable[str], arm_floor: float) -> Pose:
         return max(angle - 3.0, arm_floor) if raise_arm[side] else angle
 
     return Pose(arm(pose.arm_down_l, "l"), arm(pose.arm_down_r, "r"), pose.elbow_l, pose.elbow_r,
-                pose.hip_abduction_l + legs, pose.hip_abduction_r + legs)
+                pose.hip_abduction_l + legs, pose.hip_abduction_r + legs, pose.palm_in_l, pose.palm_in_r)
+
+
+def _palms(index: int, seed: int, lo: float, hi: float) -> tuple[float, float]:
+    """Subject ``index``'s palm turns (left, right; degrees) drawn in [lo, hi] from a stream of their own: both
+    around one value, the sides 10 deg apart at most; exactly ``lo`` for a single angle."""
+    if hi <= lo:
+        return lo, lo
+    rng = np.random.default_rng([int(seed), int(index), 1])
+    mid, d = rng.uniform(lo, hi), float(np.clip(rng.normal(0.0, 3.0), -5.0, 5.0))
+    return float(np.clip(mid + d, lo, hi)), float(np.clip(mid - d, lo, hi))
 
 
 def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
             arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG,
             leg_range: tuple[float, float] = HIP_ABDUCTION_RANGE_DEG, bmi_shift: float = 0.0,
-            macros: str = "standard") -> Subject:
+            macros: str = "standard", palm_range: tuple[float, float] = PALM_IN_RANGE_DEG) -> Subject:
     """Subject ``index`` of the cohort of ``seed`` (deterministic). ``arm_range``: the interval (degrees
     below the horizontal, :func:`check_arm_range`) the arms' angle is drawn from; the default keeps the
     cohort as it always was, a wider one (:data:`WIDE_ARM_DOWN_RANGE_DEG`) draws the same random numbers,
@@ -295,11 +340,14 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
     it. ``bmi_shift`` (:func:`check_bmi_shift`) is added to the drawn BMI, every draw the same (a BMI the body
     cannot reach is brought into its reachable range, as always). ``macros`` names the :data:`MACRO_RANGES`
     the gender, muscle and proportions are drawn from (the same draws, scaled to other intervals; a PoseError
-    for an unknown name)."""
+    for an unknown name). ``palm_range`` (:func:`check_palm_range`) is the interval the palms' turn in from
+    facing forward is drawn from, both sides around one value, from a random stream of its own: every other
+    draw stays."""
     lo, hi = check_arm_range(arm_range)
     llo, lhi = check_leg_range(leg_range)
     shift = check_bmi_shift(bmi_shift)
     ranges = check_macros(macros)
+    palm_lo, palm_hi = check_palm_range(palm_range)
     rng = np.random.default_rng([int(seed), int(index)])
     female = index % 2 == 0
     mu, sd = (1.63, 0.065) if female else (1.77, 0.07)
@@ -317,7 +365,8 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
     d = rng.normal(0, 1.5, size=3)
     pose = Pose(float(np.clip(arm + d[0], lo, hi)), float(np.clip(arm - d[0], lo, hi)),
                 float(np.clip(elbow + d[1], 0, 20)), float(np.clip(elbow - d[1], 0, 20)),
-                float(np.clip(hip + d[2] / 3, llo, lhi)), float(np.clip(hip - d[2] / 3, llo, lhi)))
+                float(np.clip(hip + d[2] / 3, llo, lhi)), float(np.clip(hip - d[2] / 3, llo, lhi)),
+                *_palms(index, seed, palm_lo, palm_hi))
     loc = _draw_local(rng)
     if local:
         ph = ph.with_(local=loc)
@@ -339,28 +388,33 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
         if check and penetrations(body.vertices, body.faces, body.face_labels):
             raise SolveError(f"cohort subject {index} (seed {seed}) still self-intersects after pose changes")
     return Subject(index, int(seed), "female" if female else "male", stature, bmi_used, ph, pose, body,
-                   arm_range=(lo, hi), leg_range=(llo, lhi), bmi_shift=shift, macros=macros)
+                   arm_range=(lo, hi), leg_range=(llo, lhi), bmi_shift=shift, macros=macros,
+                   palm_range=(palm_lo, palm_hi))
 
 
 def cohort(n: int, seed: int = 0, local: bool = True, check: bool = True,
-           arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG) -> list[Subject]:
+           arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG,
+           palm_range: tuple[float, float] = PALM_IN_RANGE_DEG) -> list[Subject]:
     """``n`` plausible adults (half female), deterministic for a seed; local modifiers on by default.
     ``arm_range``: the interval (degrees below the horizontal) the arm angles are drawn from, as in
     :func:`subject` (:data:`ARM_DOWN_RANGE_DEG` by default, :data:`WIDE_ARM_DOWN_RANGE_DEG` for wide
-    A-poses); a bad range is a PoseError before any subject is made."""
+    A-poses); ``palm_range`` the palms' (:data:`RELAXED_PALM_IN_RANGE_DEG` for palms as people hold them
+    unasked); a bad range is a PoseError before any subject is made."""
     if n < 0:
         raise ValueError(f"cohort size {n}: must be >= 0")
     check_arm_range(arm_range)
-    return list(iter_cohort(n, seed, local, check, arm_range))
+    check_palm_range(palm_range)
+    return list(iter_cohort(n, seed, local, check, arm_range, palm_range))
 
 
 def iter_cohort(n: int, seed: int = 0, local: bool = True, check: bool = True,
-                arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG) -> Iterator[Subject]:
-    """Like cohort() but yields subjects one at a time. ``arm_range``: the interval (degrees below the
-    horizontal) the arm angles are drawn from (:func:`subject`); a bad range is a PoseError at the first
-    subject."""
+                arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG,
+                palm_range: tuple[float, float] = PALM_IN_RANGE_DEG) -> Iterator[Subject]:
+    """Like cohort() but yields subjects one at a time. ``arm_range`` and ``palm_range``: the intervals
+    (degrees) the arm angles and the palms' turn are drawn from (:func:`subject`); a bad range is a PoseError
+    at the first subject."""
     for i in range(n):
-        yield subject(i, seed, local, check, arm_range)
+        yield subject(i, seed, local, check, arm_range, palm_range=palm_range)
 
 
 def volumes_json(s: Subject) -> str:
@@ -398,23 +452,27 @@ def write_subject(s: Subject, out_dir: str | Path, overwrite: bool = False) -> t
 
 
 def write_cohort(out_dir: str | Path, n: int, seed: int = 0, local: bool = True, overwrite: bool = False,
-                 arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG) -> list[tuple[Path, Path]]:
+                 arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG,
+                 palm_range: tuple[float, float] = PALM_IN_RANGE_DEG) -> list[tuple[Path, Path]]:
     """Generate and write a cohort: one PLY + JSON per subject and ``cohort.json`` listing them (with the
-    seed, local modifiers and ``arm_down_deg``, the arm range of :func:`subject`). A bad ``arm_range``
-    (PoseError) or any of these files already present is refused before anything is generated
+    seed, local modifiers, ``arm_down_deg`` and ``palm_in_deg``, the arm and palm ranges of :func:`subject`).
+    A bad range (PoseError) or any of these files already present is refused before anything is generated
     (:class:`bsv.errors.OutputExistsError`) unless ``overwrite``."""
     out = Path(out_dir)
     lo, hi = check_arm_range(arm_range)
+    palms = check_palm_range(palm_range)
     _refuse_existing([out / "cohort.json", *(p for i in range(max(n, 0)) for p in subject_files(i, out))], overwrite)
-    paths = [write_subject(s, out, overwrite) for s in iter_cohort(n, seed, local, arm_range=(lo, hi))]
+    paths = [write_subject(s, out, overwrite) for s in iter_cohort(n, seed, local, arm_range=(lo, hi),
+                                                                   palm_range=palms)]
     index = {"seed": int(seed), "n": int(n), "local_modifiers": bool(local), "arm_down_deg": [lo, hi],
-             "subjects": [{"mesh": p.name, "volumes": j.name} for p, j in paths]}
+             "palm_in_deg": list(palms), "subjects": [{"mesh": p.name, "volumes": j.name} for p, j in paths]}
     (out / "cohort.json").write_text(json.dumps(index, indent=1) + "\n")
     return paths
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m bsv.bodies.cohort OUT_DIR N [SEED] [--no-local] [--arm-down LOW,HIGH] [--overwrite]``:
+    """``python -m bsv.bodies.cohort OUT_DIR N [SEED] [--no-local] [--arm-down LOW,HIGH] [--palm-in LOW,HIGH]
+    [--overwrite]``:
     write a cohort; returns the exit status (2 and a message if files exist and --overwrite is not given,
     see bsv.exitcodes)."""
     import argparse
@@ -428,13 +486,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-local", action="store_true", help="macro phenotypes only (no local modifiers)")
     ap.add_argument("--arm-down", type=arm_range_arg, default=ARM_DOWN_RANGE_DEG, metavar="LOW,HIGH",
                     help=arm_down_help())
+    ap.add_argument("--palm-in", type=palm_range_arg, default=PALM_IN_RANGE_DEG, metavar="LOW,HIGH",
+                    help=palm_in_help())
     ap.add_argument("--overwrite", action="store_true", help="replace subject files and cohort.json already in OUT_DIR")
     args = ap.parse_args(argv)
     from ..exitcodes import run_command
 
     def run() -> int:
         written = write_cohort(args.out_dir, args.n, args.seed, not args.no_local, overwrite=args.overwrite,
-                               arm_range=args.arm_down)
+                               arm_range=args.arm_down, palm_range=args.palm_in)
         for ply, js in written:
             print(ply, js)
         return 0
@@ -451,6 +511,8 @@ __all__ = [
     "LOCAL_SIDED",
     "MACRO_RANGES",
     "NARROW_HIP_ABDUCTION_RANGE_DEG",
+    "PALM_IN_RANGE_DEG",
+    "RELAXED_PALM_IN_RANGE_DEG",
     "WIDE_ARM_DOWN_RANGE_DEG",
     "MacroRanges",
     "Subject",
@@ -461,10 +523,13 @@ __all__ = [
     "check_bmi_shift",
     "check_leg_range",
     "check_macros",
+    "check_palm_range",
     "cohort",
     "iter_cohort",
     "leg_range_arg",
     "main",
+    "palm_in_help",
+    "palm_range_arg",
     "subject",
     "subject_files",
     "volumes_json",

@@ -3,8 +3,9 @@
 Each posed bone gets a world-space rotation; a bone without one inherits its parent's. A bone's
 transform is x -> R_b (x - h_b) + T_parent(h_b) (h_b its rest head), so joints stay connected.
 Arms: abducted in the frontal plane to ``arm_down_deg`` below horizontal, forearm straightened onto the
-upper-arm axis, twisted about it so that the palm faces forward (the twist spread over lowerarm01,
-lowerarm02 and the wrist), then flexed forward at the elbow by ``elbow_deg``. Legs: the hip->ankle
+upper-arm axis, twisted about it so that the palm faces forward, or turned ``palm_in_deg`` in from there
+towards the body (the twist spread over lowerarm01, lowerarm02 and the wrist), then flexed forward at the
+elbow by ``elbow_deg``. Legs: the hip->ankle
 axis abducted ``hip_abduction_deg`` from the vertical in the frontal plane; feet kept level.
 """
 
@@ -29,7 +30,11 @@ class Pose:
     elbow_r: float = 10.0
     hip_abduction_l: float = 4.0
     hip_abduction_r: float = 4.0
-    palms_forward: bool = True
+    #: How far each palm is turned in from facing forward, about the forearm (degrees): 0 palms forward (the
+    #: thumb on the arm's outer side), 90 palms facing the body (the thumb forward: MakeHuman's rest hand
+    #: with no twist lies about there), 180 palms backward.
+    palm_in_l: float = 0.0
+    palm_in_r: float = 0.0
 
     @staticmethod
     def symmetric(arm_down: float = 40.0, elbow: float = 10.0, hip_abduction: float = 4.0) -> Pose:
@@ -39,7 +44,8 @@ class Pose:
     #: The plausible range (degrees) of each angle.
     RANGES: ClassVar[dict[str, tuple[float, float]]] = {
         "arm_down_l": (-10, 85), "arm_down_r": (-10, 85), "elbow_l": (0, 120), "elbow_r": (0, 120),
-        "hip_abduction_l": (-5, 30), "hip_abduction_r": (-5, 30)}
+        "hip_abduction_l": (-5, 30), "hip_abduction_r": (-5, 30), "palm_in_l": (-30, 180),
+        "palm_in_r": (-30, 180)}
 
     def validate(self) -> None:
         """Raise PoseError if an angle is implausible (outside :attr:`RANGES`)."""
@@ -105,14 +111,14 @@ def bone_transforms(joints: np.ndarray, pose: Pose, asset: Asset | None = None) 
         u = r_ua @ ua
         u /= np.linalg.norm(u)
         r_al = _align(r_ua @ (wr - el), u) @ r_ua
-        phi = 0.0
-        if pose.palms_forward:
-            thumb = head[b(f"finger1-2.{side}")] - el
-            p = r_al @ thumb
-            p -= (p @ u) * u
-            t = np.array([sx * np.sin(want), np.cos(want), 0.0])
-            t -= (t @ u) * u
-            phi = float(np.arctan2(u @ np.cross(p, t), p @ t))
+        thumb = head[b(f"finger1-2.{side}")] - el
+        p = r_al @ thumb
+        p -= (p @ u) * u
+        t = np.array([sx * np.sin(want), np.cos(want), 0.0])  # the thumb's way with the palm forward
+        t -= (t @ u) * u
+        turn = np.radians(pose.palm_in_l if side == "L" else pose.palm_in_r)
+        t = np.cos(turn) * t + np.sin(turn) * np.array([0.0, 0.0, np.linalg.norm(t)])  # turned in: thumb forward
+        phi = float(np.arctan2(u @ np.cross(p, t), p @ t))
         flex = np.radians(pose.elbow_l if side == "L" else pose.elbow_r)
         r_fl = _rot(np.cross(u, z), flex)
         for n, frac in (("lowerarm01", 1 / 3), ("lowerarm02", 2 / 3), ("wrist", 1.0)):

@@ -35,6 +35,7 @@ from .argtypes import seed as seed_type
 from .errors import BsipError, InputError, OutputExistsError, PersonIsolationError, ReportError
 from .extras import require
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
+from .frontend.facing import turn_deg, turn_warning
 from .frontend.palms import palms_of
 from .frontend.sex import SEX_SCORES, template_gender
 from .interop import as_mesh
@@ -578,6 +579,10 @@ def process(
                           "colors": np.ascontiguousarray(d["colour"], dtype=np.uint8)})
         pdf_renderer.check()  # a worker that could not load WeasyPrint (pango missing) says so before the fit
         landmark_warnings = [w for seg in camera_segs.values() for w in seg.warnings]
+        turn = (turn_deg(joints, np.asarray(extrinsics["front"]["translation"], dtype=np.float64))
+                if joints and "front" in extrinsics else None)
+        if (facing := turn_warning(turn)) is not None:
+            landmark_warnings.append(facing)
         if segmentation == "camera" and not loops:  # the thighs' boundaries from the colour labels alone
             from .frontend.groin import NO_TARGET_WARNING
 
@@ -639,6 +644,8 @@ def process(
         vols["cloud"] = {"points": len(cloud), "segmentation": segmentation, "report": cloud_report,
                          "upper_arm_points_relabelled_torso": arm_relabelled}
         vols["joints_m"] = {name: j.to_json() for name, j in joints.items()}
+        if turn is not None:  # how squarely the subject faced the front camera (bsv.frontend.facing)
+            vols["subject_turn_deg"] = round(turn, 1)
         if segmentation == "camera":
             vols["boundaries_m"] = {name: t.to_json() for name, t in pulled_loops.items()}
         vols["warnings"] = landmark_warnings + template_notes

@@ -346,6 +346,25 @@ def test_palm_in_option_reaches_the_synth_config() -> None:
         bad.validate()
 
 
+def test_turn_option_reaches_the_synth_config() -> None:
+    from bsv.bench.main import parser, synth_config, synth_record
+    from bsv.bodies import TURN_RANGE_DEG, TURNED_RANGE_DEG
+
+    args = parser().parse_args(["synth", "--turn=-10,10"])
+    cfg = synth_config(args)
+    cfg.validate()
+    assert cfg.turn_range == TURNED_RANGE_DEG == (-10.0, 10.0)
+    assert synth_record(cfg, args)["turn_deg"] == [-10.0, 10.0]
+    default = parser().parse_args(["synth"])
+    assert synth_config(default).turn_range == TURN_RANGE_DEG
+    bad = synth_config(default)
+    bad.turn_range = (10.0, -10.0)
+    with pytest.raises(BenchError, match="--turn"):
+        bad.validate()
+    with pytest.raises(SystemExit):
+        parser().parse_args(["synth", "--turn=-50,0"])
+
+
 def test_bad_options_are_usage_errors(tmp_path: Path, capsys) -> None:
     with pytest.raises(SystemExit):
         bench_main(["synth", "--conditions", "noer,foggy"])

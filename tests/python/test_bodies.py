@@ -266,6 +266,37 @@ def test_relaxed_palms_draw_the_same_subject_with_its_palms_turned_in():
             bodies.cohort(0, palm_range=bad)
 
 
+def test_a_turned_subject_is_the_same_body_turned_about_the_hips():
+    """--turn -10,10 keeps every draw and turns the whole body about the vertical through the hip joints' midpoint:
+    the same volumes, the same heights, the hips' midpoint in place; the truth joints turn with it; one angle (LOW =
+    HIGH) is exact; bad ranges are PoseErrors naming the turn range."""
+    import dataclasses
+
+    from bsv.bodies import TURN_RANGE_DEG, TURNED_RANGE_DEG
+    from bsv.bodies.joints import rig_joints
+
+    std = bodies.subject(2, seed=5, check=False)
+    assert std.pose.turn_deg == 0.0 and std.info()["turn_deg"] == list(TURN_RANGE_DEG)
+    turned = bodies.subject(2, seed=5, check=False, turn_range=(12.0, 12.0))
+    assert turned.pose.turn_deg == 12.0 and turned.sex == std.sex
+    # the stature and BMI are solved again (to the same values, within the solver's tolerance)
+    assert turned.volumes_l()["trunk_limbs"] == pytest.approx(std.volumes_l()["trunk_limbs"], rel=1e-4)
+    exact = bodies.make_body(std.phenotype, dataclasses.replace(std.pose, turn_deg=12.0))
+    j0, j1 = rig_joints(std.phenotype, std.pose), rig_joints(std.phenotype, exact.pose)
+    mid0, mid1 = (j0["hip_l"] + j0["hip_r"]) / 2, (j1["hip_l"] + j1["hip_r"]) / 2
+    np.testing.assert_allclose(mid1, mid0, atol=1e-9)
+    a = np.radians(12.0)
+    turn = np.array([[np.cos(a), 0.0, np.sin(a)], [0.0, 1.0, 0.0], [-np.sin(a), 0.0, np.cos(a)]])
+    np.testing.assert_allclose((std.body.vertices - mid0) @ turn.T + mid0, exact.vertices, atol=1e-9)
+    np.testing.assert_allclose((j0["wrist_l"] - mid0) @ turn.T + mid0, j1["wrist_l"], atol=1e-9)
+    drawn = [bodies.subject(i, seed=5, check=False, turn_range=TURNED_RANGE_DEG).pose.turn_deg for i in range(6)]
+    assert all(-10.0 <= t <= 10.0 for t in drawn) and max(drawn) - min(drawn) > 5.0, drawn
+    assert bodies.check_turn_range("-10,10") == (-10.0, 10.0)
+    for bad in ((10.0, -10.0), (-40.0, 0.0), "x,y", (math.nan, 2.0)):
+        with pytest.raises(bodies.PoseError, match="turn range"):
+            bodies.subject(0, seed=5, turn_range=bad)
+
+
 def test_a_bmi_shift_draws_the_same_subject_heavier():
     """--bmi-shift 8 keeps every other draw (sex, stature, modifiers, pose) and solves the body for the drawn BMI
     plus 8; bad shifts are PoseErrors naming the BMI shift."""

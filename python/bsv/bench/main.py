@@ -14,12 +14,15 @@ from ..bodies.cohort import (
     HIP_ABDUCTION_RANGE_DEG,
     MACRO_RANGES,
     PALM_IN_RANGE_DEG,
+    TURN_RANGE_DEG,
     arm_down_help,
     arm_range_arg,
     bmi_shift_arg,
     leg_range_arg,
     palm_in_help,
     palm_range_arg,
+    turn_help,
+    turn_range_arg,
 )
 from .reference import CONDITIONS
 from .synth import COHORTS, SynthConfig
@@ -114,6 +117,7 @@ def parser() -> argparse.ArgumentParser:
                    help=f"{arm_down_help()}; the camera path's shoulder boundary moves with the arms")
     s.add_argument("--palm-in", type=palm_range_arg, default=PALM_IN_RANGE_DEG, metavar="LOW,HIGH",
                    help=f"{palm_in_help()}; the camera path turns the template's forearms as it measures the palms")
+    s.add_argument("--turn", type=turn_range_arg, default=TURN_RANGE_DEG, metavar="LOW,HIGH", help=turn_help())
     lo, hi = HIP_ABDUCTION_RANGE_DEG
     s.add_argument("--hip-abduction", type=leg_range_arg, default=HIP_ABDUCTION_RANGE_DEG, metavar="LOW,HIGH",
                    help=f"the interval each thigh's angle outward of the vertical is drawn from, degrees (default "
@@ -161,7 +165,7 @@ def synth_config(args: argparse.Namespace) -> SynthConfig:
                        cloud_params=dict(args.cloud_param), cohort=args.cohort,
                        refine_calibration=args.refine_calibration, arm_range=args.arm_down,
                        leg_range=args.hip_abduction, bmi_shift=args.bmi_shift, macros=args.macros,
-                       palm_range=args.palm_in)
+                       palm_range=args.palm_in, turn_range=args.turn)
 
 
 def synth_record(cfg: SynthConfig, args: argparse.Namespace) -> dict[str, Any]:
@@ -177,6 +181,7 @@ def synth_record(cfg: SynthConfig, args: argparse.Namespace) -> dict[str, Any]:
             "params": cfg.params, "local_modifiers": cfg.local, "jobs": args.jobs,
             "cohort": cfg.cohort, "arm_down_deg": list(cfg.arm_range),
             "hip_abduction_deg": list(cfg.leg_range), "palm_in_deg": list(cfg.palm_range),
+            "turn_deg": list(cfg.turn_range),
             "bmi_shift": cfg.bmi_shift, "macros": cfg.macros,
             "scheduler": args.scheduler,
             "refine_calibration": cfg.refine_calibration}

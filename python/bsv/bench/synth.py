@@ -35,11 +35,13 @@ from ..bodies.cohort import (
     ARM_DOWN_RANGE_DEG,
     HIP_ABDUCTION_RANGE_DEG,
     PALM_IN_RANGE_DEG,
+    TURN_RANGE_DEG,
     check_arm_range,
     check_bmi_shift,
     check_leg_range,
     check_macros,
     check_palm_range,
+    check_turn_range,
 )
 from ..errors import BsvError, PoseError
 from ..types import Mesh, PointCloud
@@ -79,6 +81,9 @@ class SynthConfig:
     #: The palms' turn in from facing forward the subjects are drawn from (degrees; ``--palm-in``):
     #: :data:`bsv.bodies.cohort.PALM_IN_RANGE_DEG` (forward) by default.
     palm_range: tuple[float, float] = PALM_IN_RANGE_DEG
+    #: The body's turn about the vertical the subjects are drawn from (degrees; ``--turn``):
+    #: :data:`bsv.bodies.cohort.TURN_RANGE_DEG` (facing the front camera squarely) by default.
+    turn_range: tuple[float, float] = TURN_RANGE_DEG
     #: The BMI added to every subject's draw (``--bmi-shift``; :data:`bsv.bodies.cohort.HEAVY_BMI_SHIFT` for a
     #: heavier cohort).
     bmi_shift: float = 0.0
@@ -147,6 +152,10 @@ class SynthConfig:
             check_palm_range(self.palm_range)
         except PoseError as exc:
             raise BenchError(f"--palm-in: {exc}") from None
+        try:
+            check_turn_range(self.turn_range)
+        except PoseError as exc:
+            raise BenchError(f"--turn: {exc}") from None
         try:
             check_bmi_shift(self.bmi_shift)
         except PoseError as exc:
@@ -217,6 +226,7 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
     extra_sd: dict[str, float] = {}  # the sd degraded boundaries add to the intervals, as bsv process adds it
     palms: tuple[float | None, float | None] | None = None  # the palms' turn read from the hand model
     palm_readings: dict[str, list[float | None]] = {}  # each view's readings of them (deg)
+    turn: float | None = None  # the subject's turn from facing the front camera, measured (bsv.frontend.facing)
     lab = cloud_mode == "lab" or segmentation == "camera"
     need_files = condition in CALIBRATED or lab
     refined: Refined | None = None
@@ -253,6 +263,12 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
                 palms = palm_turns(readings)
                 palm_readings = {v: list(r) for v, r in readings.items()}
                 landmark_warnings = [w for s in segs.values() for w in s.warnings]
+                from ..frontend.facing import turn_deg, turn_warning
+                from .joints import capture_views_geometry
+
+                turn = turn_deg(joints, capture_views_geometry(tmp)[1]["front"].translation)
+                if (facing := turn_warning(turn)) is not None:
+                    landmark_warnings.append(facing)
                 views = capture_views(tmp, segmentation, labels={v: s.labels for v, s in segs.items()})
                 joint_errs = joint_errors(joints, truth_joints) if truth_joints else None
             else:
@@ -327,6 +343,7 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
             run.info[ORACLE_JOINTS_PARAM] = list(oracle_joints)
         if segmentation == "camera":
             run.info["hip_loops"] = {k: t.to_json() for k, t in loops.items()}
+            run.info["turn_deg"] = None if turn is None else round(turn, 2)
         if landmark_warnings is not None:
             from .joints import WARNINGS_KEY
 
@@ -471,7 +488,7 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] |
     try:
         make = hard_subject if cfg.cohort == "hard" else subject
         s = make(index, cfg.seed, local=cfg.local, arm_range=cfg.arm_range, leg_range=cfg.leg_range,
-                 bmi_shift=cfg.bmi_shift, macros=cfg.macros, palm_range=cfg.palm_range)
+                 bmi_shift=cfg.bmi_shift, macros=cfg.macros, palm_range=cfg.palm_range, turn_range=cfg.turn_range)
     except Exception as exc:
         err = f"subject generation failed: {type(exc).__name__}: {exc}"
         runs: list[Run] = [Run(name, c, m, False, error=err) for c in cfg.conditions for m in cfg.methods]

@@ -66,6 +66,14 @@ PALM_IN_RANGE_DEG: tuple[float, float] = (0.0, 0.0)
 RELAXED_PALM_IN_RANGE_DEG: tuple[float, float] = (0.0, 120.0)
 #: The bounds a palm range must lie in (degrees; see :func:`check_palm_range`).
 _PALM_IN_LIMITS_DEG: tuple[float, float] = (-30.0, 150.0)
+#: The cohort's turn about the vertical (degrees, :attr:`bsv.bodies.pose.Pose.turn_deg`): facing the front camera
+#: squarely, as the standard cohort always has.
+TURN_RANGE_DEG: tuple[float, float] = (0.0, 0.0)
+#: Subjects standing up to 10 deg off square (``bsv bench synth --turn -10,10``), as they do when nobody lines
+#: them up with the cameras (BENCH.md, round 2 session 44).
+TURNED_RANGE_DEG: tuple[float, float] = (-10.0, 10.0)
+#: The bounds a turn range must lie in (degrees; see :func:`check_turn_range`).
+_TURN_LIMITS_DEG: tuple[float, float] = (-30.0, 30.0)
 #: ``bsv bench synth --bmi-shift``: the BMI added to every subject's draw for a heavier cohort (the standard
 #: draw is 25 +- 4 within 18.5-35; +8 gives about 27-41, where the camera path's boundaries drift, BENCH.md round 2
 #: session 30), and the bounds a shift must lie in.
@@ -139,6 +147,8 @@ class Subject:
     bmi_shift: float = 0.0
     #: The interval the palms' turn was drawn from (``palm_range`` of :func:`subject`; degrees).
     palm_range: tuple[float, float] = PALM_IN_RANGE_DEG
+    #: The interval the body's turn about the vertical was drawn from (``turn_range`` of :func:`subject`; degrees).
+    turn_range: tuple[float, float] = TURN_RANGE_DEG
     #: The macro ranges the subject was drawn with (``macros`` of :func:`subject`: :data:`MACRO_RANGES`).
     macros: str = "standard"
 
@@ -148,7 +158,8 @@ class Subject:
 
     def info(self) -> dict:
         """JSON-ready description (draws, phenotype, pose, the arm range ``arm_down_deg``, the hips'
-        ``hip_abduction_deg``, the palms' ``palm_in_deg``, the ``macros`` ranges, measured stature/BMI)."""
+        ``hip_abduction_deg``, the palms' ``palm_in_deg``, the body's ``turn_deg``, the ``macros`` ranges, measured
+        stature/BMI)."""
         return {"index": self.index, "seed": self.seed, "sex": self.sex,
                 "stature_target_m": self.stature_target, "bmi_target": self.bmi_target,
                 "stature_m": self.body.stature, "bmi": self.body.bmi, "volume_l": self.body.volume_l,
@@ -156,6 +167,7 @@ class Subject:
                 "arm_down_deg": [float(a) for a in self.arm_range],
                 "hip_abduction_deg": [float(a) for a in self.leg_range],
                 "palm_in_deg": [float(a) for a in self.palm_range],
+                "turn_deg": [float(a) for a in self.turn_range],
                 "bmi_shift": float(self.bmi_shift),
                 "macros": self.macros,
                 **({"variant": self.variant} if self.variant else {})}
@@ -231,6 +243,14 @@ def check_palm_range(palm_range: Sequence[float] | str) -> tuple[float, float]:
                         _PALM_IN_LIMITS_DEG, " (degrees turned in from palms forward)", equal_ok=True)
 
 
+def check_turn_range(turn_range: Sequence[float] | str) -> tuple[float, float]:
+    """``turn_range`` (two angles of the body about the vertical, or the command line's ``"LOW,HIGH"``; LOW = HIGH
+    for one angle) as floats, or PoseError when it is not an increasing pair inside [-30, 30] degrees (0 facing
+    the front camera squarely)."""
+    return _angle_range(turn_range, "turn range", "two angles in degrees, LOW <= HIGH, e.g. -10,10",
+                        _TURN_LIMITS_DEG, " (degrees about the vertical from facing the front camera)", equal_ok=True)
+
+
 T = TypeVar("T")
 
 
@@ -281,6 +301,19 @@ def palm_range_arg(text: str) -> tuple[float, float]:
     return _usage_checked(check_palm_range, text)
 
 
+def turn_range_arg(text: str) -> tuple[float, float]:
+    """The argparse type of ``--turn LOW,HIGH`` (``bsv cohort``, ``bsv bench synth``): :func:`check_turn_range`,
+    its message as the usage error."""
+    return _usage_checked(check_turn_range, text)
+
+
+def turn_help() -> str:
+    """The help text of ``--turn LOW,HIGH`` (``bsv cohort``, ``bsv bench synth``)."""
+    (lo, hi), (tlo, thi) = TURN_RANGE_DEG, TURNED_RANGE_DEG
+    return (f"the interval the body's turn about the vertical is drawn from, degrees (default {lo:g},{hi:g}: facing "
+            f"the front camera squarely; {tlo:g},{thi:g} for subjects nobody lined up with the cameras)")
+
+
 def palm_in_help() -> str:
     """The help text of ``--palm-in LOW,HIGH`` (``bsv cohort``, ``bsv bench synth``)."""
     (lo, hi), (rlo, rhi) = PALM_IN_RANGE_DEG, RELAXED_PALM_IN_RANGE_DEG
@@ -313,7 +346,8 @@ def _free_step(pose: Pose, hits: Iterable[str], arm_floor: float) -> Pose:
         return max(angle - 3.0, arm_floor) if raise_arm[side] else angle
 
     return Pose(arm(pose.arm_down_l, "l"), arm(pose.arm_down_r, "r"), pose.elbow_l, pose.elbow_r,
-                pose.hip_abduction_l + legs, pose.hip_abduction_r + legs, pose.palm_in_l, pose.palm_in_r)
+                pose.hip_abduction_l + legs, pose.hip_abduction_r + legs, pose.palm_in_l, pose.palm_in_r,
+                pose.turn_deg)
 
 
 def _palms(index: int, seed: int, lo: float, hi: float) -> tuple[float, float]:
@@ -326,10 +360,19 @@ def _palms(index: int, seed: int, lo: float, hi: float) -> tuple[float, float]:
     return float(np.clip(mid + d, lo, hi)), float(np.clip(mid - d, lo, hi))
 
 
+def _turn(index: int, seed: int, lo: float, hi: float) -> float:
+    """Subject ``index``'s turn about the vertical (degrees) drawn in [lo, hi] from a stream of its own; exactly
+    ``lo`` for a single angle."""
+    if hi <= lo:
+        return lo
+    return float(np.random.default_rng([int(seed), int(index), 2]).uniform(lo, hi))
+
+
 def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
             arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG,
             leg_range: tuple[float, float] = HIP_ABDUCTION_RANGE_DEG, bmi_shift: float = 0.0,
-            macros: str = "standard", palm_range: tuple[float, float] = PALM_IN_RANGE_DEG) -> Subject:
+            macros: str = "standard", palm_range: tuple[float, float] = PALM_IN_RANGE_DEG,
+            turn_range: tuple[float, float] = TURN_RANGE_DEG) -> Subject:
     """Subject ``index`` of the cohort of ``seed`` (deterministic). ``arm_range``: the interval (degrees
     below the horizontal, :func:`check_arm_range`) the arms' angle is drawn from; the default keeps the
     cohort as it always was, a wider one (:data:`WIDE_ARM_DOWN_RANGE_DEG`) draws the same random numbers,
@@ -342,12 +385,13 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
     the gender, muscle and proportions are drawn from (the same draws, scaled to other intervals; a PoseError
     for an unknown name). ``palm_range`` (:func:`check_palm_range`) is the interval the palms' turn in from
     facing forward is drawn from, both sides around one value, from a random stream of its own: every other
-    draw stays."""
+    draw stays; ``turn_range`` (:func:`check_turn_range`) the whole body's turn about the vertical, likewise."""
     lo, hi = check_arm_range(arm_range)
     llo, lhi = check_leg_range(leg_range)
     shift = check_bmi_shift(bmi_shift)
     ranges = check_macros(macros)
     palm_lo, palm_hi = check_palm_range(palm_range)
+    turn_lo, turn_hi = check_turn_range(turn_range)
     rng = np.random.default_rng([int(seed), int(index)])
     female = index % 2 == 0
     mu, sd = (1.63, 0.065) if female else (1.77, 0.07)
@@ -366,7 +410,7 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
     pose = Pose(float(np.clip(arm + d[0], lo, hi)), float(np.clip(arm - d[0], lo, hi)),
                 float(np.clip(elbow + d[1], 0, 20)), float(np.clip(elbow - d[1], 0, 20)),
                 float(np.clip(hip + d[2] / 3, llo, lhi)), float(np.clip(hip - d[2] / 3, llo, lhi)),
-                *_palms(index, seed, palm_lo, palm_hi))
+                *_palms(index, seed, palm_lo, palm_hi), _turn(index, seed, turn_lo, turn_hi))
     loc = _draw_local(rng)
     if local:
         ph = ph.with_(local=loc)
@@ -389,32 +433,36 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
             raise SolveError(f"cohort subject {index} (seed {seed}) still self-intersects after pose changes")
     return Subject(index, int(seed), "female" if female else "male", stature, bmi_used, ph, pose, body,
                    arm_range=(lo, hi), leg_range=(llo, lhi), bmi_shift=shift, macros=macros,
-                   palm_range=(palm_lo, palm_hi))
+                   palm_range=(palm_lo, palm_hi), turn_range=(turn_lo, turn_hi))
 
 
 def cohort(n: int, seed: int = 0, local: bool = True, check: bool = True,
            arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG,
-           palm_range: tuple[float, float] = PALM_IN_RANGE_DEG) -> list[Subject]:
+           palm_range: tuple[float, float] = PALM_IN_RANGE_DEG,
+           turn_range: tuple[float, float] = TURN_RANGE_DEG) -> list[Subject]:
     """``n`` plausible adults (half female), deterministic for a seed; local modifiers on by default.
     ``arm_range``: the interval (degrees below the horizontal) the arm angles are drawn from, as in
     :func:`subject` (:data:`ARM_DOWN_RANGE_DEG` by default, :data:`WIDE_ARM_DOWN_RANGE_DEG` for wide
     A-poses); ``palm_range`` the palms' (:data:`RELAXED_PALM_IN_RANGE_DEG` for palms as people hold them
-    unasked); a bad range is a PoseError before any subject is made."""
+    unasked), ``turn_range`` the body's turn about the vertical; a bad range is a PoseError before any subject is
+    made."""
     if n < 0:
         raise ValueError(f"cohort size {n}: must be >= 0")
     check_arm_range(arm_range)
     check_palm_range(palm_range)
-    return list(iter_cohort(n, seed, local, check, arm_range, palm_range))
+    check_turn_range(turn_range)
+    return list(iter_cohort(n, seed, local, check, arm_range, palm_range, turn_range))
 
 
 def iter_cohort(n: int, seed: int = 0, local: bool = True, check: bool = True,
                 arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG,
-                palm_range: tuple[float, float] = PALM_IN_RANGE_DEG) -> Iterator[Subject]:
-    """Like cohort() but yields subjects one at a time. ``arm_range`` and ``palm_range``: the intervals
-    (degrees) the arm angles and the palms' turn are drawn from (:func:`subject`); a bad range is a PoseError
-    at the first subject."""
+                palm_range: tuple[float, float] = PALM_IN_RANGE_DEG,
+                turn_range: tuple[float, float] = TURN_RANGE_DEG) -> Iterator[Subject]:
+    """Like cohort() but yields subjects one at a time. ``arm_range``, ``palm_range`` and ``turn_range``: the
+    intervals (degrees) the arm angles, the palms' turn and the body's are drawn from (:func:`subject`); a bad
+    range is a PoseError at the first subject."""
     for i in range(n):
-        yield subject(i, seed, local, check, arm_range, palm_range=palm_range)
+        yield subject(i, seed, local, check, arm_range, palm_range=palm_range, turn_range=turn_range)
 
 
 def volumes_json(s: Subject) -> str:
@@ -453,26 +501,28 @@ def write_subject(s: Subject, out_dir: str | Path, overwrite: bool = False) -> t
 
 def write_cohort(out_dir: str | Path, n: int, seed: int = 0, local: bool = True, overwrite: bool = False,
                  arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG,
-                 palm_range: tuple[float, float] = PALM_IN_RANGE_DEG) -> list[tuple[Path, Path]]:
+                 palm_range: tuple[float, float] = PALM_IN_RANGE_DEG,
+                 turn_range: tuple[float, float] = TURN_RANGE_DEG) -> list[tuple[Path, Path]]:
     """Generate and write a cohort: one PLY + JSON per subject and ``cohort.json`` listing them (with the
-    seed, local modifiers, ``arm_down_deg`` and ``palm_in_deg``, the arm and palm ranges of :func:`subject`).
+    seed, local modifiers, ``arm_down_deg``, ``palm_in_deg`` and ``turn_deg``, the ranges of :func:`subject`).
     A bad range (PoseError) or any of these files already present is refused before anything is generated
     (:class:`bsv.errors.OutputExistsError`) unless ``overwrite``."""
     out = Path(out_dir)
     lo, hi = check_arm_range(arm_range)
     palms = check_palm_range(palm_range)
+    turns = check_turn_range(turn_range)
     _refuse_existing([out / "cohort.json", *(p for i in range(max(n, 0)) for p in subject_files(i, out))], overwrite)
     paths = [write_subject(s, out, overwrite) for s in iter_cohort(n, seed, local, arm_range=(lo, hi),
-                                                                   palm_range=palms)]
+                                                                   palm_range=palms, turn_range=turns)]
     index = {"seed": int(seed), "n": int(n), "local_modifiers": bool(local), "arm_down_deg": [lo, hi],
-             "palm_in_deg": list(palms), "subjects": [{"mesh": p.name, "volumes": j.name} for p, j in paths]}
+             "palm_in_deg": list(palms), "turn_deg": list(turns), "subjects": [{"mesh": p.name, "volumes": j.name} for p, j in paths]}
     (out / "cohort.json").write_text(json.dumps(index, indent=1) + "\n")
     return paths
 
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m bsv.bodies.cohort OUT_DIR N [SEED] [--no-local] [--arm-down LOW,HIGH] [--palm-in LOW,HIGH]
-    [--overwrite]``:
+    [--turn LOW,HIGH] [--overwrite]``:
     write a cohort; returns the exit status (2 and a message if files exist and --overwrite is not given,
     see bsv.exitcodes)."""
     import argparse
@@ -488,13 +538,14 @@ def main(argv: list[str] | None = None) -> int:
                     help=arm_down_help())
     ap.add_argument("--palm-in", type=palm_range_arg, default=PALM_IN_RANGE_DEG, metavar="LOW,HIGH",
                     help=palm_in_help())
+    ap.add_argument("--turn", type=turn_range_arg, default=TURN_RANGE_DEG, metavar="LOW,HIGH", help=turn_help())
     ap.add_argument("--overwrite", action="store_true", help="replace subject files and cohort.json already in OUT_DIR")
     args = ap.parse_args(argv)
     from ..exitcodes import run_command
 
     def run() -> int:
         written = write_cohort(args.out_dir, args.n, args.seed, not args.no_local, overwrite=args.overwrite,
-                               arm_range=args.arm_down, palm_range=args.palm_in)
+                               arm_range=args.arm_down, palm_range=args.palm_in, turn_range=args.turn)
         for ply, js in written:
             print(ply, js)
         return 0
@@ -513,6 +564,8 @@ __all__ = [
     "NARROW_HIP_ABDUCTION_RANGE_DEG",
     "PALM_IN_RANGE_DEG",
     "RELAXED_PALM_IN_RANGE_DEG",
+    "TURNED_RANGE_DEG",
+    "TURN_RANGE_DEG",
     "WIDE_ARM_DOWN_RANGE_DEG",
     "MacroRanges",
     "Subject",
@@ -524,6 +577,7 @@ __all__ = [
     "check_leg_range",
     "check_macros",
     "check_palm_range",
+    "check_turn_range",
     "cohort",
     "iter_cohort",
     "leg_range_arg",
@@ -532,6 +586,8 @@ __all__ = [
     "palm_range_arg",
     "subject",
     "subject_files",
+    "turn_help",
+    "turn_range_arg",
     "volumes_json",
     "write_cohort",
     "write_subject",

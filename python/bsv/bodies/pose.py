@@ -6,7 +6,9 @@ Arms: abducted in the frontal plane to ``arm_down_deg`` below horizontal, forear
 upper-arm axis, twisted about it so that the palm faces forward, or turned ``palm_in_deg`` in from there
 towards the body (the twist spread over lowerarm01, lowerarm02 and the wrist), then flexed forward at the
 elbow by ``elbow_deg``. Legs: the hip->ankle
-axis abducted ``hip_abduction_deg`` from the vertical in the frontal plane; feet kept level.
+axis abducted ``hip_abduction_deg`` from the vertical in the frontal plane; feet kept level. Last, the whole
+body may be turned about the vertical through the midpoint of the hip joints (``turn_deg``): a subject not
+squarely facing the front camera.
 """
 
 from __future__ import annotations
@@ -35,6 +37,9 @@ class Pose:
     #: with no twist lies about there), 180 palms backward.
     palm_in_l: float = 0.0
     palm_in_r: float = 0.0
+    #: The whole body turned about the vertical through the midpoint of the hip joints (degrees; + turns the
+    #: subject's left backwards, seen from above counterclockwise): 0 faces the front camera squarely.
+    turn_deg: float = 0.0
 
     @staticmethod
     def symmetric(arm_down: float = 40.0, elbow: float = 10.0, hip_abduction: float = 4.0) -> Pose:
@@ -45,7 +50,7 @@ class Pose:
     RANGES: ClassVar[dict[str, tuple[float, float]]] = {
         "arm_down_l": (-10, 85), "arm_down_r": (-10, 85), "elbow_l": (0, 120), "elbow_r": (0, 120),
         "hip_abduction_l": (-5, 30), "hip_abduction_r": (-5, 30), "palm_in_l": (-30, 180),
-        "palm_in_r": (-30, 180)}
+        "palm_in_r": (-30, 180), "turn_deg": (-45, 45)}
 
     def validate(self) -> None:
         """Raise PoseError if an angle is implausible (outside :attr:`RANGES`)."""
@@ -140,6 +145,11 @@ def bone_transforms(joints: np.ndarray, pose: Pose, asset: Asset | None = None) 
         R[i] = rot.get(i, pr)
         ph = pr @ head[i] + pt  # where the parent's transform takes this bone's rest head
         T[i] = ph - R[i] @ head[i]
+    if pose.turn_deg:
+        turn = _rot(np.array([0.0, 1.0, 0.0]), np.radians(pose.turn_deg))
+        centre = (head[b("upperleg01.L")] + head[b("upperleg01.R")]) / 2  # the hips do not move in the A-pose
+        R = turn @ R
+        T = (T - centre) @ turn.T + centre
     return R, T
 
 

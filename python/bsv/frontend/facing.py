@@ -1,0 +1,61 @@
+"""How squarely the subject faces the front camera, from the capture's joint centres.
+
+The camera path's 2-D cut lines, the crotch the two views must agree on and the shoulder line are drawn for a
+subject who faces the front camera. Turned about the vertical, the subject shows each camera one side more than
+the other. On the room's seeds 0-1 turned by 10 deg (every other subject the other way) the eight limbs came out
+1.76 / 2.04 % (noer / l515) against 1.35 / 1.41 % facing the camera, 11 of 40 captures lost the crotch target and
+one thigh came out -10 %; the oracle labels on the same bodies did not move (benchmarks/BENCH.md, round 2 session
+44). The capture cannot undo the turn, but it can say so: :func:`turn_deg` measures it (the subject's left from
+the hip and shoulder joint centres, against the horizontal direction from the hips to the front camera) and
+:func:`turn_warning` asks to capture again above :data:`TURN_WARN_DEG`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+#: A subject turned more than this (degrees about the vertical from facing the front camera) gets a warning: at 5
+#: deg the camera path's volumes held (BENCH.md, round 2 session 44), at 10 they did not.
+TURN_WARN_DEG = 6.0
+#: The joints whose left-right lines give the subject's left.
+LINES: tuple[tuple[str, str], ...] = (("hip_l", "hip_r"), ("shoulder_l", "shoulder_r"))
+
+
+def _xyz(value: Any) -> np.ndarray:
+    """A joint centre (a :class:`bsv.frontend.landmarks.JointCentre` or an xyz) as a float array."""
+    return np.asarray(getattr(value, "xyz", value), dtype=np.float64)
+
+
+def turn_deg(joints: Mapping[str, Any], front_camera_m: np.ndarray | None) -> float | None:
+    """The subject's turn about the vertical (degrees, world +Y up; + when the subject's left has gone backwards,
+    as :attr:`bsv.bodies.pose.Pose.turn_deg`) from facing the front camera, whose centre is ``front_camera_m``
+    (world metres): the subject's forward is its left (the sum of the left-minus-right lines of :data:`LINES`)
+    crossed with up. None without both hips and the camera."""
+    if front_camera_m is None or not all(a in joints and b in joints for a, b in LINES[:1]):
+        return None
+    left = sum((_xyz(joints[a]) - _xyz(joints[b]) for a, b in LINES if a in joints and b in joints),
+               np.zeros(3))
+    left[1] = 0.0
+    hips = (_xyz(joints["hip_l"]) + _xyz(joints["hip_r"])) / 2
+    to_camera = np.asarray(front_camera_m, dtype=np.float64) - hips
+    to_camera[1] = 0.0
+    if np.linalg.norm(left) < 1e-6 or np.linalg.norm(to_camera) < 1e-6:
+        return None
+    forward = np.cross(left, [0.0, 1.0, 0.0])
+    return float(np.degrees(np.arctan2(np.cross(to_camera, forward)[1], to_camera @ forward)))
+
+
+def turn_warning(turn: float | None) -> str | None:
+    """The warning for a subject turned more than :data:`TURN_WARN_DEG` (None otherwise or when not measured)."""
+    if turn is None or abs(turn) <= TURN_WARN_DEG:
+        return None
+    side = "left" if turn > 0 else "right"
+    return (f"the subject stood turned {abs(turn):.0f} deg from facing the front camera (the {side} side back): the "
+            f"segment boundaries are less certain (limbs typically 0.4 point worse at 10 deg); have the subject face "
+            f"the front camera squarely (within {TURN_WARN_DEG:g} deg) and capture again")
+
+
+__all__ = ["LINES", "TURN_WARN_DEG", "turn_deg", "turn_warning"]

@@ -337,7 +337,11 @@ def test_a_failed_camera_run_leaves_nothing_and_can_be_rerun(capture, subject, t
     pose = vols["template"]["pose"]
     assert set(pose) == set(bsv.bodies.Pose.RANGES)
     for name, measured in pose.items():
-        assert measured == pytest.approx(getattr(subject.pose, name), abs=6.0), name
+        # the palms are read from the hand model: palms forward read about 13 deg (bsv.frontend.palms)
+        tolerance = 16.0 if name.startswith("palm_in") else 6.0
+        assert measured == pytest.approx(getattr(subject.pose, name), abs=tolerance), name
+    # the subject faced the front camera squarely (bsv.frontend.facing): measured so, no warning
+    assert abs(vols["subject_turn_deg"]) < 3.0 and not any("turned" in w for w in vols["warnings"])
     relabelled = vols["cloud"]["upper_arm_points_relabelled_torso"]
     assert isinstance(relabelled, int) and relabelled >= 0  # keypoints.confine_upper_arms ran on the camera labels
 

@@ -5,9 +5,10 @@ subject who faces the front camera. Turned about the vertical, the subject shows
 the other. On the room's seeds 0-1 turned by 10 deg (every other subject the other way) the eight limbs came out
 1.76 / 2.04 % (noer / l515) against 1.35 / 1.41 % facing the camera, 11 of 40 captures lost the crotch target and
 one thigh came out -10 %; the oracle labels on the same bodies did not move (benchmarks/BENCH.md, round 2 session
-44). The capture cannot undo the turn, but it can say so: :func:`turn_deg` measures it (the subject's left from
-the hip and shoulder joint centres, against the horizontal direction from the hips to the front camera) and
-:func:`turn_warning` asks to capture again above :data:`TURN_WARN_DEG`.
+44). The capture cannot undo the turn yet, but it can say so: :func:`turn_deg` measures it (the subject's left from
+the hip and shoulder joint centres, against the horizontal direction from the hips to the front camera; about
+0.4 deg sd on square subjects, 1.2 on turned ones, which it reads about 15 % short) and :func:`turn_warning` asks
+to capture again above :data:`TURN_WARN_DEG`.
 """
 
 from __future__ import annotations
@@ -17,9 +18,10 @@ from typing import Any
 
 import numpy as np
 
-#: A subject turned more than this (degrees about the vertical from facing the front camera) gets a warning: at 5
-#: deg the camera path's volumes held (BENCH.md, round 2 session 44), at 10 they did not.
-TURN_WARN_DEG = 6.0
+#: A subject turned more than this (degrees about the vertical from facing the front camera) gets a warning. Turned
+#: 8-10 deg, the eight limbs lost 0.38 point on average; a subject turned 5.8 deg had an upper arm -12 % (its
+#: shoulder loop 12 mm off); square subjects read within 1.3 deg (BENCH.md, round 2 session 44).
+TURN_WARN_DEG = 4.0
 #: The joints whose left-right lines give the subject's left.
 LINES: tuple[tuple[str, str], ...] = (("hip_l", "hip_r"), ("shoulder_l", "shoulder_r"))
 
@@ -54,8 +56,8 @@ def turn_warning(turn: float | None) -> str | None:
         return None
     side = "left" if turn > 0 else "right"
     return (f"the subject stood turned {abs(turn):.0f} deg from facing the front camera (the {side} side back): the "
-            f"segment boundaries are less certain (limbs typically 0.4 point worse at 10 deg); have the subject face "
-            f"the front camera squarely (within {TURN_WARN_DEG:g} deg) and capture again")
+            "limbs' boundaries are less certain (turned 8-10 deg, their volumes erred 0.4 percentage points more on "
+            f"average); have the subject face the front camera squarely (within {TURN_WARN_DEG:g} deg) and capture again")
 
 
 __all__ = ["LINES", "TURN_WARN_DEG", "turn_deg", "turn_warning"]

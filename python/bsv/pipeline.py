@@ -35,7 +35,7 @@ from .argtypes import seed as seed_type
 from .errors import BsipError, InputError, OutputExistsError, PersonIsolationError, ReportError
 from .extras import require
 from .frontend.errors import CalibrationFileError, CaptureError, SegmentationError
-from .frontend.facing import turn_deg, turn_warning
+from .frontend.facing import turn_deg, turn_extra_sd, turn_warning
 from .frontend.palms import palms_of
 from .frontend.sex import SEX_SCORES, template_gender
 from .interop import as_mesh
@@ -228,15 +228,17 @@ def segmentation_build_score(segmentations: Iterable[Segmentation]) -> float | N
 
 
 def segmentation_extra_sd(segmentations: Iterable[Segmentation],
-                          hip_loops: Mapping[str, Any] | None = None) -> dict[str, float]:
+                          hip_loops: Mapping[str, Any] | None = None, turn: float | None = None) -> dict[str, float]:
     """The sd the views' degraded boundaries add to each quantity
-    (:attr:`bsv.frontend.segment.Segmentation.extra_sd`), and the thighs' when the camera path found no hip-loop
-    targets (``hip_loops`` given and empty: :func:`bsv.frontend.groin.hip_loop_extra_sd`): the largest per
-    quantity (the two views of one capture, and the crotch they place, describe the same boundary)."""
+    (:attr:`bsv.frontend.segment.Segmentation.extra_sd`), the thighs' when the camera path found no hip-loop
+    targets (``hip_loops`` given and empty: :func:`bsv.frontend.groin.hip_loop_extra_sd`) and a turned subject's
+    (``turn``, degrees: :func:`bsv.frontend.facing.turn_extra_sd`): the largest per quantity (the two views of one
+    capture, the crotch they place and the turn describe the same boundaries)."""
     from .frontend.groin import hip_loop_extra_sd
 
     out: dict[str, float] = {}
-    extra = [seg.extra_sd for seg in segmentations] + ([hip_loop_extra_sd(hip_loops)] if hip_loops is not None else [])
+    extra = ([seg.extra_sd for seg in segmentations] + ([hip_loop_extra_sd(hip_loops)] if hip_loops is not None else [])
+             + [turn_extra_sd(turn)])
     for sds in extra:
         for name, sd in sds.items():
             out[name] = max(out.get(name, 0.0), float(sd))
@@ -637,7 +639,8 @@ def process(
         vols["intervals"] = steps.run(
             "intervals", "95 % intervals (calibration Monte Carlo + error model)",
             lambda: _intervals(reg, [_camera_spread(c, extrinsics[c]) for c in cameras], segmentation, density,
-                               segmentation_extra_sd(camera_segs.values(), pulled_loops if segmentation == "camera" else None),
+                               segmentation_extra_sd(camera_segs.values(), pulled_loops if segmentation == "camera" else None,
+                                                     turn),
                                segmentation_build_score(camera_segs.values()))).to_json()
         if refined:
             vols["calibration_refinement"] = {"method": "floor plane (pitch, roll, height)", "cameras": refined}

@@ -59,3 +59,25 @@ def test_the_turn_is_measured_on_a_rendered_capture(turn):
     got = facing.turn_deg(joints, front)
     assert got is not None and abs(got - turn) < 3.0, got
     assert (facing.turn_warning(got) is not None) == (turn > facing.TURN_WARN_DEG)
+
+
+def test_a_turned_subjects_intervals_widen_with_the_turn():
+    """The sd a turn adds grows with its size, either way, the same for both sides of a pair; none unmeasured; the
+    capture's extra sd takes the larger of the turn's and a degraded view's (bsv.pipeline.segmentation_extra_sd)."""
+    from types import SimpleNamespace
+
+    from bsv.pipeline import segmentation_extra_sd
+
+    assert facing.turn_extra_sd(None) == {}
+    eight, minus_four = facing.turn_extra_sd(8.0), facing.turn_extra_sd(-4.0)
+    assert set(eight) == set(facing.TURN_SD_PER_DEG)
+    for name, sd in eight.items():
+        assert sd == pytest.approx(2.0 * minus_four[name]) and sd >= 0.0
+    for name in eight:
+        if name.endswith("_l"):
+            assert eight[name] == eight[name[:-2] + "_r"], name
+    assert eight["asymmetry_thigh_pct"] > 2.0  # points: turned 8 deg, a thigh asymmetry is uncertain by several
+    view = SimpleNamespace(extra_sd={"thigh_l": 1.0, "torso": 0.001})
+    merged = segmentation_extra_sd([view], None, 8.0)
+    assert merged["thigh_l"] == 1.0 and merged["asymmetry_thigh_pct"] == eight["asymmetry_thigh_pct"]
+    assert segmentation_extra_sd([view], None, None) == view.extra_sd

@@ -253,9 +253,12 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
 
                 segs, joints = camera_segmentations(tmp, sex=sex)
                 loops = capture_hip_loops(tmp, segs, joints)
+                from ..frontend.facing import turn_deg, turn_warning
                 from ..pipeline import segmentation_extra_sd
+                from .joints import capture_views_geometry
 
-                extra_sd = segmentation_extra_sd(segs.values(), loops)
+                turn = turn_deg(joints, capture_views_geometry(tmp)[1]["front"].translation)
+                extra_sd = segmentation_extra_sd(segs.values(), loops, turn)
                 sex_estimate = segs["front"].sex
                 from ..frontend.palms import palm_turns, view_readings
 
@@ -263,10 +266,6 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
                 palms = palm_turns(readings)
                 palm_readings = {v: list(r) for v, r in readings.items()}
                 landmark_warnings = [w for s in segs.values() for w in s.warnings]
-                from ..frontend.facing import turn_deg, turn_warning
-                from .joints import capture_views_geometry
-
-                turn = turn_deg(joints, capture_views_geometry(tmp)[1]["front"].translation)
                 if (facing := turn_warning(turn)) is not None:
                     landmark_warnings.append(facing)
                 views = capture_views(tmp, segmentation, labels={v: s.labels for v, s in segs.items()})

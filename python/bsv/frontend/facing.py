@@ -22,6 +22,32 @@ import numpy as np
 #: 8-10 deg, the eight limbs lost 0.38 point on average; a subject turned 5.8 deg had an upper arm -12 % (its
 #: shoulder loop 12 mm off); square subjects read within 1.3 deg (BENCH.md, round 2 session 44).
 TURN_WARN_DEG = 4.0
+#: The sd (per degree of the measured turn) a turned subject adds to each quantity of the volumes report, in the
+#: error models' comparison space (:func:`bsv.uncertainty.transform`: natural log for volumes and ratios, points
+#: for asymmetries): per quantity, the rms error of turned captures and of the same subjects square, their
+#: difference in quadrature over the turns' rms (the larger side of each pair for both; room seeds 0, 1, 20 and 21
+#: turned -10..10 deg against square, 80 paired runs, ``--turn=-10,10``; derived on seeds 0-1 alone and held out on
+#: 20-21, the asymmetries' coverage went 72-80 -> 88-92 %). Turned, an asymmetry's error follows the turn
+#: (the thighs' -0.35 point per deg): without it 70-85 % of the asymmetries' truths fell inside their intervals and
+#: 17-32 % of the symmetric pairs read distinguishable (BENCH.md, round 2 session 44).
+TURN_SD_PER_DEG: dict[str, float] = {
+    "arm_l": 0.00407, "arm_r": 0.00407,
+    "asymmetry_arm_pct": 0.484,
+    "asymmetry_forearm_pct": 0.133,
+    "asymmetry_leg_pct": 0.305,
+    "asymmetry_shin_pct": 0.151,
+    "asymmetry_thigh_pct": 0.424,
+    "asymmetry_upper_arm_pct": 0.657,
+    "forearm_l": 0.00106, "forearm_r": 0.00106,
+    "forearm_to_upper_arm_l": 0.00235, "forearm_to_upper_arm_r": 0.00235,
+    "leg_l": 0.00224, "leg_r": 0.00224,
+    "shin_l": 0.00103, "shin_r": 0.00103,
+    "shin_to_thigh_l": 0.00281, "shin_to_thigh_r": 0.00281,
+    "thigh_l": 0.00302, "thigh_r": 0.00302,
+    "torso": 0.00043,
+    "trunk_limbs": 0.0001,
+    "upper_arm_l": 0.00549, "upper_arm_r": 0.00549,
+}
 #: The joints whose left-right lines give the subject's left.
 LINES: tuple[tuple[str, str], ...] = (("hip_l", "hip_r"), ("shoulder_l", "shoulder_r"))
 
@@ -50,6 +76,14 @@ def turn_deg(joints: Mapping[str, Any], front_camera_m: np.ndarray | None) -> fl
     return float(np.degrees(np.arctan2(np.cross(to_camera, forward)[1], to_camera @ forward)))
 
 
+def turn_extra_sd(turn: float | None) -> dict[str, float]:
+    """The sd a subject turned ``turn`` degrees adds to each quantity (:data:`TURN_SD_PER_DEG` times the turn's size;
+    empty when the turn was not measured), as :attr:`bsv.frontend.segment.Segmentation.extra_sd` holds it."""
+    if turn is None:
+        return {}
+    return {name: sd * abs(turn) for name, sd in TURN_SD_PER_DEG.items()}
+
+
 def turn_warning(turn: float | None) -> str | None:
     """The warning for a subject turned more than :data:`TURN_WARN_DEG` (None otherwise or when not measured)."""
     if turn is None or abs(turn) <= TURN_WARN_DEG:
@@ -60,4 +94,4 @@ def turn_warning(turn: float | None) -> str | None:
             f"average); have the subject face the front camera squarely (within {TURN_WARN_DEG:g} deg) and capture again")
 
 
-__all__ = ["LINES", "TURN_WARN_DEG", "turn_deg", "turn_warning"]
+__all__ = ["LINES", "TURN_SD_PER_DEG", "TURN_WARN_DEG", "turn_deg", "turn_extra_sd", "turn_warning"]

@@ -7,8 +7,9 @@ the other. On the room's seeds 0-1 turned by 10 deg (every other subject the oth
 one thigh came out -10 %; the oracle labels on the same bodies did not move (benchmarks/BENCH.md, round 2 session
 44). The capture cannot undo the turn yet, but it can say so: :func:`turn_deg` measures it (the subject's left from
 the hip and shoulder joint centres, against the horizontal direction from the hips to the front camera; about
-0.4 deg sd on square subjects, 1.2 on turned ones, which it reads about 15 % short) and :func:`turn_warning` asks
-to capture again above :data:`TURN_WARN_DEG`.
+0.4 deg sd on square subjects, 1.2 on turned ones, which it reads about 15 % short), :func:`turn_warning` asks
+to capture again above :data:`TURN_WARN_DEG`, and :func:`turn_extra_sd` widens the intervals by the turn
+(:data:`TURN_SD_PER_DEG`): turned, an asymmetry's error follows the turn.
 """
 
 from __future__ import annotations

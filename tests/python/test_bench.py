@@ -329,40 +329,28 @@ def test_arm_down_option_reaches_the_synth_config() -> None:
     assert synth_record(synth_config(default), default)["arm_down_deg"] == list(ARM_DOWN_RANGE_DEG)
 
 
-def test_palm_in_option_reaches_the_synth_config() -> None:
+@pytest.mark.parametrize(("option", "field", "record", "given", "default"), [
+    ("--palm-in=0,120", "palm_range", "palm_in_deg", (0.0, 120.0), "PALM_IN_RANGE_DEG"),
+    ("--turn=-10,10", "turn_range", "turn_deg", (-10.0, 10.0), "TURN_RANGE_DEG"),
+])
+def test_pose_range_options_reach_the_synth_config(option, field, record, given, default) -> None:
+    """--palm-in and --turn reach the config and its record; the defaults keep the cohort as it was; a reversed
+    range is a BenchError naming the option, one outside the limits a usage error."""
+    import bsv.bodies as bodies
     from bsv.bench.main import parser, synth_config, synth_record
-    from bsv.bodies import PALM_IN_RANGE_DEG, RELAXED_PALM_IN_RANGE_DEG
 
-    args = parser().parse_args(["synth", "--palm-in", "0,120"])
+    args = parser().parse_args(["synth", option])
     cfg = synth_config(args)
     cfg.validate()
-    assert cfg.palm_range == RELAXED_PALM_IN_RANGE_DEG == (0.0, 120.0)
-    assert synth_record(cfg, args)["palm_in_deg"] == [0.0, 120.0]
-    default = parser().parse_args(["synth"])
-    assert synth_config(default).palm_range == PALM_IN_RANGE_DEG
-    bad = synth_config(default)
-    bad.palm_range = (100.0, 10.0)
-    with pytest.raises(BenchError, match="--palm-in"):
-        bad.validate()
-
-
-def test_turn_option_reaches_the_synth_config() -> None:
-    from bsv.bench.main import parser, synth_config, synth_record
-    from bsv.bodies import TURN_RANGE_DEG, TURNED_RANGE_DEG
-
-    args = parser().parse_args(["synth", "--turn=-10,10"])
-    cfg = synth_config(args)
-    cfg.validate()
-    assert cfg.turn_range == TURNED_RANGE_DEG == (-10.0, 10.0)
-    assert synth_record(cfg, args)["turn_deg"] == [-10.0, 10.0]
-    default = parser().parse_args(["synth"])
-    assert synth_config(default).turn_range == TURN_RANGE_DEG
-    bad = synth_config(default)
-    bad.turn_range = (10.0, -10.0)
-    with pytest.raises(BenchError, match="--turn"):
-        bad.validate()
+    assert getattr(cfg, field) == given
+    assert synth_record(cfg, args)[record] == list(given)
+    plain = synth_config(parser().parse_args(["synth"]))
+    assert getattr(plain, field) == getattr(bodies, default)
+    setattr(plain, field, (given[1], given[0]))
+    with pytest.raises(BenchError, match=option.split("=")[0]):
+        plain.validate()
     with pytest.raises(SystemExit):
-        parser().parse_args(["synth", "--turn=-50,0"])
+        parser().parse_args(["synth", f"{option.split('=')[0]}=-90,0"])
 
 
 def test_bad_options_are_usage_errors(tmp_path: Path, capsys) -> None:

@@ -140,30 +140,15 @@ class SynthConfig:
         bad = [c for c in self.conditions if c not in CONDITIONS]
         if bad or not self.conditions:
             raise BenchError(f"--conditions {','.join(self.conditions)}: use a comma list of {','.join(CONDITIONS)}")
-        try:
-            check_arm_range(self.arm_range)
-        except PoseError as exc:
-            raise BenchError(f"--arm-down: {exc}") from None
-        try:
-            check_leg_range(self.leg_range)
-        except PoseError as exc:
-            raise BenchError(f"--hip-abduction: {exc}") from None
-        try:
-            check_palm_range(self.palm_range)
-        except PoseError as exc:
-            raise BenchError(f"--palm-in: {exc}") from None
-        try:
-            check_turn_range(self.turn_range)
-        except PoseError as exc:
-            raise BenchError(f"--turn: {exc}") from None
-        try:
-            check_bmi_shift(self.bmi_shift)
-        except PoseError as exc:
-            raise BenchError(f"--bmi-shift: {exc}") from None
-        try:
-            check_macros(self.macros)
-        except PoseError as exc:
-            raise BenchError(f"--macros: {exc}") from None
+        checks: tuple[tuple[str, Callable[[Any], Any], Any], ...] = (
+            ("--arm-down", check_arm_range, self.arm_range), ("--hip-abduction", check_leg_range, self.leg_range),
+            ("--palm-in", check_palm_range, self.palm_range), ("--turn", check_turn_range, self.turn_range),
+            ("--bmi-shift", check_bmi_shift, self.bmi_shift), ("--macros", check_macros, self.macros))
+        for option, check, value in checks:
+            try:
+                check(value)
+            except PoseError as exc:
+                raise BenchError(f"{option}: {exc}") from None
         if self.cohort not in COHORTS:
             raise BenchError(f"--cohort {self.cohort}: use one of {', '.join(COHORTS)}")
         if self.segmentation not in SEGMENTATIONS:

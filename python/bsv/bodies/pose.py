@@ -5,10 +5,9 @@ transform is x -> R_b (x - h_b) + T_parent(h_b) (h_b its rest head), so joints s
 Arms: abducted in the frontal plane to ``arm_down_deg`` below horizontal, forearm straightened onto the
 upper-arm axis, twisted about it so that the palm faces forward, or turned ``palm_in_deg`` in from there
 towards the body (the twist spread over lowerarm01, lowerarm02 and the wrist), then flexed forward at the
-elbow by ``elbow_deg``. Legs: the hip->ankle
-axis abducted ``hip_abduction_deg`` from the vertical in the frontal plane; feet kept level. Last, the whole
-body may be turned about the vertical through the midpoint of the hip joints (``turn_deg``): a subject not
-squarely facing the front camera.
+elbow by ``elbow_deg``. Legs: the hip->ankle axis abducted ``hip_abduction_deg`` from the vertical in the
+frontal plane; feet kept level. Last, the whole body may be turned about the vertical through the midpoint
+of the hip joints (``turn_deg``): a subject not squarely facing the front camera.
 """
 
 from __future__ import annotations

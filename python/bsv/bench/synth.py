@@ -238,11 +238,12 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
 
                 segs, joints = camera_segmentations(tmp, sex=sex)
                 loops = capture_hip_loops(tmp, segs, joints)
+                views = capture_views(tmp, segmentation, labels={v: s.labels for v, s in segs.items()})
                 from ..frontend.facing import turn_deg, turn_warning
                 from ..pipeline import segmentation_extra_sd
-                from .joints import capture_views_geometry
 
-                turn = turn_deg(joints, capture_views_geometry(tmp)[1]["front"].translation)
+                front = next(v["camera_to_world"]["translation"] for v in views if v["name"] == "front")
+                turn = turn_deg(joints, front)
                 extra_sd = segmentation_extra_sd(segs.values(), loops, turn)
                 sex_estimate = segs["front"].sex
                 from ..frontend.palms import palm_turns, view_readings
@@ -253,7 +254,6 @@ def measure_condition(name: str, mesh: Mesh, truth: dict[str, float], condition:
                 landmark_warnings = [w for s in segs.values() for w in s.warnings]
                 if (facing := turn_warning(turn)) is not None:
                     landmark_warnings.append(facing)
-                views = capture_views(tmp, segmentation, labels={v: s.labels for v, s in segs.items()})
                 joint_errs = joint_errors(joints, truth_joints) if truth_joints else None
             else:
                 views = capture_views(tmp, segmentation)

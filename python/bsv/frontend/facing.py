@@ -14,7 +14,7 @@ to capture again above :data:`TURN_WARN_DEG`, and :func:`turn_extra_sd` widens t
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -58,7 +58,7 @@ def _xyz(value: Any) -> np.ndarray:
     return np.asarray(getattr(value, "xyz", value), dtype=np.float64)
 
 
-def turn_deg(joints: Mapping[str, Any], front_camera_m: np.ndarray | None) -> float | None:
+def turn_deg(joints: Mapping[str, Any], front_camera_m: np.ndarray | Sequence[float] | None) -> float | None:
     """The subject's turn about the vertical (degrees, world +Y up; + when the subject's left has gone backwards,
     as :attr:`bsv.bodies.pose.Pose.turn_deg`) from facing the front camera, whose centre is ``front_camera_m``
     (world metres): the subject's forward is its left (the sum of the left-minus-right lines of :data:`LINES`)

@@ -332,9 +332,10 @@ def test_arm_down_option_reaches_the_synth_config() -> None:
 @pytest.mark.parametrize(("option", "field", "record", "given", "default"), [
     ("--palm-in=0,120", "palm_range", "palm_in_deg", (0.0, 120.0), "PALM_IN_RANGE_DEG"),
     ("--turn=-10,10", "turn_range", "turn_deg", (-10.0, 10.0), "TURN_RANGE_DEG"),
+    ("--elbow=20,40", "elbow_range", "elbow_deg", (20.0, 40.0), "ELBOW_RANGE_DEG"),
 ])
 def test_pose_range_options_reach_the_synth_config(option, field, record, given, default) -> None:
-    """--palm-in and --turn reach the config and its record; the defaults keep the cohort as it was; a reversed
+    """--palm-in, --turn and --elbow reach the config and its record; the defaults keep the cohort as it was; a reversed
     range is a BenchError naming the option, one outside the limits a usage error."""
     import bsv.bodies as bodies
     from bsv.bench.main import parser, synth_config, synth_record

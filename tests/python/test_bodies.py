@@ -297,6 +297,41 @@ def test_a_turned_subject_is_the_same_body_turned_about_the_hips():
             bodies.subject(0, seed=5, turn_range=bad)
 
 
+def test_flexed_elbows_draw_the_same_subject_with_its_elbows_bent():
+    """--elbow 20,40 keeps every other draw (sex, modifiers, arms, legs, stature) and bends only the elbows, by the
+    same random numbers shifted into the range: the forearms and hands move, nothing else; the default keeps the
+    cohort as it was; bad ranges are PoseErrors naming the elbow range."""
+    import dataclasses
+
+    from bsv.bodies import ELBOW_RANGE_DEG, FLEXED_ELBOW_RANGE_DEG
+    from bsv.bodies.variants import hard_subject
+    from bsv.types import SEGMENT_IDS
+
+    lo, hi = FLEXED_ELBOW_RANGE_DEG
+    for i in range(4):
+        std = bodies.subject(i, seed=5, check=False)
+        same = bodies.subject(i, seed=5, check=False, elbow_range=ELBOW_RANGE_DEG)
+        np.testing.assert_array_equal(same.body.vertices, std.body.vertices)
+        bent = bodies.subject(i, seed=5, check=False, elbow_range=FLEXED_ELBOW_RANGE_DEG)
+        assert bent.phenotype.local == std.phenotype.local and bent.sex == std.sex
+        assert dataclasses.replace(bent.pose, elbow_l=std.pose.elbow_l, elbow_r=std.pose.elbow_r) == std.pose
+        assert lo <= bent.pose.elbow_l <= hi and lo <= bent.pose.elbow_r <= hi
+        assert bent.pose.elbow_l == pytest.approx(std.pose.elbow_l + 20.0, abs=1e-9) or std.pose.elbow_l in (0.0, 20.0)
+        moved = np.linalg.norm(bent.body.vertices - std.body.vertices, axis=1)
+        lower = np.isin(std.body.vertex_labels, [SEGMENT_IDS[f"{p}_{s}"] for p in ("forearm", "hand") for s in "lr"])
+        legs = np.isin(std.body.vertex_labels, [SEGMENT_IDS[f"{p}_{s}"] for p in ("thigh", "shin", "foot")
+                                                for s in "lr"])
+        assert moved[legs].max() < 1e-3 and moved[lower].max() > 0.03  # the body re-solved: microns elsewhere
+        assert std.info()["elbow_deg"] == list(ELBOW_RANGE_DEG) and bent.info()["elbow_deg"] == [lo, hi]
+    assert hard_subject(3, seed=5, elbow_range=(30.0, 30.0)).pose.elbow_r == 30.0
+    assert bodies.check_elbow_range("20,40") == (20.0, 40.0)
+    for bad in ((40.0, 20.0), (-5.0, 10.0), (0.0, 100.0), "x,y", (math.nan, 2.0)):
+        with pytest.raises(bodies.PoseError, match="elbow range"):
+            bodies.subject(0, seed=5, elbow_range=bad)
+        with pytest.raises(bodies.PoseError, match="elbow range"):
+            bodies.cohort(0, elbow_range=bad)
+
+
 def test_a_bmi_shift_draws_the_same_subject_heavier():
     """--bmi-shift 8 keeps every other draw (sex, stature, modifiers, pose) and solves the body for the drawn BMI
     plus 8; bad shifts are PoseErrors naming the BMI shift."""
@@ -383,12 +418,14 @@ def test_cohort_files_are_not_overwritten(tmp_path, capsys):
         with pytest.raises(SystemExit):
             cohort_main([str(tmp_path), "1", "7", "--overwrite", "--arm-down", bad])
         assert "--arm-down" in capsys.readouterr().err
-    cohort_main([str(tmp_path), "1", "7", "--overwrite", "--arm-down", "15,60"])
+    cohort_main([str(tmp_path), "1", "7", "--overwrite", "--arm-down", "15,60", "--elbow", "20,40"])
     assert (tmp_path / "cohort.json").is_file() and (tmp_path / "subject_001.json").read_text() == "mine"
-    assert json.loads((tmp_path / "cohort.json").read_text())["arm_down_deg"] == [15.0, 60.0]
+    index = json.loads((tmp_path / "cohort.json").read_text())
+    assert index["arm_down_deg"] == [15.0, 60.0] and index["elbow_deg"] == [20.0, 40.0]
     written = json.loads((tmp_path / "subject_000.json").read_text())["subject"]
-    assert written["arm_down_deg"] == [15.0, 60.0]
+    assert written["arm_down_deg"] == [15.0, 60.0] and written["elbow_deg"] == [20.0, 40.0]
     assert all(15.0 <= written["pose"][k] <= 60.0 for k in ("arm_down_l", "arm_down_r"))
+    assert all(20.0 <= written["pose"][k] <= 40.0 for k in ("elbow_l", "elbow_r"))
     with pytest.raises(OutputExistsError, match=r"cohort\.json"):
         bodies.write_cohort(tmp_path, 1, seed=7)
     s = bodies.subject(0, seed=7)

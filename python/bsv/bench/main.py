@@ -10,6 +10,7 @@ from typing import Any
 from ..argtypes import key_value, seed, whole
 from ..bodies.cohort import (
     ARM_DOWN_RANGE_DEG,
+    ELBOW_RANGE_DEG,
     HEAVY_BMI_SHIFT,
     HIP_ABDUCTION_RANGE_DEG,
     MACRO_RANGES,
@@ -18,6 +19,8 @@ from ..bodies.cohort import (
     arm_down_help,
     arm_range_arg,
     bmi_shift_arg,
+    elbow_help,
+    elbow_range_arg,
     leg_range_arg,
     palm_in_help,
     palm_range_arg,
@@ -118,6 +121,7 @@ def parser() -> argparse.ArgumentParser:
     s.add_argument("--palm-in", type=palm_range_arg, default=PALM_IN_RANGE_DEG, metavar="LOW,HIGH",
                    help=f"{palm_in_help()}; the camera path turns the template's forearms as it measures the palms")
     s.add_argument("--turn", type=turn_range_arg, default=TURN_RANGE_DEG, metavar="LOW,HIGH", help=turn_help())
+    s.add_argument("--elbow", type=elbow_range_arg, default=ELBOW_RANGE_DEG, metavar="LOW,HIGH", help=elbow_help())
     lo, hi = HIP_ABDUCTION_RANGE_DEG
     s.add_argument("--hip-abduction", type=leg_range_arg, default=HIP_ABDUCTION_RANGE_DEG, metavar="LOW,HIGH",
                    help=f"the interval each thigh's angle outward of the vertical is drawn from, degrees (default "
@@ -165,7 +169,7 @@ def synth_config(args: argparse.Namespace) -> SynthConfig:
                        cloud_params=dict(args.cloud_param), cohort=args.cohort,
                        refine_calibration=args.refine_calibration, arm_range=args.arm_down,
                        leg_range=args.hip_abduction, bmi_shift=args.bmi_shift, macros=args.macros,
-                       palm_range=args.palm_in, turn_range=args.turn)
+                       palm_range=args.palm_in, turn_range=args.turn, elbow_range=args.elbow)
 
 
 def synth_record(cfg: SynthConfig, args: argparse.Namespace) -> dict[str, Any]:
@@ -181,7 +185,7 @@ def synth_record(cfg: SynthConfig, args: argparse.Namespace) -> dict[str, Any]:
             "params": cfg.params, "local_modifiers": cfg.local, "jobs": args.jobs,
             "cohort": cfg.cohort, "arm_down_deg": list(cfg.arm_range),
             "hip_abduction_deg": list(cfg.leg_range), "palm_in_deg": list(cfg.palm_range),
-            "turn_deg": list(cfg.turn_range),
+            "turn_deg": list(cfg.turn_range), "elbow_deg": list(cfg.elbow_range),
             "bmi_shift": cfg.bmi_shift, "macros": cfg.macros,
             "scheduler": args.scheduler,
             "refine_calibration": cfg.refine_calibration}

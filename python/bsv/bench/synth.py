@@ -33,11 +33,13 @@ from typing import Any
 
 from ..bodies.cohort import (
     ARM_DOWN_RANGE_DEG,
+    ELBOW_RANGE_DEG,
     HIP_ABDUCTION_RANGE_DEG,
     PALM_IN_RANGE_DEG,
     TURN_RANGE_DEG,
     check_arm_range,
     check_bmi_shift,
+    check_elbow_range,
     check_leg_range,
     check_macros,
     check_palm_range,
@@ -84,6 +86,9 @@ class SynthConfig:
     #: The body's turn about the vertical the subjects are drawn from (degrees; ``--turn``):
     #: :data:`bsv.bodies.cohort.TURN_RANGE_DEG` (facing the front camera squarely) by default.
     turn_range: tuple[float, float] = TURN_RANGE_DEG
+    #: The elbows' flexion the subjects are drawn from (degrees; ``--elbow``):
+    #: :data:`bsv.bodies.cohort.ELBOW_RANGE_DEG` (nearly straight) by default.
+    elbow_range: tuple[float, float] = ELBOW_RANGE_DEG
     #: The BMI added to every subject's draw (``--bmi-shift``; :data:`bsv.bodies.cohort.HEAVY_BMI_SHIFT` for a
     #: heavier cohort).
     bmi_shift: float = 0.0
@@ -143,6 +148,7 @@ class SynthConfig:
         checks: tuple[tuple[str, Callable[[Any], Any], Any], ...] = (
             ("--arm-down", check_arm_range, self.arm_range), ("--hip-abduction", check_leg_range, self.leg_range),
             ("--palm-in", check_palm_range, self.palm_range), ("--turn", check_turn_range, self.turn_range),
+            ("--elbow", check_elbow_range, self.elbow_range),
             ("--bmi-shift", check_bmi_shift, self.bmi_shift), ("--macros", check_macros, self.macros))
         for option, check, value in checks:
             try:
@@ -472,7 +478,8 @@ def run_subject(cfg: SynthConfig, index: int, on_condition: Callable[[], None] |
     try:
         make = hard_subject if cfg.cohort == "hard" else subject
         s = make(index, cfg.seed, local=cfg.local, arm_range=cfg.arm_range, leg_range=cfg.leg_range,
-                 bmi_shift=cfg.bmi_shift, macros=cfg.macros, palm_range=cfg.palm_range, turn_range=cfg.turn_range)
+                 bmi_shift=cfg.bmi_shift, macros=cfg.macros, palm_range=cfg.palm_range, turn_range=cfg.turn_range,
+                 elbow_range=cfg.elbow_range)
     except Exception as exc:
         err = f"subject generation failed: {type(exc).__name__}: {exc}"
         runs: list[Run] = [Run(name, c, m, False, error=err) for c in cfg.conditions for m in cfg.methods]

@@ -11,6 +11,8 @@ from .asset import AssetError, asset_path, load_asset
 from .body import Body, SolveError, make_body, solve_stature_bmi
 from .cohort import (
     ARM_DOWN_RANGE_DEG,
+    ELBOW_RANGE_DEG,
+    FLEXED_ELBOW_RANGE_DEG,
     HEAVY_BMI_SHIFT,
     HIP_ABDUCTION_RANGE_DEG,
     MACRO_RANGES,
@@ -24,6 +26,7 @@ from .cohort import (
     Subject,
     check_arm_range,
     check_bmi_shift,
+    check_elbow_range,
     check_leg_range,
     check_macros,
     check_palm_range,
@@ -43,6 +46,8 @@ from .template import templates, write_templates
 
 __all__ = [
     "ARM_DOWN_RANGE_DEG",
+    "ELBOW_RANGE_DEG",
+    "FLEXED_ELBOW_RANGE_DEG",
     "HEAVY_BMI_SHIFT",
     "HIP_ABDUCTION_RANGE_DEG",
     "MACRO_RANGES",
@@ -66,6 +71,7 @@ __all__ = [
     "asset_path",
     "check_arm_range",
     "check_bmi_shift",
+    "check_elbow_range",
     "check_leg_range",
     "check_macros",
     "check_palm_range",

@@ -66,6 +66,14 @@ PALM_IN_RANGE_DEG: tuple[float, float] = (0.0, 0.0)
 RELAXED_PALM_IN_RANGE_DEG: tuple[float, float] = (0.0, 120.0)
 #: The bounds a palm range must lie in (degrees; see :func:`check_palm_range`).
 _PALM_IN_LIMITS_DEG: tuple[float, float] = (-30.0, 150.0)
+#: The cohort's elbow flexion (degrees, :attr:`bsv.bodies.pose.Pose.elbow_l`, both sides drawn around one value): arms
+#: nearly straight, as the standard cohort has always stood.
+ELBOW_RANGE_DEG: tuple[float, float] = (0.0, 20.0)
+#: Elbows bent 20-40 deg (``bsv bench synth --elbow 20,40``), as relaxed arms hang when nobody asks for them
+#: straight: the camera path's forearms lose more than the oracle labels' (BENCH.md, round 2 session 45).
+FLEXED_ELBOW_RANGE_DEG: tuple[float, float] = (20.0, 40.0)
+#: The bounds an elbow range must lie in (degrees; see :func:`check_elbow_range`).
+_ELBOW_LIMITS_DEG: tuple[float, float] = (0.0, 90.0)
 #: The cohort's turn about the vertical (degrees, :attr:`bsv.bodies.pose.Pose.turn_deg`): facing the front camera
 #: squarely, as the standard cohort always has.
 TURN_RANGE_DEG: tuple[float, float] = (0.0, 0.0)
@@ -149,6 +157,8 @@ class Subject:
     palm_range: tuple[float, float] = PALM_IN_RANGE_DEG
     #: The interval the body's turn about the vertical was drawn from (``turn_range`` of :func:`subject`; degrees).
     turn_range: tuple[float, float] = TURN_RANGE_DEG
+    #: The interval the elbows' flexion was drawn from (``elbow_range`` of :func:`subject`; degrees).
+    elbow_range: tuple[float, float] = ELBOW_RANGE_DEG
     #: The macro ranges the subject was drawn with (``macros`` of :func:`subject`: :data:`MACRO_RANGES`).
     macros: str = "standard"
 
@@ -158,7 +168,8 @@ class Subject:
 
     def info(self) -> dict:
         """JSON-ready description (draws, phenotype, pose, the arm range ``arm_down_deg``, the hips'
-        ``hip_abduction_deg``, the palms' ``palm_in_deg``, the body's ``turn_deg``, the ``macros`` ranges, measured
+        ``hip_abduction_deg``, the palms' ``palm_in_deg``, the body's ``turn_deg``, the elbows' ``elbow_deg``, the
+        ``macros`` ranges, measured
         stature/BMI)."""
         return {"index": self.index, "seed": self.seed, "sex": self.sex,
                 "stature_target_m": self.stature_target, "bmi_target": self.bmi_target,
@@ -168,6 +179,7 @@ class Subject:
                 "hip_abduction_deg": [float(a) for a in self.leg_range],
                 "palm_in_deg": [float(a) for a in self.palm_range],
                 "turn_deg": [float(a) for a in self.turn_range],
+                "elbow_deg": [float(a) for a in self.elbow_range],
                 "bmi_shift": float(self.bmi_shift),
                 "macros": self.macros,
                 **({"variant": self.variant} if self.variant else {})}
@@ -251,6 +263,13 @@ def check_turn_range(turn_range: Sequence[float] | str) -> tuple[float, float]:
                         _TURN_LIMITS_DEG, " (degrees about the vertical from facing the front camera)", equal_ok=True)
 
 
+def check_elbow_range(elbow_range: Sequence[float] | str) -> tuple[float, float]:
+    """``elbow_range`` (two elbow flexion angles, or the command line's ``"LOW,HIGH"``; LOW = HIGH for one angle) as
+    floats, or PoseError when it is not an increasing pair inside [0, 90] degrees (0 the arm straight)."""
+    return _angle_range(elbow_range, "elbow range", "two angles in degrees, LOW <= HIGH, e.g. 20,40",
+                        _ELBOW_LIMITS_DEG, " (degrees of elbow flexion from straight)", equal_ok=True)
+
+
 T = TypeVar("T")
 
 
@@ -305,6 +324,19 @@ def turn_range_arg(text: str) -> tuple[float, float]:
     """The argparse type of ``--turn LOW,HIGH`` (``bsv cohort``, ``bsv bench synth``): :func:`check_turn_range`,
     its message as the usage error."""
     return _usage_checked(check_turn_range, text)
+
+
+def elbow_range_arg(text: str) -> tuple[float, float]:
+    """The argparse type of ``--elbow LOW,HIGH`` (``bsv cohort``, ``bsv bench synth``): :func:`check_elbow_range`,
+    its message as the usage error."""
+    return _usage_checked(check_elbow_range, text)
+
+
+def elbow_help() -> str:
+    """The help text of ``--elbow LOW,HIGH`` (``bsv cohort``, ``bsv bench synth``)."""
+    (lo, hi), (flo, fhi) = ELBOW_RANGE_DEG, FLEXED_ELBOW_RANGE_DEG
+    return (f"the interval the elbows' flexion from straight is drawn from, degrees (default {lo:g},{hi:g}: arms "
+            f"nearly straight; {flo:g},{fhi:g} for relaxed arms)")
 
 
 def turn_help() -> str:
@@ -372,7 +404,8 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
             arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG,
             leg_range: tuple[float, float] = HIP_ABDUCTION_RANGE_DEG, bmi_shift: float = 0.0,
             macros: str = "standard", palm_range: tuple[float, float] = PALM_IN_RANGE_DEG,
-            turn_range: tuple[float, float] = TURN_RANGE_DEG) -> Subject:
+            turn_range: tuple[float, float] = TURN_RANGE_DEG,
+            elbow_range: tuple[float, float] = ELBOW_RANGE_DEG) -> Subject:
     """Subject ``index`` of the cohort of ``seed`` (deterministic). ``arm_range``: the interval (degrees
     below the horizontal, :func:`check_arm_range`) the arms' angle is drawn from; the default keeps the
     cohort as it always was, a wider one (:data:`WIDE_ARM_DOWN_RANGE_DEG`) draws the same random numbers,
@@ -385,13 +418,16 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
     the gender, muscle and proportions are drawn from (the same draws, scaled to other intervals; a PoseError
     for an unknown name). ``palm_range`` (:func:`check_palm_range`) is the interval the palms' turn in from
     facing forward is drawn from, both sides around one value, from a random stream of its own: every other
-    draw stays; ``turn_range`` (:func:`check_turn_range`) the whole body's turn about the vertical, likewise."""
+    draw stays; ``turn_range`` (:func:`check_turn_range`) the whole body's turn about the vertical, likewise.
+    ``elbow_range`` (:func:`check_elbow_range`): the elbows' flexion, drawn as the arms' angle is (the same random
+    numbers, so every other draw stays; the default keeps the cohort as it was)."""
     lo, hi = check_arm_range(arm_range)
     llo, lhi = check_leg_range(leg_range)
     shift = check_bmi_shift(bmi_shift)
     ranges = check_macros(macros)
     palm_lo, palm_hi = check_palm_range(palm_range)
     turn_lo, turn_hi = check_turn_range(turn_range)
+    elo, ehi = check_elbow_range(elbow_range)
     rng = np.random.default_rng([int(seed), int(index)])
     female = index % 2 == 0
     mu, sd = (1.63, 0.065) if female else (1.77, 0.07)
@@ -405,10 +441,10 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
                    age=Phenotype.age_from_years(years), muscle=float(rng.uniform(*ranges.muscle)),
                    proportions=float(rng.uniform(*ranges.proportions)), african=float(race[0]), asian=float(race[1]),
                    caucasian=float(race[2]))
-    arm, elbow, hip = rng.uniform(lo, hi), rng.uniform(0, 20), rng.uniform(llo, lhi)
+    arm, elbow, hip = rng.uniform(lo, hi), rng.uniform(elo, ehi), rng.uniform(llo, lhi)
     d = rng.normal(0, 1.5, size=3)
     pose = Pose(float(np.clip(arm + d[0], lo, hi)), float(np.clip(arm - d[0], lo, hi)),
-                float(np.clip(elbow + d[1], 0, 20)), float(np.clip(elbow - d[1], 0, 20)),
+                float(np.clip(elbow + d[1], elo, ehi)), float(np.clip(elbow - d[1], elo, ehi)),
                 float(np.clip(hip + d[2] / 3, llo, lhi)), float(np.clip(hip - d[2] / 3, llo, lhi)),
                 *_palms(index, seed, palm_lo, palm_hi), _turn(index, seed, turn_lo, turn_hi))
     loc = _draw_local(rng)
@@ -433,36 +469,40 @@ def subject(index: int, seed: int = 0, local: bool = True, check: bool = True,
             raise SolveError(f"cohort subject {index} (seed {seed}) still self-intersects after pose changes")
     return Subject(index, int(seed), "female" if female else "male", stature, bmi_used, ph, pose, body,
                    arm_range=(lo, hi), leg_range=(llo, lhi), bmi_shift=shift, macros=macros,
-                   palm_range=(palm_lo, palm_hi), turn_range=(turn_lo, turn_hi))
+                   palm_range=(palm_lo, palm_hi), turn_range=(turn_lo, turn_hi), elbow_range=(elo, ehi))
 
 
 def cohort(n: int, seed: int = 0, local: bool = True, check: bool = True,
            arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG,
            palm_range: tuple[float, float] = PALM_IN_RANGE_DEG,
-           turn_range: tuple[float, float] = TURN_RANGE_DEG) -> list[Subject]:
+           turn_range: tuple[float, float] = TURN_RANGE_DEG,
+           elbow_range: tuple[float, float] = ELBOW_RANGE_DEG) -> list[Subject]:
     """``n`` plausible adults (half female), deterministic for a seed; local modifiers on by default.
     ``arm_range``: the interval (degrees below the horizontal) the arm angles are drawn from, as in
     :func:`subject` (:data:`ARM_DOWN_RANGE_DEG` by default, :data:`WIDE_ARM_DOWN_RANGE_DEG` for wide
     A-poses); ``palm_range`` the palms' (:data:`RELAXED_PALM_IN_RANGE_DEG` for palms as people hold them
-    unasked), ``turn_range`` the body's turn about the vertical; a bad range is a PoseError before any subject is
-    made."""
+    unasked), ``turn_range`` the body's turn about the vertical, ``elbow_range`` the elbows' flexion
+    (:data:`FLEXED_ELBOW_RANGE_DEG` for relaxed arms); a bad range is a PoseError before any subject is made."""
     if n < 0:
         raise ValueError(f"cohort size {n}: must be >= 0")
     check_arm_range(arm_range)
     check_palm_range(palm_range)
     check_turn_range(turn_range)
-    return list(iter_cohort(n, seed, local, check, arm_range, palm_range, turn_range))
+    check_elbow_range(elbow_range)
+    return list(iter_cohort(n, seed, local, check, arm_range, palm_range, turn_range, elbow_range))
 
 
 def iter_cohort(n: int, seed: int = 0, local: bool = True, check: bool = True,
                 arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG,
                 palm_range: tuple[float, float] = PALM_IN_RANGE_DEG,
-                turn_range: tuple[float, float] = TURN_RANGE_DEG) -> Iterator[Subject]:
-    """Like cohort() but yields subjects one at a time. ``arm_range``, ``palm_range`` and ``turn_range``: the
-    intervals (degrees) the arm angles, the palms' turn and the body's are drawn from (:func:`subject`); a bad
-    range is a PoseError at the first subject."""
+                turn_range: tuple[float, float] = TURN_RANGE_DEG,
+                elbow_range: tuple[float, float] = ELBOW_RANGE_DEG) -> Iterator[Subject]:
+    """Like cohort() but yields subjects one at a time. ``arm_range``, ``palm_range``, ``turn_range`` and
+    ``elbow_range``: the intervals (degrees) the arm angles, the palms' turn, the body's and the elbows' flexion are
+    drawn from (:func:`subject`); a bad range is a PoseError at the first subject."""
     for i in range(n):
-        yield subject(i, seed, local, check, arm_range, palm_range=palm_range, turn_range=turn_range)
+        yield subject(i, seed, local, check, arm_range, palm_range=palm_range, turn_range=turn_range,
+                      elbow_range=elbow_range)
 
 
 def volumes_json(s: Subject) -> str:
@@ -502,27 +542,31 @@ def write_subject(s: Subject, out_dir: str | Path, overwrite: bool = False) -> t
 def write_cohort(out_dir: str | Path, n: int, seed: int = 0, local: bool = True, overwrite: bool = False,
                  arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG,
                  palm_range: tuple[float, float] = PALM_IN_RANGE_DEG,
-                 turn_range: tuple[float, float] = TURN_RANGE_DEG) -> list[tuple[Path, Path]]:
+                 turn_range: tuple[float, float] = TURN_RANGE_DEG,
+                 elbow_range: tuple[float, float] = ELBOW_RANGE_DEG) -> list[tuple[Path, Path]]:
     """Generate and write a cohort: one PLY + JSON per subject and ``cohort.json`` listing them (with the
-    seed, local modifiers, ``arm_down_deg``, ``palm_in_deg`` and ``turn_deg``, the ranges of :func:`subject`).
+    seed, local modifiers, ``arm_down_deg``, ``palm_in_deg``, ``turn_deg`` and ``elbow_deg``, the ranges of
+    :func:`subject`).
     A bad range (PoseError) or any of these files already present is refused before anything is generated
     (:class:`bsv.errors.OutputExistsError`) unless ``overwrite``."""
     out = Path(out_dir)
     lo, hi = check_arm_range(arm_range)
     palms = check_palm_range(palm_range)
     turns = check_turn_range(turn_range)
+    elbows = check_elbow_range(elbow_range)
     _refuse_existing([out / "cohort.json", *(p for i in range(max(n, 0)) for p in subject_files(i, out))], overwrite)
     paths = [write_subject(s, out, overwrite) for s in iter_cohort(n, seed, local, arm_range=(lo, hi),
-                                                                   palm_range=palms, turn_range=turns)]
+                                                                   palm_range=palms, turn_range=turns,
+                                                                   elbow_range=elbows)]
     index = {"seed": int(seed), "n": int(n), "local_modifiers": bool(local), "arm_down_deg": [lo, hi],
-             "palm_in_deg": list(palms), "turn_deg": list(turns), "subjects": [{"mesh": p.name, "volumes": j.name} for p, j in paths]}
+             "palm_in_deg": list(palms), "turn_deg": list(turns), "elbow_deg": list(elbows), "subjects": [{"mesh": p.name, "volumes": j.name} for p, j in paths]}
     (out / "cohort.json").write_text(json.dumps(index, indent=1) + "\n")
     return paths
 
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m bsv.bodies.cohort OUT_DIR N [SEED] [--no-local] [--arm-down LOW,HIGH] [--palm-in LOW,HIGH]
-    [--turn LOW,HIGH] [--overwrite]``:
+    [--turn LOW,HIGH] [--elbow LOW,HIGH] [--overwrite]``:
     write a cohort; returns the exit status (2 and a message if files exist and --overwrite is not given,
     see bsv.exitcodes)."""
     import argparse
@@ -539,13 +583,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--palm-in", type=palm_range_arg, default=PALM_IN_RANGE_DEG, metavar="LOW,HIGH",
                     help=palm_in_help())
     ap.add_argument("--turn", type=turn_range_arg, default=TURN_RANGE_DEG, metavar="LOW,HIGH", help=turn_help())
+    ap.add_argument("--elbow", type=elbow_range_arg, default=ELBOW_RANGE_DEG, metavar="LOW,HIGH", help=elbow_help())
     ap.add_argument("--overwrite", action="store_true", help="replace subject files and cohort.json already in OUT_DIR")
     args = ap.parse_args(argv)
     from ..exitcodes import run_command
 
     def run() -> int:
         written = write_cohort(args.out_dir, args.n, args.seed, not args.no_local, overwrite=args.overwrite,
-                               arm_range=args.arm_down, palm_range=args.palm_in, turn_range=args.turn)
+                               arm_range=args.arm_down, palm_range=args.palm_in, turn_range=args.turn,
+                               elbow_range=args.elbow)
         for ply, js in written:
             print(ply, js)
         return 0
@@ -556,6 +602,8 @@ def main(argv: list[str] | None = None) -> int:
 __all__ = [
     "ARM_DOWN_RANGE_DEG",
     "ARM_FREE_FLOOR_DEG",
+    "ELBOW_RANGE_DEG",
+    "FLEXED_ELBOW_RANGE_DEG",
     "HEAVY_BMI_SHIFT",
     "HIP_ABDUCTION_RANGE_DEG",
     "LOCAL_CENTRAL",
@@ -574,11 +622,14 @@ __all__ = [
     "bmi_shift_arg",
     "check_arm_range",
     "check_bmi_shift",
+    "check_elbow_range",
     "check_leg_range",
     "check_macros",
     "check_palm_range",
     "check_turn_range",
     "cohort",
+    "elbow_help",
+    "elbow_range_arg",
     "iter_cohort",
     "leg_range_arg",
     "main",

@@ -20,7 +20,15 @@ import numpy as np
 from ..errors import PhenotypeError
 from ..types import SEGMENT_IDS
 from .body import Body, make_body
-from .cohort import ARM_DOWN_RANGE_DEG, HIP_ABDUCTION_RANGE_DEG, PALM_IN_RANGE_DEG, TURN_RANGE_DEG, Subject, subject
+from .cohort import (
+    ARM_DOWN_RANGE_DEG,
+    ELBOW_RANGE_DEG,
+    HIP_ABDUCTION_RANGE_DEG,
+    PALM_IN_RANGE_DEG,
+    TURN_RANGE_DEG,
+    Subject,
+    subject,
+)
 from .collide import penetrations
 
 #: The limb segments a variant may reshape or swell.
@@ -134,7 +142,8 @@ def hard_subject(index: int, seed: int = 0, local: bool = True,
                  arm_range: tuple[float, float] = ARM_DOWN_RANGE_DEG,
                  leg_range: tuple[float, float] = HIP_ABDUCTION_RANGE_DEG, bmi_shift: float = 0.0,
                  macros: str = "standard", palm_range: tuple[float, float] = PALM_IN_RANGE_DEG,
-                 turn_range: tuple[float, float] = TURN_RANGE_DEG) -> Subject:
+                 turn_range: tuple[float, float] = TURN_RANGE_DEG,
+                 elbow_range: tuple[float, float] = ELBOW_RANGE_DEG) -> Subject:
     """Cohort subject ``index`` of ``seed`` reshaped into one of the registration's hard classes
     (:data:`HARD_CLASSES`, cycling with the index; deterministic): both upper arms 1.3-1.6x deeper
     front-to-back and 0.75-0.9x narrower; 12 bumps of 6-15 mm; one limb segment swollen by
@@ -143,7 +152,7 @@ def hard_subject(index: int, seed: int = 0, local: bool = True,
     (``variant["strength"]`` < 1). The truth is the changed body's own volumes. ``arm_range`` and the rest:
     the base subject's (:func:`bsv.bodies.subject`; a bad range is its PoseError)."""
     base = subject(index, seed, local=local, arm_range=arm_range, leg_range=leg_range, bmi_shift=bmi_shift,
-                   macros=macros, palm_range=palm_range, turn_range=turn_range)
+                   macros=macros, palm_range=palm_range, turn_range=turn_range, elbow_range=elbow_range)
     rng = np.random.default_rng([int(seed), int(index), 10])
     kind = HARD_CLASSES[index % len(HARD_CLASSES)]
     variant: dict[str, Any] = {"class": kind}

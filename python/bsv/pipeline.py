@@ -271,8 +271,9 @@ def _read_label_png(path: Path) -> np.ndarray:
 def _segment_cameras(data: dict[str, dict[str, Any]], extrinsics: dict[str, dict[str, Any]], cameras: Sequence[str],
                      params: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
     """Both cameras segmented together (landmarks filled in across views, :mod:`bsv.frontend.landmarks`),
-    the joint centres in 3-D, the knee lines moved by the body's proportions (:mod:`bsv.frontend.kneelines`)
-    and the thighs' loop targets (:mod:`bsv.frontend.groin`); a single camera is segmented alone."""
+    the joint centres in 3-D, the knee lines moved by the body's proportions (:mod:`bsv.frontend.kneelines`),
+    the elbow lines by the elbows' flexion (:mod:`bsv.frontend.elbowlines`) and the thighs' loop targets (:mod:`bsv.frontend.groin`); a single camera is segmented alone."""
+    from .frontend.elbowlines import recut_elbow_lines
     from .frontend.groin import hip_loop_targets
     from .frontend.kneelines import with_proportional_knee_lines
     from .frontend.landmarks import Camera, joint_centres, segment_views
@@ -286,6 +287,7 @@ def _segment_cameras(data: dict[str, dict[str, Any]], extrinsics: dict[str, dict
     depths = {c: data[c]["depth_m"] for c in cameras}
     joints = joint_centres(segs, depths, cams)
     segs = with_proportional_knee_lines(segs, joints, cams, **params)
+    segs = recut_elbow_lines(segs, joints, cams, **params)
     return segs, joints, hip_loop_targets(segs, depths, cams, joints)
 
 
@@ -306,7 +308,8 @@ def _segment(cam: str, data: dict[str, Any], folder: Path, mode: str, params: di
         summary = {"source": "camera (MediaPipe Holistic)", "labelled_pixels": int((labels > 0).sum()),
                    "hands_found": list(seg.hands_found), "counts": seg.counts(), "files": str(seg_out),
                    "landmark_sources": dict(seg.sources), "warnings": list(seg.warnings),
-                   "mediapipe_background": seg.background, "knee_line_shift_mm": seg.knee_line_shift_mm}
+                   "mediapipe_background": seg.background, "knee_line_shift_mm": seg.knee_line_shift_mm,
+                   "elbow_line_shift_mm": None if seg.elbow_line_shift_mm is None else list(seg.elbow_line_shift_mm)}
     if labels.shape != data["depth_m"].shape:
         raise SegmentationError(
             f"{cam}: label image {labels.shape} and depth image {data['depth_m'].shape} differ in size; the depth must "

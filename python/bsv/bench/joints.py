@@ -38,10 +38,12 @@ def camera_segmentations(capture_dir: str | Path, correct: bool = True,
                          sex: str | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
     """The camera path's segmentations of both views of a (virtual) capture folder, made together
     (:func:`bsv.frontend.landmarks.segment_views`, the cameras' calibrated ``camera_to_world`` of
-    camera.json), and their joint centres; ``correct``: with the learned joint offsets and the knee lines moved by
-    the body's proportions (:mod:`bsv.frontend.kneelines`), as ``bsv process`` has them; ``sex``: the subject's
+    camera.json), and their joint centres; ``correct``: with the learned joint offsets, the knee lines moved by
+    the body's proportions (:mod:`bsv.frontend.kneelines`) and the elbow lines by the elbows' flexion
+    (:mod:`bsv.frontend.elbowlines`), as ``bsv process`` has them; ``sex``: the subject's
     sex as a user gives it (None: read from the capture, :mod:`bsv.frontend.sex`)."""
     from ..frontend.capture import read_capture
+    from ..frontend.elbowlines import recut_elbow_lines
     from ..frontend.kneelines import with_proportional_knee_lines
     from ..frontend.landmarks import Camera, joint_centres, segment_views
     from ..frontend.segment import VIEWS
@@ -54,8 +56,9 @@ def camera_segmentations(capture_dir: str | Path, correct: bool = True,
     params: dict[str, Any] = {} if sex is None else {"sex_score": SEX_SCORES[sex]}
     segs = segment_views({v: {"colour": data[v]["colour"], "depth_m": data[v]["depth_m"]} for v in VIEWS}, cams, **params)
     joints = joint_centres(segs, {v: data[v]["depth_m"] for v in VIEWS}, cams, correct=correct)
-    if correct:  # as bsv process: the knee lines moved by the body's proportions
+    if correct:  # as bsv process: the knee lines moved by the body's proportions, the elbow lines by the flexion
         segs = with_proportional_knee_lines(segs, joints, cams, **params)
+        segs = recut_elbow_lines(segs, joints, cams, **params)
     return segs, joints
 
 

@@ -466,6 +466,10 @@ class Segmentation:
     #: How far (mm, + towards the feet) the thigh / shin line was moved from where :func:`knee_line` draws it
     #: for the body's proportions (:func:`bsv.frontend.kneelines.recut_knee_lines`); None when not moved.
     knee_line_shift_mm: float | None = None
+    #: How far (mm, + towards the wrist) the (left, right) upper-arm / forearm lines were moved from where
+    #: :func:`elbow_line` draws them for the elbows' flexion (:func:`bsv.frontend.elbowlines.recut_elbow_lines`);
+    #: None when not moved.
+    elbow_line_shift_mm: tuple[float, float] | None = None
 
     def landmark(self, name: str) -> np.ndarray:
         """(x, y, visibility) of one landmark by name (KeyError naming it if unknown)."""
@@ -1081,6 +1085,24 @@ def knee_line(pose: np.ndarray, params: SegmentParams) -> tuple[np.ndarray, np.n
     return _knee_line({n: pose[i, :2].astype(np.float64) for i, n in enumerate(POSE_NAMES)}, params)
 
 
+def elbow_line(pose: np.ndarray, side: str, params: SegmentParams) -> tuple[np.ndarray, np.ndarray]:
+    """The ``side`` ("left" or "right") upper-arm / forearm line :func:`label_pixels` draws for subject-oriented
+    pose landmarks (33, >= 2 pixels): a point on it (pixels, x y: the elbow landmark moved along the line's normal
+    by ``elbow_shift`` plus the sex's and the build's terms, fractions of the elbow-wrist length) and its unit
+    normal, the bisector of the upper arm's and the forearm's directions. A pixel ``p`` lies on the forearm's side
+    when ``(p - point) @ normal > 0``."""
+    return _elbow_line({n: pose[i, :2].astype(np.float64) for i, n in enumerate(POSE_NAMES)}, side, params)
+
+
+def _elbow_line(P: Mapping[str, np.ndarray], side: str, params: SegmentParams) -> tuple[np.ndarray, np.ndarray]:
+    sh, el, wr = P[f"{side}_shoulder"], P[f"{side}_elbow"], P[f"{side}_wrist"]
+    fore = float(np.hypot(*(wr - el)))
+    normal = _unit(_unit(el - sh) + _unit(wr - el))
+    shift = (params.elbow_shift + (params.sex_score or 0.0) * params.elbow_shift_sex
+             + _build_excess(params) * params.elbow_shift_build)
+    return el + shift * fore * normal, normal
+
+
 def label_pixels(mask: np.ndarray, pose: np.ndarray, hands: list, params: SegmentParams = SegmentParams(),
                  crotch: np.ndarray | None = None) -> np.ndarray:
     """(H, W) uint8 segment ids of the mask pixels from subject-oriented pose landmarks (33, >=2 pixels)
@@ -1123,7 +1145,6 @@ def label_pixels(mask: np.ndarray, pose: np.ndarray, hands: list, params: Segmen
     fork = (h_mid + down * params.crotch_drop * thigh_len if fork is None
             else fork + down * params.crotch_offset * thigh_len)
     sex = params.sex_score or 0.0  # bsv.frontend.sex: +1 female ... -1 male
-    build = _build_excess(params)
     hip_raise = params.hip_raise - sex * params.hip_raise_sex
     hip_level = fork - down * hip_raise * thigh_len - h_mid  # the outer hips, relative to the mid-hip
     hip_level = down * float(hip_level @ down)
@@ -1145,12 +1166,11 @@ def label_pixels(mask: np.ndarray, pose: np.ndarray, hands: list, params: Segmen
     #        transverse line) and the ankles
     for k, side, sfx in ((0, "left", "_l"), (1, "right", "_r")):
         on = left if k == 0 else ~left
-        sh, el, wr = P[f"{side}_shoulder"], P[f"{side}_elbow"], P[f"{side}_wrist"]
+        el, wr = P[f"{side}_elbow"], P[f"{side}_wrist"]
         fore = float(np.hypot(*(wr - el)))
-        n_el = _unit(_unit(el - sh) + _unit(wr - el))
         n_wr = _unit(wr - el)
-        past_el = (p - (el + (params.elbow_shift + sex * params.elbow_shift_sex + build * params.elbow_shift_build)
-                            * fore * n_el)) @ n_el > 0
+        el_point, n_el = _elbow_line(P, side, params)
+        past_el = (p - el_point) @ n_el > 0
         past_wr = (p - (wr + params.wrist_shift * fore * n_wr)) @ n_wr > 0
         arm = on & ((group == 1) | (group == 2))
         out[arm] = np.where(past_wr[arm], SEGMENT_IDS["hand" + sfx],
@@ -1763,6 +1783,7 @@ __all__ = [
     "crotch_point",
     "detect",
     "disagreeing_arm_angles",
+    "elbow_line",
     "expected_crotch_depth",
     "gap_top",
     "knee_line",

@@ -16,7 +16,10 @@ FX = 600.0
 DEPTH_M = 2.0
 
 
-def _arm(bend_deg: float, towards: np.ndarray = np.array([0.0, 0.0, 1.0])) -> tuple[np.ndarray, ...]:
+FORWARD = np.array([0.0, 0.0, 1.0])
+
+
+def _arm(bend_deg: float, towards: np.ndarray = FORWARD) -> tuple[np.ndarray, ...]:
     """Shoulder, elbow and wrist centres (metres) of an arm hanging straight down from (0.2, 1.4, 2) and bent
     ``bend_deg`` at the elbow towards ``towards`` (unit, across the arm)."""
     sh, elbow = np.array([0.2, 1.4, DEPTH_M]), np.array([0.2, 1.1, DEPTH_M])

@@ -21,14 +21,11 @@ fills the cache and stops (two such runs on disjoint seeds can share the two cor
 
 from __future__ import annotations
 
-import argparse
-import dataclasses
-import json
 import tempfile
-from pathlib import Path
 
 import cv2
 import numpy as np
+from learning import measured, parser
 from tqdm import tqdm
 
 import bsv
@@ -66,9 +63,7 @@ def capture(seed: int, index: int, flexed: bool) -> dict:
         _, cams = capture_views_geometry(tmp)
         for v, seg in segs.items():
             truth = cv2.imread(f"{tmp}/{v}/labels.png", cv2.IMREAD_UNCHANGED)
-            prm = sg.view_params(v)
-            if seg.sex is not None:
-                prm = dataclasses.replace(prm, sex_score=seg.sex.score)
+            prm = sg.drawn_params(seg)
             cam = cams[v]
             for side, sid in SIDES:
                 names = (f"shoulder_{sid}", f"elbow_{sid}", f"wrist_{sid}")
@@ -123,22 +118,10 @@ def evaluate(name: str, radii: dict[str, float] | None, rows: list[tuple[str, fl
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--train-seeds", default="0")
-    ap.add_argument("--eval-seeds", default="1")
-    ap.add_argument("--n", type=int, default=6, help="subjects per seed")
-    ap.add_argument("--cache", type=Path, default=None, help="JSON file of the measurements (read and extended)")
-    ap.add_argument("--only-measure", action="store_true", help="fill the cache for the seeds given and stop")
-    args = ap.parse_args()
-    cache = json.loads(args.cache.read_text()) if args.cache and args.cache.exists() else {}
-    seeds = {name: [int(s) for s in getattr(args, name).split(",") if s] for name in ("train_seeds", "eval_seeds")}
-    try:
-        rows = {name: [r for s in ss for r in measure(args.n, s, cache)] for name, ss in seeds.items()}
-    finally:
-        if args.cache:
-            args.cache.write_text(json.dumps(cache))
-    if args.only_measure:
+    got = measured(parser(__doc__, "0", "1", 6).parse_args(), measure)
+    if got is None:
         return
+    seeds, rows = got
     radii = fit(rows["train_seeds"])
     print("ELBOW_RADIUS_M =", radii)
     for name, key in (("training", "train_seeds"), ("held out", "eval_seeds")):

@@ -17,11 +17,8 @@ fills the cache and stops (two such runs on disjoint seeds can share the two cor
 
 from __future__ import annotations
 
-import argparse
-import json
-from pathlib import Path
-
 import numpy as np
+from learning import measured, parser
 from tqdm import tqdm
 
 import bsv
@@ -73,22 +70,10 @@ def evaluate(model: dict, rows: list[tuple[float, float | None, float | None]]) 
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--train-seeds", default="40,41,42,43")
-    ap.add_argument("--eval-seeds", default="44,45")
-    ap.add_argument("--n", type=int, default=10, help="subjects per seed")
-    ap.add_argument("--cache", type=Path, default=None, help="JSON file of the readings (read and extended)")
-    ap.add_argument("--only-measure", action="store_true", help="fill the cache for the seeds given and stop")
-    args = ap.parse_args()
-    cache = json.loads(args.cache.read_text()) if args.cache and args.cache.exists() else {}
-    seeds = {name: [int(s) for s in getattr(args, name).split(",") if s] for name in ("train_seeds", "eval_seeds")}
-    try:
-        rows = {name: [r for s in ss for r in measure(args.n, s, cache)] for name, ss in seeds.items()}
-    finally:
-        if args.cache:
-            args.cache.write_text(json.dumps(cache))
-    if args.only_measure:
+    got = measured(parser(__doc__, "40,41,42,43", "44,45", 10).parse_args(), measure)
+    if got is None:
         return
+    seeds, rows = got
     model = fit(rows["train_seeds"])
     print("PALM_TURN_MODEL =", model)
     print(f"training seeds {seeds['train_seeds']}:")

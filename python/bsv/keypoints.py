@@ -225,6 +225,12 @@ def confine_cloud_upper_arms(cloud: PointCloud, joints: Mapping[str, Any] | None
     return PointCloud(cloud.points, cloud.normals, cloud.colors, labels), changed
 
 
+def joint_xyz(value: Any) -> np.ndarray:
+    """A joint centre's position as a float (3,) array: a :class:`bsv.frontend.landmarks.JointCentre`'s (or any
+    object's) ``xyz``, or the value itself."""
+    return np.asarray(getattr(value, "xyz", value), dtype=np.float64).reshape(3)
+
+
 def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Distance of each point of ``p`` (N, 3) from the segment ``a``-``b`` (a point when they coincide)."""
     ab = b - a
@@ -233,4 +239,4 @@ def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray
     return np.asarray(np.linalg.norm(p - (a + t[:, None] * ab), axis=1))
 
 
-__all__ = ["BOUNDARY_RINGS", "CAMERA_KEYPOINT_KINDS", "JOINT_NAMES", "UPPER_ARM_MAX_DISTANCE_M", "as_keypoints", "boundary_rings", "camera_joints", "confine_cloud_upper_arms", "confine_upper_arms", "joint_rings", "select_joints", "template_kind"]
+__all__ = ["BOUNDARY_RINGS", "CAMERA_KEYPOINT_KINDS", "JOINT_NAMES", "UPPER_ARM_MAX_DISTANCE_M", "as_keypoints", "boundary_rings", "camera_joints", "confine_cloud_upper_arms", "confine_upper_arms", "joint_rings", "joint_xyz", "select_joints", "template_kind"]

@@ -132,10 +132,6 @@ class PosedTemplate(Mesh):
         return f"PosedTemplate({self.kind}, {len(self.vertices)} vertices, pose {self.pose_json()})"
 
 
-def _xyz(value: Any) -> np.ndarray:
-    return np.asarray(getattr(value, "xyz", value), dtype=np.float64).reshape(3)
-
-
 def _angles(p: dict[str, np.ndarray]) -> dict[str, Any]:
     """The pose angles (deg) of the joints in :data:`POSE_JOINTS` (see :func:`pose_from_joints`)."""
     x = p["hip_l"] - p["hip_r"]
@@ -163,11 +159,13 @@ def pose_from_joints(joints: Mapping[str, Any]) -> tuple[Pose, list[str]]:
     Y up, the subject facing +Z) and the notes on any angle clipped to the pose's range (more than
     :data:`CLIP_SILENT_DEG` outside it). Raises :class:`KeyError` naming the joints of :data:`POSE_JOINTS`
     that are missing, :class:`ValueError` when the joints give no angle (coincident or non-finite joints)."""
+    from .keypoints import joint_xyz
+
     missing = [n for n in POSE_JOINTS if n not in joints]
     if missing:
         raise KeyError(", ".join(missing))
     with np.errstate(invalid="ignore", divide="ignore"):  # coincident joints: NaN angles, refused below
-        angles = _angles({n: _xyz(joints[n]) for n in POSE_JOINTS})
+        angles = _angles({n: joint_xyz(joints[n]) for n in POSE_JOINTS})
     bad = [name for name, v in angles.items() if not np.isfinite(v)]
     if bad:
         raise ValueError(f"no angle for {', '.join(bad)} (coincident joints)")

@@ -24,8 +24,9 @@ from typing import Any
 
 import numpy as np
 
+from ..keypoints import joint_xyz as _xyz
 from ..types import SEGMENT_IDS
-from .segment import Segmentation, elbow_line, view_params
+from .segment import Segmentation, drawn_params, elbow_line
 
 #: The elbow's effective radius per view (metres): how far in front of the joint, towards the camera, the
 #: boundary the view draws is taken to lie.
@@ -36,11 +37,6 @@ REFERENCE_FLEXION_DEG = 10.0
 MIN_FLEXION_DEG = 2.0
 #: The largest move of an elbow line (mm): a prediction beyond it is clipped.
 MAX_SHIFT_MM = 25.0
-
-
-def _xyz(joint: Any) -> np.ndarray:
-    """A joint centre's position: a :class:`bsv.frontend.landmarks.JointCentre`'s ``xyz`` or the array itself."""
-    return np.asarray(getattr(joint, "xyz", joint), dtype=np.float64)
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -92,37 +88,36 @@ def recut_elbow_lines(segs: Mapping[str, Segmentation], joints: Mapping[str, Any
     (``joints``: the joint centres, :class:`bsv.frontend.landmarks.JointCentre` or arrays; ``cameras``:
     calibrated :class:`bsv.frontend.landmarks.Camera`); each records the shifts (``elbow_line_shift_mm``). A side
     whose joints are missing, or a view without its landmarks or the elbow in front of it, keeps its line."""
-    out = {}
-    for v, seg in segs.items():
-        if seg.pose is None or v not in cameras:
-            out[v] = seg
-            continue
-        cam = cameras[v]
-        prm = view_params(v, **params)
-        if seg.sex is not None:
-            prm = dataclasses.replace(prm, sex_score=seg.sex.score)
-        labels, shifts = None, [0.0, 0.0]
-        for k, (side, s) in enumerate((("left", "l"), ("right", "r"))):
-            names = (f"shoulder_{s}", f"elbow_{s}", f"wrist_{s}")
-            if not all(n in joints for n in names):
-                continue
-            sh, el, wr = (_xyz(joints[n]) for n in names)
-            shift = flexion_shift_mm(sh, el, wr, np.asarray(cam.translation, dtype=np.float64), ELBOW_RADIUS_M.get(v, 0.0))
-            depth = float((el - cam.translation) @ cam.rotation[:, 2])
-            point, normal = elbow_line(seg.pose, side, prm)
-            if not shift or not (np.isfinite(depth) and depth > 0.0 and np.all(np.isfinite(point))):
-                continue
-            point = point + normal * (shift / 1000.0) * cam.intrinsics.fx / depth
-            labels = seg.labels.copy() if labels is None else labels
-            upper, fore = SEGMENT_IDS[f"upper_arm_{s}"], SEGMENT_IDS[f"forearm_{s}"]
-            ys, xs = np.nonzero((labels == upper) | (labels == fore))
-            past = (np.column_stack([xs, ys]) - point) @ normal > 0
-            labels[ys, xs] = np.where(past, fore, upper)
-            shifts[k] = round(shift, 2)
-        out[v] = seg if labels is None else dataclasses.replace(seg, labels=labels,
-                                                                  elbow_line_shift_mm=(shifts[0], shifts[1]))
-    return out
+    return {v: _recut_view(seg, cameras.get(v), joints, ELBOW_RADIUS_M.get(v, 0.0), **params)
+            for v, seg in segs.items()}
 
+
+def _recut_view(seg: Segmentation, cam: Any, joints: Mapping[str, Any], radius_m: float,
+                **params: Any) -> Segmentation:
+    """:func:`recut_elbow_lines` of one view, seen by ``cam`` (None: unknown) with the effective ``radius_m``."""
+    if seg.pose is None or cam is None or not radius_m:
+        return seg
+    prm = drawn_params(seg, **params)
+    centre = np.asarray(cam.translation, dtype=np.float64)
+    labels, shifts = None, [0.0, 0.0]
+    for k, (side, s) in enumerate((("left", "l"), ("right", "r"))):
+        names = (f"shoulder_{s}", f"elbow_{s}", f"wrist_{s}")
+        if not all(n in joints for n in names):
+            continue
+        sh, el, wr = (_xyz(joints[n]) for n in names)
+        shift = flexion_shift_mm(sh, el, wr, centre, radius_m)
+        depth = float((el - centre) @ cam.rotation[:, 2])
+        point, normal = elbow_line(seg.pose, side, prm)
+        if not shift or not (np.isfinite(depth) and depth > 0.0 and np.all(np.isfinite(point))):
+            continue
+        point = point + normal * (shift / 1000.0) * cam.intrinsics.fx / depth
+        labels = seg.labels.copy() if labels is None else labels
+        upper, fore = SEGMENT_IDS[f"upper_arm_{s}"], SEGMENT_IDS[f"forearm_{s}"]
+        ys, xs = np.nonzero((labels == upper) | (labels == fore))
+        past = (np.column_stack([xs, ys]) - point) @ normal > 0
+        labels[ys, xs] = np.where(past, fore, upper)
+        shifts[k] = round(shift, 2)
+    return seg if labels is None else dataclasses.replace(seg, labels=labels, elbow_line_shift_mm=(shifts[0], shifts[1]))
 
 __all__ = ["ELBOW_RADIUS_M", "MAX_SHIFT_MM", "MIN_FLEXION_DEG", "REFERENCE_FLEXION_DEG", "flexion_deg",
            "flexion_shift_mm", "recut_elbow_lines"]

@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from ..keypoints import joint_xyz as _xyz
+
 #: A subject turned more than this (degrees about the vertical from facing the front camera) gets a warning. Turned
 #: 8-10 deg, the eight limbs lost 0.38 point on average; a subject turned 5.8 deg had an upper arm -12 % (its
 #: shoulder loop 12 mm off); square subjects read within 1.3 deg (BENCH.md, round 2 session 44).
@@ -51,11 +53,6 @@ TURN_SD_PER_DEG: dict[str, float] = {
 }
 #: The joints whose left-right lines give the subject's left.
 LINES: tuple[tuple[str, str], ...] = (("hip_l", "hip_r"), ("shoulder_l", "shoulder_r"))
-
-
-def _xyz(value: Any) -> np.ndarray:
-    """A joint centre (a :class:`bsv.frontend.landmarks.JointCentre` or an xyz) as a float array."""
-    return np.asarray(getattr(value, "xyz", value), dtype=np.float64)
 
 
 def turn_deg(joints: Mapping[str, Any], front_camera_m: np.ndarray | Sequence[float] | None) -> float | None:

@@ -25,8 +25,9 @@ from typing import Any
 
 import numpy as np
 
+from ..keypoints import joint_xyz as _xyz
 from ..types import SEGMENT_IDS
-from .segment import Segmentation, knee_line, view_params
+from .segment import Segmentation, drawn_params, knee_line
 from .sex import build_score
 
 #: The scale-free proportions of the joint centres :data:`KNEE_LOOP_MODEL` takes (:func:`proportions`), then
@@ -49,11 +50,6 @@ KNEE_LINE_GAIN = 1.0
 #: The largest move of a knee line (mm): a prediction beyond it is clipped (a landmark centimetres off must
 #: not carry the line with it).
 MAX_SHIFT_MM = 15.0
-
-
-def _xyz(joint: Any) -> np.ndarray:
-    """A joint centre's position: a :class:`bsv.frontend.landmarks.JointCentre`'s ``xyz`` or the array itself."""
-    return np.asarray(getattr(joint, "xyz", joint), dtype=np.float64)
 
 
 def _dist(joints: Mapping[str, np.ndarray], a: str, b: str) -> float:
@@ -130,10 +126,7 @@ def recut_knee_lines(segs: Mapping[str, Segmentation], joints: Mapping[str, Any]
             continue
         cam = cameras[v]
         depth = float((knees - cam.translation) @ cam.rotation[:, 2])
-        prm = view_params(v, **params)
-        if seg.sex is not None:
-            prm = dataclasses.replace(prm, sex_score=seg.sex.score)
-        point, down = knee_line(seg.pose, prm)
+        point, down = knee_line(seg.pose, drawn_params(seg, **params))
         if not (np.isfinite(depth) and depth > 0.0 and np.all(np.isfinite(point))):
             out[v] = seg  # the knees not in front of this camera, or its landmarks not placed: its line stays
             continue

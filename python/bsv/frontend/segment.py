@@ -1085,6 +1085,13 @@ def knee_line(pose: np.ndarray, params: SegmentParams) -> tuple[np.ndarray, np.n
     return _knee_line({n: pose[i, :2].astype(np.float64) for i, n in enumerate(POSE_NAMES)}, params)
 
 
+def drawn_params(seg: Segmentation, **overrides: Any) -> SegmentParams:
+    """The parameters ``seg``'s labels were drawn with: its view's (:func:`view_params`, with ``overrides`` set)
+    and its sex (:attr:`Segmentation.sex`, when read)."""
+    prm = view_params(seg.view, **overrides)
+    return prm if seg.sex is None else dataclasses.replace(prm, sex_score=seg.sex.score)
+
+
 def elbow_line(pose: np.ndarray, side: str, params: SegmentParams) -> tuple[np.ndarray, np.ndarray]:
     """The ``side`` ("left" or "right") upper-arm / forearm line :func:`label_pixels` draws for subject-oriented
     pose landmarks (33, >= 2 pixels): a point on it (pixels, x y: the elbow landmark moved along the line's normal
@@ -1783,6 +1790,7 @@ __all__ = [
     "crotch_point",
     "detect",
     "disagreeing_arm_angles",
+    "drawn_params",
     "elbow_line",
     "expected_crotch_depth",
     "gap_top",

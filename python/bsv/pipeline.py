@@ -272,7 +272,8 @@ def _segment_cameras(data: dict[str, dict[str, Any]], extrinsics: dict[str, dict
                      params: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
     """Both cameras segmented together (landmarks filled in across views, :mod:`bsv.frontend.landmarks`),
     the joint centres in 3-D, the knee lines moved by the body's proportions (:mod:`bsv.frontend.kneelines`),
-    the elbow lines by the elbows' flexion (:mod:`bsv.frontend.elbowlines`) and the thighs' loop targets (:mod:`bsv.frontend.groin`); a single camera is segmented alone."""
+    the elbow lines by the elbows' flexion (:mod:`bsv.frontend.elbowlines`) and the thighs' loop targets
+    (:mod:`bsv.frontend.groin`); a single camera is segmented alone."""
     from .frontend.elbowlines import recut_elbow_lines
     from .frontend.groin import hip_loop_targets
     from .frontend.kneelines import with_proportional_knee_lines

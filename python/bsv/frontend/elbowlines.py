@@ -6,14 +6,16 @@ through the elbow joint that bisects the upper arm's and the forearm's direction
 the surface a camera sees it lies off the joint along the arm: by about the elbow's radius times the tangent of
 half the flexion, towards the hand on the side the forearm bends away from (the back view of an arm bent
 forwards) and towards the shoulder on the other. A 2-D line across the arm cannot see that. With the elbows bent
-20-40 deg the back view's line lay 3-6 px (1-2.5 cm) nearer the shoulder than the true boundary, and the camera
-path's forearms came out +1.4 % signed (noer) while the oracle labels' did not move (BENCH.md, round 2 session 45).
+20 deg more than the cohort's, the back view's line, at MediaPipe's landmark on the olecranon, stayed 11-12 mm
+short of the true boundary, while the front view's landmark (the crook of the elbow) followed it; the camera path's
+forearms came out +1.4 to +2.1 % signed (noer), the oracle labels' did not move (BENCH.md, round 2 session 45).
 
 **The correction.** :func:`flexion_shift_mm` takes the bisecting plane from the 3-D joint centres and gives, per
 view, how far along the arm it crosses the surface the camera sees (:data:`ELBOW_RADIUS_M` off the joint
 towards the camera), less the same for an arm bent :data:`REFERENCE_FLEXION_DEG` in the same plane (what the
-lines' constants were tuned for): 0 for an arm bent as the cohort's, and within :data:`MIN_FLEXION_DEG` of
-straight, where the plane of the bend is not defined. :func:`recut_elbow_lines` moves each view's line by it.
+lines' constants were tuned for): 0 for an arm bent no more than that. The radius is an effective one per view,
+learned from the rig's true labels by ``benchmarks/learn_elbow_lines.py``: 0 for the front view, whose landmark
+follows the boundary. :func:`recut_elbow_lines` moves each view's line by it, after the joint centres.
 """
 
 from __future__ import annotations
@@ -118,6 +120,7 @@ def _recut_view(seg: Segmentation, cam: Any, joints: Mapping[str, Any], radius_m
         labels[ys, xs] = np.where(past, fore, upper)
         shifts[k] = round(shift, 2)
     return seg if labels is None else dataclasses.replace(seg, labels=labels, elbow_line_shift_mm=(shifts[0], shifts[1]))
+
 
 __all__ = ["ELBOW_RADIUS_M", "MAX_SHIFT_MM", "MIN_FLEXION_DEG", "REFERENCE_FLEXION_DEG", "flexion_deg",
            "flexion_shift_mm", "recut_elbow_lines"]

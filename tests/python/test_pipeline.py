@@ -328,8 +328,15 @@ def test_a_failed_camera_run_leaves_nothing_and_can_be_rerun(capture, subject, t
         pipeline.process(cap, cap / "calibration.json", out, segmentation="camera", progress=False,
                          schedule="m2p:0")
     assert not out.exists() or not any(out.rglob("*")), sorted(out.rglob("*"))
-    pipeline.process(cap, cap / "calibration.json", out, segmentation="camera", progress=False, sex="female")
+    res = pipeline.process(cap, cap / "calibration.json", out, segmentation="camera", progress=False, sex="female")
     assert (out / "segmentation" / "front" / "mask.png").exists() and (out / "volumes.json").exists()
+    # the lines moved after the joints are recorded per view (the knee lines by the proportions, the elbow lines by
+    # the elbows' bend): this subject's elbows are bent 16-17 deg, past the reference 10, so the back view's elbow
+    # lines move towards the wrists; the front view's landmark follows the bend, its lines stay
+    for view in ("front", "back"):
+        assert "knee_line_shift_mm" in res.segmentation[view]
+    assert res.segmentation["front"]["elbow_line_shift_mm"] is None
+    assert all(0.0 < mm < 10.0 for mm in res.segmentation["back"]["elbow_line_shift_mm"])
     vols = json.loads((out / "volumes.json").read_text())
     # the camera path keeps the template's segments: the sex picks the template of that sex, posed like the
     # subject (bsv.posed_template): its angles are the synthetic subject's within a few degrees

@@ -274,10 +274,9 @@ def _segment_cameras(data: dict[str, dict[str, Any]], extrinsics: dict[str, dict
     the joint centres in 3-D, the knee lines moved by the body's proportions (:mod:`bsv.frontend.kneelines`),
     the elbow lines by the elbows' flexion (:mod:`bsv.frontend.elbowlines`) and the thighs' loop targets
     (:mod:`bsv.frontend.groin`); a single camera is segmented alone."""
-    from .frontend.elbowlines import recut_elbow_lines
     from .frontend.groin import hip_loop_targets
-    from .frontend.kneelines import with_proportional_knee_lines
     from .frontend.landmarks import Camera, joint_centres, segment_views
+    from .frontend.recut import lines_after_joints
     from .frontend.segment import segment_image
 
     if sorted(cameras) != ["back", "front"]:
@@ -287,8 +286,7 @@ def _segment_cameras(data: dict[str, dict[str, Any]], extrinsics: dict[str, dict
     segs = segment_views({c: data[c] for c in cameras}, cams, **params)
     depths = {c: data[c]["depth_m"] for c in cameras}
     joints = joint_centres(segs, depths, cams)
-    segs = with_proportional_knee_lines(segs, joints, cams, **params)
-    segs = recut_elbow_lines(segs, joints, cams, **params)
+    segs = lines_after_joints(segs, joints, cams, **params)
     return segs, joints, hip_loop_targets(segs, depths, cams, joints)
 
 

@@ -43,9 +43,8 @@ def camera_segmentations(capture_dir: str | Path, correct: bool = True,
     (:mod:`bsv.frontend.elbowlines`), as ``bsv process`` has them; ``sex``: the subject's
     sex as a user gives it (None: read from the capture, :mod:`bsv.frontend.sex`)."""
     from ..frontend.capture import read_capture
-    from ..frontend.elbowlines import recut_elbow_lines
-    from ..frontend.kneelines import with_proportional_knee_lines
     from ..frontend.landmarks import Camera, joint_centres, segment_views
+    from ..frontend.recut import lines_after_joints
     from ..frontend.segment import VIEWS
 
     d = Path(capture_dir)
@@ -57,8 +56,7 @@ def camera_segmentations(capture_dir: str | Path, correct: bool = True,
     segs = segment_views({v: {"colour": data[v]["colour"], "depth_m": data[v]["depth_m"]} for v in VIEWS}, cams, **params)
     joints = joint_centres(segs, {v: data[v]["depth_m"] for v in VIEWS}, cams, correct=correct)
     if correct:  # as bsv process: the knee lines moved by the body's proportions, the elbow lines by the flexion
-        segs = with_proportional_knee_lines(segs, joints, cams, **params)
-        segs = recut_elbow_lines(segs, joints, cams, **params)
+        segs = lines_after_joints(segs, joints, cams, **params)
     return segs, joints
 
 

@@ -332,32 +332,37 @@ def elbow_range_arg(text: str) -> tuple[float, float]:
     return _usage_checked(check_elbow_range, text)
 
 
+def _range_help(what: str, default: tuple[float, float], default_note: str, other: tuple[float, float],
+                other_note: str) -> str:
+    """The help text of a cohort's ``--OPTION LOW,HIGH``: the interval ``what`` is drawn from, its ``default`` (and
+    what that is) and the ``other`` range the bench uses for a class (and what for)."""
+    (lo, hi), (olo, ohi) = default, other
+    return (f"the interval {what} is drawn from, degrees (default {lo:g},{hi:g}{default_note}; {olo:g},{ohi:g} for "
+            f"{other_note})")
+
+
 def elbow_help() -> str:
     """The help text of ``--elbow LOW,HIGH`` (``bsv cohort``, ``bsv bench synth``)."""
-    (lo, hi), (flo, fhi) = ELBOW_RANGE_DEG, FLEXED_ELBOW_RANGE_DEG
-    return (f"the interval the elbows' flexion from straight is drawn from, degrees (default {lo:g},{hi:g}: arms "
-            f"nearly straight; {flo:g},{fhi:g} for relaxed arms)")
+    return _range_help("the elbows' flexion from straight", ELBOW_RANGE_DEG, ": arms nearly straight",
+                       FLEXED_ELBOW_RANGE_DEG, "relaxed arms")
 
 
 def turn_help() -> str:
     """The help text of ``--turn LOW,HIGH`` (``bsv cohort``, ``bsv bench synth``)."""
-    (lo, hi), (tlo, thi) = TURN_RANGE_DEG, TURNED_RANGE_DEG
-    return (f"the interval the body's turn about the vertical is drawn from, degrees (default {lo:g},{hi:g}: facing "
-            f"the front camera squarely; {tlo:g},{thi:g} for subjects nobody lined up with the cameras)")
+    return _range_help("the body's turn about the vertical", TURN_RANGE_DEG, ": facing the front camera squarely",
+                       TURNED_RANGE_DEG, "subjects nobody lined up with the cameras")
 
 
 def palm_in_help() -> str:
     """The help text of ``--palm-in LOW,HIGH`` (``bsv cohort``, ``bsv bench synth``)."""
-    (lo, hi), (rlo, rhi) = PALM_IN_RANGE_DEG, RELAXED_PALM_IN_RANGE_DEG
-    return (f"the interval the palms' turn in from facing forward is drawn from, degrees (default {lo:g},{hi:g}: "
-            f"palms forward; {rlo:g},{rhi:g} for palms as people hold them unasked, up to facing the body)")
+    return _range_help("the palms' turn in from facing forward", PALM_IN_RANGE_DEG, ": palms forward",
+                       RELAXED_PALM_IN_RANGE_DEG, "palms as people hold them unasked, up to facing the body")
 
 
 def arm_down_help() -> str:
     """The help text of ``--arm-down LOW,HIGH`` (``bsv cohort``, ``bsv bench synth``)."""
-    (lo, hi), (wlo, whi) = ARM_DOWN_RANGE_DEG, WIDE_ARM_DOWN_RANGE_DEG
-    return (f"the interval the arms' A-pose angle below the horizontal is drawn from, degrees (default "
-            f"{lo:g},{hi:g}; {wlo:g},{whi:g} for wide A-poses)")
+    return _range_help("the arms' A-pose angle below the horizontal", ARM_DOWN_RANGE_DEG, "",
+                       WIDE_ARM_DOWN_RANGE_DEG, "wide A-poses")
 
 
 def _free_step(pose: Pose, hits: Iterable[str], arm_floor: float) -> Pose:

@@ -529,8 +529,12 @@ def test_reduced_camera_path_regression_guard(tmp_path: Path, look: str) -> None
 #: The hard cohort's subject 0 of seed 0 has upper arms 1.44 x deeper and 0.85 x narrower than its build's
 #: (``bsv.bodies.variants``, the deep upper arms class): on the camera path they came out -10.4 / -7.1 % until
 #: round 2 session 32, when the articulated initialisation skipped such a short, deep cloud arm (elongation 1.96
-#: < 2); -1.3 / +0.9 % since.
+#: < 2); -1.3 / +0.9 % since (-0.7 / +2.2 % since session 45).
 BOUND_DEEP_UPPER_ARM_NOER = 4.0
+#: A short, deep cloud upper arm reads under this elongation (a plain arm reads 3.3): this subject's read 1.95 /
+#: 1.97 until round 2 session 45, 1.99 / 2.03 since (its elbows are bent 16-17 deg, so the back view's elbow line
+#: moves towards the wrist, bsv.frontend.elbowlines, and the cloud arm is a little longer).
+DEEP_ARM_MAX_ELONGATION = 2.1
 
 
 @pytest.mark.slow
@@ -547,7 +551,7 @@ def test_deep_upper_arms_are_articulated_on_the_camera_path(tmp_path: Path) -> N
     aligned = {a["label"]: a for a in run["info"]["articulation"]}
     for side, label in (("l", 3), ("r", 4)):
         assert label in aligned, f"upper_arm_{side} was not articulated: {sorted(aligned)}"
-        assert aligned[label]["elongation"] < 2.0 and aligned[label]["depth_scale"] > 1.2, aligned[label]
+        assert aligned[label]["elongation"] < DEEP_ARM_MAX_ELONGATION and aligned[label]["depth_scale"] > 1.2, aligned[label]
         err = 100.0 * (run["estimated_l"][f"upper_arm_{side}"] / run["truth_l"][f"upper_arm_{side}"] - 1.0)
         assert abs(err) < BOUND_DEEP_UPPER_ARM_NOER, (side, err)
 

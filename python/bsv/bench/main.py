@@ -27,6 +27,7 @@ from ..bodies.cohort import (
     turn_help,
     turn_range_arg,
 )
+from .compare import DEFAULT_MAX_GAP
 from .reference import CONDITIONS
 from .synth import COHORTS, SynthConfig
 
@@ -47,6 +48,23 @@ def _ints(text: str) -> tuple[int, ...]:
 
 
 _param = key_value
+
+
+def _labels(text: str) -> tuple[str, str]:
+    items = [t.strip() for t in text.split(",")]
+    if len(items) != 2 or not all(items):
+        raise argparse.ArgumentTypeError(f"{text!r}: give two names, e.g. camera,oracle")
+    return items[0], items[1]
+
+
+def _points(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (value >= 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"{text!r}: give a number of points >= 0, e.g. 1")
+    return value
 
 
 def dask_options(p: argparse.ArgumentParser, what: str) -> None:
@@ -152,6 +170,22 @@ def parser() -> argparse.ArgumentParser:
     f.add_argument("--seed", type=seed, default=0, help="scan seed (default 0)")
     dask_options(f, "scans")
     common(f, "bench_faust")
+
+    c = sub.add_parser("compare", help="two sets of `bench synth` runs of the same bodies, segment by segment "
+                       "(e.g. the camera path against the oracle labels)")
+    c.add_argument("--runs", nargs="+", required=True, metavar="DIR",
+                   help="--out folders of `bench synth` runs (one per cohort seed), e.g. the camera path's")
+    c.add_argument("--against", nargs="+", required=True, metavar="DIR",
+                   help="--out folders of runs of the same bodies to compare with, e.g. the oracle labels'")
+    c.add_argument("--labels", type=_labels, default=None, metavar="FIRST,SECOND",
+                   help="the two sets' names in the table (default: their segmentation when that differs, else "
+                   "the first folder's name)")
+    c.add_argument("--max-gap", type=_points, default=DEFAULT_MAX_GAP, metavar="POINTS",
+                   help=f"mark a segment whose mean RVE is more than this above the second set's (default "
+                   f"{DEFAULT_MAX_GAP:g}: issue 12's camera-path target)")
+    c.add_argument("--out", default=None, help="also write compare.md, compare.json and compare.png into this "
+                   "folder (refused if they exist, unless --overwrite)")
+    c.add_argument("--overwrite", action="store_true", help="replace compare.* already in --out")
     return ap
 
 
@@ -195,6 +229,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Runs ``bsv bench ...``; returns the process exit code (0 ok, 1 some run failed, 2 bad usage or
     outputs already in --out without --overwrite)."""
     args = parser().parse_args(list(sys.argv[1:] if argv is None else argv))
+    from ..exitcodes import run_command
+
+    if args.command == "compare":
+        from .compare import main_compare
+
+        return run_command("bsv bench compare", lambda: main_compare(args.runs, args.against, args.labels,
+                                                                      args.max_gap, args.out, args.overwrite))
     params = dict(args.param)
     methods = _methods(args)
 
@@ -231,8 +272,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         _print_summary(summary)
         print(f"wrote {args.out}/report.md, results.json, results.csv")
         return 0 if all(r.ok for r in runs) else 1
-
-    from ..exitcodes import run_command
 
     return run_command(f"bsv bench {args.command}", run)
 

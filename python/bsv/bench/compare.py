@@ -1,0 +1,295 @@
+"""``bsv bench compare``: two sets of ``bench synth`` runs of the same bodies, segment by segment.
+
+The camera path's headline is its gap to the oracle labels on the same bodies: a segment's mean RVE with the
+camera's labels less its mean RVE with the scanner's true labels (issue 12's target: at most
+:data:`DEFAULT_MAX_GAP` point). The same table answers "did this change help?" for two engines run on one
+cohort. Runs are paired by (cohort seed, subject, condition); per condition and segment the table gives each
+set's mean RVE, mean signed error and worst subject's signed error, the difference of the mean RVEs (first set
+less second) with its paired standard error, and marks a difference above ``max_gap``. The last row, ``limbs``,
+is each run's mean RVE over the eight limb segments (upper arms, forearms, thighs, shins), averaged.
+
+Two sets are compared only when they hold the same bodies: every paired run must carry the same true volumes
+(the bodies are regenerated from the seed by each run), else :class:`bsv.errors.BenchError` names the subject
+and what to run instead. A pair in which either registration failed is left out and counted.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..bodies.variants import LIMB_SEGMENTS
+from ..errors import BenchError, OutputExistsError
+from .common import signed_error
+from .reference import ordered_conditions
+
+#: The issue's target for the camera path: at most this many points of mean RVE above the oracle labels.
+DEFAULT_MAX_GAP = 1.0
+#: The row holding each run's mean RVE over :data:`LIMB_SEGMENTS`.
+LIMBS_ROW = "limbs"
+#: The table's rows, in order.
+ROWS: tuple[str, ...] = ("trunk_limbs", "torso", *LIMB_SEGMENTS, LIMBS_ROW)
+#: The files ``write_compare`` writes into its output folder.
+OUTPUT_FILES: tuple[str, ...] = ("compare.md", "compare.json", "compare.png")
+#: Two true volumes (litres) closer than this are the same body's.
+SAME_VOLUME_L = 1e-6
+
+Key = tuple[int, str, str]
+
+
+@dataclass(frozen=True)
+class RunSet:
+    """The runs of one or more ``bench synth`` output folders."""
+
+    #: What the set is called in the table.
+    label: str
+    #: The folders read.
+    dirs: tuple[Path, ...]
+    #: The ``config`` block of each folder's results.json, by cohort seed.
+    configs: dict[int, dict[str, Any]]
+    #: The method's runs by (cohort seed, subject, condition), as results.json holds them.
+    runs: dict[Key, dict[str, Any]]
+
+
+def _read_results(d: Path) -> dict[str, Any]:
+    path = d / "results.json"
+    try:
+        doc = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise BenchError(f"{path}: not found; give the --out folder of a finished `bsv bench synth` run") from None
+    except (OSError, ValueError) as exc:
+        raise BenchError(f"{path}: not readable as a benchmark's results ({exc}); run `bsv bench synth` into "
+                         "that folder again") from exc
+    if not isinstance(doc, dict) or not isinstance(doc.get("config"), dict) or not isinstance(doc.get("runs"), list):
+        raise BenchError(f"{path}: no config and runs in it; give the --out folder of a `bsv bench synth` run")
+    if "seed" not in doc["config"] or "segmentation" not in doc["config"]:
+        raise BenchError(f"{path}: not a `bsv bench synth` run (its config has no cohort seed); compare takes "
+                         "synthetic-cohort runs, whose bodies are known")
+    return doc
+
+
+def read_runs(dirs: Sequence[str | Path], label: str | None = None, method: str = "bsv") -> RunSet:
+    """The ``method``'s runs of the ``bench synth`` output folders ``dirs``; ``label`` (default: the first
+    folder's name). :class:`bsv.errors.BenchError` naming the folder for one that is missing or not a
+    ``bench synth`` output, or for two folders of the same cohort seed."""
+    if not dirs:
+        raise BenchError("compare: give at least one `bsv bench synth` output folder per set")
+    paths = tuple(Path(d) for d in dirs)
+    configs: dict[int, dict[str, Any]] = {}
+    runs: dict[Key, dict[str, Any]] = {}
+    where: dict[int, Path] = {}
+    for d in paths:
+        doc = _read_results(d)
+        seed = int(doc["config"]["seed"])
+        if seed in configs:
+            raise BenchError(f"{d} and {where[seed]} both hold cohort seed {seed}: give each seed once per set")
+        configs[seed], where[seed] = doc["config"], d
+        for r in doc["runs"]:
+            if isinstance(r, dict) and r.get("method") == method:
+                runs[(seed, str(r["subject"]), str(r["condition"]))] = r
+    return RunSet(label or paths[0].name, paths, configs, runs)
+
+
+def default_labels(a: RunSet, b: RunSet) -> tuple[str, str]:
+    """The sets' labels: their segmentation ("camera", "oracle") when that is what differs, else their own."""
+    seg_a = {str(c.get("segmentation")) for c in a.configs.values()}
+    seg_b = {str(c.get("segmentation")) for c in b.configs.values()}
+    if len(seg_a) == 1 and len(seg_b) == 1 and seg_a != seg_b:
+        return seg_a.pop(), seg_b.pop()
+    return a.label, b.label
+
+
+def pairs(a: RunSet, b: RunSet) -> list[Key]:
+    """The (seed, subject, condition) keys both sets ran, checked to be the same bodies (equal true volumes);
+    :class:`bsv.errors.BenchError` when none are shared or a shared key's bodies differ."""
+    keys = sorted(set(a.runs) & set(b.runs))
+    if not keys:
+        raise BenchError(f"compare: {a.label} (seeds {sorted(a.configs)}) and {b.label} (seeds {sorted(b.configs)}) "
+                         "share no (seed, subject, condition): run both on the same --seed, --n and --conditions")
+    for k in keys:
+        ta, tb = a.runs[k].get("truth_l") or {}, b.runs[k].get("truth_l") or {}
+        for seg in ROWS[:-1]:
+            if seg in ta and seg in tb and abs(float(ta[seg]) - float(tb[seg])) > SAME_VOLUME_L:
+                raise BenchError(
+                    f"compare: seed {k[0]} {k[1]} is not the same body in {a.label} and {b.label} (true {seg} "
+                    f"{float(ta[seg]):.4f} L against {float(tb[seg]):.4f} L): compare runs of one cohort (the same "
+                    "--seed, --cohort, --macros, --bmi-shift and pose ranges)")
+    return keys
+
+
+def _errors(run: Mapping[str, Any], row: str) -> tuple[float, float]:
+    """(RVE, signed error) of a run's row, %: for :data:`LIMBS_ROW` the means over the eight limb segments."""
+    if row == LIMBS_ROW:
+        e = np.array([_errors(run, s)[1] for s in LIMB_SEGMENTS])
+        return float(np.mean(np.abs(e))), float(np.mean(e))
+    e1 = signed_error(float(run["estimated_l"][row]), float(run["truth_l"][row]))
+    return abs(e1), e1
+
+
+def _has(run: Mapping[str, Any], row: str) -> bool:
+    segs = LIMB_SEGMENTS if row == LIMBS_ROW else (row,)
+    return bool(run.get("ok")) and all(s in (run.get("estimated_l") or {}) and s in (run.get("truth_l") or {})
+                                       for s in segs)
+
+
+def _side(runs: Sequence[Mapping[str, Any]], keys: Sequence[Key], row: str) -> dict[str, Any]:
+    """One set's cell: mean RVE, mean signed error, and the worst run's signed error (for :data:`LIMBS_ROW`:
+    its mean RVE over the limbs) and which run it is."""
+    e = np.array([_errors(r, row) for r in runs])
+    worst = int(np.argmax(e[:, 0]))
+    return {"mean_rve": float(np.mean(e[:, 0])), "signed": float(np.mean(e[:, 1])),
+            "worst": float(e[worst, 0] if row == LIMBS_ROW else e[worst, 1]),
+            "worst_run": f"seed {keys[worst][0]} {keys[worst][1]}"}
+
+
+def compare_runs(a: RunSet, b: RunSet, max_gap: float = DEFAULT_MAX_GAP,
+                 labels: tuple[str, str] | None = None) -> dict[str, Any]:
+    """The comparison of ``a`` against ``b`` (JSON-ready; see the module notes): ``labels``, ``max_gap``, and
+    per condition the pairs used, the pairs left out because a run failed (by set) and one record per row of
+    :data:`ROWS`: each set's ``mean_rve``, ``signed``, ``worst`` (signed %, and which run), the ``gap`` (first
+    less second, points), its paired standard error ``gap_se`` and ``over`` (gap > ``max_gap``)."""
+    if not (np.isfinite(max_gap) and max_gap >= 0):
+        raise BenchError(f"compare: max_gap must be a number of points >= 0, got {max_gap!r}")
+    la, lb = labels or default_labels(a, b)
+    keys = pairs(a, b)
+    out: dict[str, Any] = {"labels": [la, lb], "max_gap": float(max_gap),
+                           "dirs": [[str(d) for d in a.dirs], [str(d) for d in b.dirs]], "conditions": {}}
+    for cond in ordered_conditions({k[2] for k in keys}):
+        ck = [k for k in keys if k[2] == cond]
+        failed = {la: sum(not a.runs[k].get("ok") for k in ck), lb: sum(not b.runs[k].get("ok") for k in ck)}
+        rows: dict[str, Any] = {}
+        for row in ROWS:
+            kk = [k for k in ck if _has(a.runs[k], row) and _has(b.runs[k], row)]
+            if not kk:
+                continue
+            ra, rb = [a.runs[k] for k in kk], [b.runs[k] for k in kk]
+            sa, sb = _side(ra, kk, row), _side(rb, kk, row)
+            d = np.array([_errors(r, row)[0] for r in ra]) - np.array([_errors(r, row)[0] for r in rb])
+            se = float(np.std(d, ddof=1) / np.sqrt(len(d))) if len(d) > 1 else float("nan")
+            gap = sa["mean_rve"] - sb["mean_rve"]
+            rows[row] = {"n": len(kk), la: sa, lb: sb, "gap": float(gap), "gap_se": se, "over": bool(gap > max_gap)}
+        used = sum(1 for k in ck if a.runs[k].get("ok") and b.runs[k].get("ok"))
+        out["conditions"][cond] = {"pairs": used, "failed": failed, "rows": rows}
+    return out
+
+
+def _cell(side: Mapping[str, Any]) -> str:
+    return f"{side['mean_rve']:.2f} / {side['signed']:+.2f} / {side['worst']:+.1f}"
+
+
+def compare_markdown(result: Mapping[str, Any]) -> str:
+    """The comparison (:func:`compare_runs`) as markdown: one table per condition, the cells over the gap
+    in bold, and a line listing them."""
+    la, lb = result["labels"]
+    md = [(f"Mean RVE / mean signed / worst subject's signed error (%), {la} against {lb} on the same bodies; "
+           f"gap = {la} less {lb} (points, +- its paired standard error); **bold**: more than "
+           f"{result['max_gap']:g} point. `{LIMBS_ROW}`: each run's mean RVE and mean signed error over the eight limb "
+           "segments; its worst is the largest run's mean RVE."), ""]
+    over = []
+    for cond, c in result["conditions"].items():
+        fails = ", ".join(f"{n} {lab}" for lab, n in c["failed"].items() if n)
+        md += [f"### {cond} ({c['pairs']} pairs{'; failed: ' + fails if fails else ''})", "",
+               f"| segment | {la} | {lb} | gap |", "|---|---|---|---|"]
+        for row, r in c["rows"].items():
+            gap = f"{r['gap']:+.2f} +- {r['gap_se']:.2f}"
+            if r["over"]:
+                gap = f"**{gap}**"
+                over.append(f"{row} {cond} ({r['gap']:+.2f})")
+            md.append(f"| {row} | {_cell(r[la])} | {_cell(r[lb])} | {gap} |")
+        md.append("")
+    md.append(f"Over {result['max_gap']:g} point: {', '.join(over)}." if over
+              else f"Every gap is within {result['max_gap']:g} point.")
+    return "\n".join(md) + "\n"
+
+
+def compare_figure(result: Mapping[str, Any], path: str | Path) -> Path:
+    """Per condition, each segment's mean RVE in both sets (bars) and the gap (printed above, red when over
+    ``max_gap``), as a PNG."""
+    from .figures import _plt
+
+    plt = _plt()
+    la, lb = result["labels"]
+    conds = list(result["conditions"].items())
+    fig, axes = plt.subplots(len(conds), 1, figsize=(10.0, 3.4 * len(conds)), squeeze=False)
+    for ax, (cond, c) in zip(axes[:, 0], conds, strict=True):
+        names = list(c["rows"])
+        x = np.arange(len(names))
+        va = [c["rows"][n][la]["mean_rve"] for n in names]
+        vb = [c["rows"][n][lb]["mean_rve"] for n in names]
+        ax.bar(x - 0.2, va, 0.4, label=la, color="tab:blue")
+        ax.bar(x + 0.2, vb, 0.4, label=lb, color="tab:grey")
+        for xi, n in zip(x, names, strict=True):
+            r = c["rows"][n]
+            ax.annotate(f"{r['gap']:+.2f}", (xi, max(r[la]["mean_rve"], r[lb]["mean_rve"])), xytext=(0, 3),
+                        textcoords="offset points", ha="center", fontsize=8,
+                        color="tab:red" if r["over"] else "black", fontweight="bold" if r["over"] else "normal")
+        ax.set_ylim(0.0, 1.18 * max([*va, *vb, 0.1]))
+        ax.set_xticks(x)
+        ax.set_xticklabels(names, rotation=30, ha="right")
+        ax.set_ylabel("mean RVE (%)")
+        ax.set_title(f"{cond}: {la} against {lb} ({c['pairs']} pairs; gap above each pair, red: over "
+                     f"{result['max_gap']:g} point)", fontsize=9)
+        ax.legend(fontsize=8)
+        ax.grid(axis="y", alpha=0.3)
+    fig.tight_layout()
+    out = Path(path)
+    fig.savefig(out, dpi=110, format="png")
+    plt.close(fig)
+    return out
+
+
+def existing(out: str | Path) -> list[str]:
+    """The files of :data:`OUTPUT_FILES` already in ``out``."""
+    return [n for n in OUTPUT_FILES if (Path(out) / n).exists()]
+
+
+def write_compare(out: str | Path, result: Mapping[str, Any], overwrite: bool = False) -> list[Path]:
+    """Writes compare.md, compare.json and compare.png into ``out`` (created). Existing ones are refused
+    (:class:`bsv.errors.OutputExistsError`) unless ``overwrite``; each file is written under a temporary name
+    and renamed only when all three are made, so a failure leaves no partial set."""
+    d = Path(out)
+    if d.exists() and not d.is_dir():
+        raise OutputExistsError(f"{d} exists and is not a folder; choose another --out folder")
+    found = existing(d)
+    if found and not overwrite:
+        raise OutputExistsError(f"{d} already holds {', '.join(found)}; pass --overwrite to replace them, or "
+                                "choose another --out folder")
+    d.mkdir(parents=True, exist_ok=True)
+    tmp = {n: d / f".{n}.partial" for n in OUTPUT_FILES}
+    try:
+        tmp["compare.md"].write_text("# bsv bench compare\n\n" + compare_markdown(result))
+        tmp["compare.json"].write_text(json.dumps(result, indent=1) + "\n")
+        compare_figure(result, tmp["compare.png"])
+        for n, p in tmp.items():
+            os.replace(p, d / n)
+    finally:
+        for p in tmp.values():
+            if p.exists():
+                p.unlink()
+    return [d / n for n in OUTPUT_FILES]
+
+
+def main_compare(runs: Iterable[str], against: Iterable[str], labels: tuple[str, str] | None = None,
+                 max_gap: float = DEFAULT_MAX_GAP, out: str | None = None, overwrite: bool = False) -> int:
+    """``bsv bench compare``: prints the comparison's markdown and, with ``out``, writes its files; returns 0.
+    An ``out`` already holding its files is refused before anything is read (unless ``overwrite``)."""
+    if out is not None and existing(out) and not overwrite:
+        raise OutputExistsError(f"{out} already holds {', '.join(existing(out))}; pass --overwrite to replace "
+                                "them, or choose another --out folder")
+    a, b = read_runs(list(runs)), read_runs(list(against))
+    result = compare_runs(a, b, max_gap, labels)
+    print(compare_markdown(result), end="")
+    if out is not None:
+        write_compare(out, result, overwrite=overwrite)
+        print(f"wrote {out}/compare.md, compare.json, compare.png")
+    return 0
+
+
+__all__ = ["DEFAULT_MAX_GAP", "LIMBS_ROW", "OUTPUT_FILES", "ROWS", "RunSet", "compare_figure", "compare_markdown",
+           "compare_runs", "default_labels", "main_compare", "pairs", "read_runs", "write_compare"]

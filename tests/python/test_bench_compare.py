@@ -1,0 +1,147 @@
+"""`bsv bench compare`: two sets of `bench synth` runs of the same bodies, segment by segment."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bsv.bench.compare import (
+    LIMBS_ROW,
+    OUTPUT_FILES,
+    ROWS,
+    compare_markdown,
+    compare_runs,
+    read_runs,
+    write_compare,
+)
+from bsv.bench.main import main as bench_main
+from bsv.bodies.variants import LIMB_SEGMENTS
+from bsv.errors import BenchError, OutputExistsError
+
+SEGMENTS = ROWS[:-1]
+
+
+def _truth(subject: int) -> dict[str, float]:
+    return {s: 1.0 + 0.1 * k + 0.01 * subject for k, s in enumerate(SEGMENTS)}
+
+
+def _write(d: Path, seed: int, segmentation: str, errors: dict[tuple[int, str], dict[str, float]],
+           failed: tuple[tuple[int, str], ...] = (), truth_shift: float = 0.0) -> Path:
+    """A bench synth results.json whose runs have the given signed errors (%) per (subject, condition)."""
+    runs = []
+    for (subject, cond), errs in errors.items():
+        truth = {s: v + truth_shift for s, v in _truth(subject).items()}
+        est = {s: truth[s] * (1 + errs.get(s, 0.0) / 100) for s in SEGMENTS}
+        ok = (subject, cond) not in failed
+        runs.append({"subject": f"subject_{subject:03d}", "condition": cond, "method": "bsv", "ok": ok,
+                     "truth_l": truth, "estimated_l": est if ok else {}})
+    d.mkdir(parents=True, exist_ok=True)
+    (d / "results.json").write_text(json.dumps({"config": {"seed": seed, "segmentation": segmentation}, "runs": runs}))
+    return d
+
+
+def test_the_gap_is_the_difference_of_the_mean_rves_paired_by_subject(tmp_path: Path) -> None:
+    cam = {(0, "noer"): {"forearm_l": 3.0, "torso": -1.0}, (1, "noer"): {"forearm_l": -2.0, "torso": 0.5}}
+    orc = {(0, "noer"): {"forearm_l": 0.5, "torso": 0.2}, (1, "noer"): {"forearm_l": -0.3, "torso": -0.2}}
+    a = read_runs([_write(tmp_path / "cam", 3, "camera", cam)])
+    b = read_runs([_write(tmp_path / "orc", 3, "oracle", orc)])
+    r = compare_runs(a, b)
+    assert r["labels"] == ["camera", "oracle"]  # the segmentations, which differ
+    rows = r["conditions"]["noer"]["rows"]
+    fa = rows["forearm_l"]
+    assert fa["camera"]["mean_rve"] == pytest.approx(2.5) and fa["oracle"]["mean_rve"] == pytest.approx(0.4)
+    assert fa["camera"]["signed"] == pytest.approx(0.5) and fa["camera"]["worst"] == pytest.approx(3.0)
+    assert fa["camera"]["worst_run"] == "seed 3 subject_000"
+    assert fa["gap"] == pytest.approx(2.1) and fa["over"]
+    assert fa["gap_se"] == pytest.approx(np.std([2.5, 1.7], ddof=1) / np.sqrt(2))
+    assert rows["torso"]["gap"] == pytest.approx(0.55) and not rows["torso"]["over"]
+    # the limbs row: each run's mean over the eight limbs (only forearm_l is off here)
+    assert rows[LIMBS_ROW]["camera"]["mean_rve"] == pytest.approx(2.5 / len(LIMB_SEGMENTS))
+    assert rows[LIMBS_ROW]["camera"]["signed"] == pytest.approx(0.5 / len(LIMB_SEGMENTS))
+    md = compare_markdown(r)
+    assert "| forearm_l | 2.50 / +0.50 / +3.0 | 0.40 / +0.10 / +0.5 | **+2.10 +- 0.40** |" in md
+    assert "Over 1 point: forearm_l noer (+2.10)." in md
+    # a larger allowance marks nothing
+    assert "Every gap is within 3 point." in compare_markdown(compare_runs(a, b, max_gap=3.0))
+
+
+def test_several_seeds_pool_and_failed_pairs_are_left_out_and_counted(tmp_path: Path) -> None:
+    err = {(0, "noer"): {"shin_l": 1.0}, (1, "noer"): {"shin_l": 2.0}, (0, "l515"): {"shin_l": 4.0}}
+    a = read_runs([_write(tmp_path / "a0", 0, "camera", err, failed=((1, "noer"),)),
+                   _write(tmp_path / "a1", 1, "camera", err)])
+    b = read_runs([_write(tmp_path / "b0", 0, "oracle", {k: {} for k in err}),
+                   _write(tmp_path / "b1", 1, "oracle", {k: {} for k in err}),
+                   _write(tmp_path / "b2", 2, "oracle", {k: {} for k in err})])  # a seed the first set lacks
+    r = compare_runs(a, b, labels=("new", "old"))
+    noer = r["conditions"]["noer"]
+    assert noer["pairs"] == 3 and noer["failed"] == {"new": 1, "old": 0}
+    assert noer["rows"]["shin_l"]["n"] == 3
+    assert noer["rows"]["shin_l"]["new"]["mean_rve"] == pytest.approx((1 + 1 + 2) / 3)
+    assert list(r["conditions"]) == ["noer", "l515"]  # the benchmark's order
+    assert "failed: 1 new" in compare_markdown(r)
+
+
+def test_other_bodies_no_shared_runs_and_bad_folders_are_refused(tmp_path: Path) -> None:
+    err = {(0, "noer"): {}}
+    a = read_runs([_write(tmp_path / "a", 0, "camera", err)])
+    with pytest.raises(BenchError, match=r"not the same body.*--seed"):
+        compare_runs(a, read_runs([_write(tmp_path / "b", 0, "oracle", err, truth_shift=0.01)]))
+    with pytest.raises(BenchError, match="share no"):
+        compare_runs(a, read_runs([_write(tmp_path / "c", 1, "oracle", err)]))
+    with pytest.raises(BenchError, match="not found"):
+        read_runs([tmp_path / "missing"])
+    (tmp_path / "junk").mkdir()
+    (tmp_path / "junk" / "results.json").write_text("{not json")
+    with pytest.raises(BenchError, match="not readable"):
+        read_runs([tmp_path / "junk"])
+    (tmp_path / "boxes").mkdir()
+    (tmp_path / "boxes" / "results.json").write_text(json.dumps({"config": {"seeds": 3}, "runs": []}))
+    with pytest.raises(BenchError, match="not a `bsv bench synth` run"):
+        read_runs([tmp_path / "boxes"])
+    with pytest.raises(BenchError, match="both hold cohort seed 0"):
+        read_runs([tmp_path / "a", tmp_path / "a"])
+    with pytest.raises(BenchError, match="max_gap"):
+        compare_runs(a, a, max_gap=float("nan"))
+
+
+def test_outputs_are_written_whole_or_not_at_all(tmp_path: Path, monkeypatch) -> None:
+    err = {(0, "noer"): {"thigh_r": 1.5}}
+    a = read_runs([_write(tmp_path / "a", 0, "camera", err)])
+    b = read_runs([_write(tmp_path / "b", 0, "oracle", {(0, "noer"): {}})])
+    r = compare_runs(a, b)
+    out = tmp_path / "out"
+    paths = write_compare(out, r)
+    assert [p.name for p in paths] == list(OUTPUT_FILES) and all(p.stat().st_size > 0 for p in paths)
+    assert json.loads((out / "compare.json").read_text())["conditions"]["noer"]["rows"]["thigh_r"]["gap"] == pytest.approx(1.5)
+    with pytest.raises(OutputExistsError, match="--overwrite"):
+        write_compare(out, r)
+    write_compare(out, r, overwrite=True)
+
+    def broken(*_args: object) -> None:
+        raise RuntimeError("figure failed")
+
+    monkeypatch.setattr("bsv.bench.compare.compare_figure", broken)
+    fresh = tmp_path / "fresh"
+    with pytest.raises(RuntimeError):
+        write_compare(fresh, r)
+    assert list(fresh.iterdir()) == []  # nothing half-written
+
+
+def test_the_command_prints_the_table_and_refuses_bad_input(tmp_path: Path, capsys) -> None:
+    a = _write(tmp_path / "a", 0, "camera", {(0, "noer"): {"upper_arm_r": -2.0}})
+    b = _write(tmp_path / "b", 0, "oracle", {(0, "noer"): {}})
+    assert bench_main(["compare", "--runs", str(a), "--against", str(b), "--out", str(tmp_path / "o")]) == 0
+    out = capsys.readouterr().out
+    assert "| upper_arm_r | 2.00 / -2.00 / -2.0 | 0.00 / +0.00 / +0.0 | **+2.00" in out
+    assert (tmp_path / "o" / "compare.png").exists()
+    assert bench_main(["compare", "--runs", str(a), "--against", str(b), "--out", str(tmp_path / "o")]) == 2
+    assert "--overwrite" in capsys.readouterr().err
+    assert bench_main(["compare", "--runs", str(tmp_path / "none"), "--against", str(b)]) == 2
+    assert "not found" in capsys.readouterr().err
+    for bad in (["--labels", "x"], ["--max-gap", "-1"], ["--max-gap", "lots"]):
+        with pytest.raises(SystemExit) as e:
+            bench_main(["compare", "--runs", str(a), "--against", str(b), *bad])
+        assert e.value.code == 2

@@ -35,7 +35,7 @@ from tqdm import tqdm
 
 import bsv
 from bsv.bench.joints import camera_segmentations, capture_views_geometry
-from bsv.bodies.cohort import NARROW_HIP_ABDUCTION_RANGE_DEG
+from bsv.bodies.cohort import HIP_ABDUCTION_RANGE_DEG, NARROW_HIP_ABDUCTION_RANGE_DEG
 from bsv.frontend.groin import CROTCH_LOW_MARGIN_M, crotch_from_depth
 from bsv.frontend.landmarks import body_frame
 from bsv.frontend.sex import build_score
@@ -49,15 +49,18 @@ PREDICTORS = ("1", "sex", "build", "thigh")
 BELOW_PREDICTORS = ("1", "sex", "thigh")
 
 
-def collect(n: int, seed: int, condition: str, cache: dict, narrow: bool = False) -> list[Row]:
+def collect(n: int, seed: int, condition: str, cache: dict, narrow: bool = False, macros: str = "standard") -> list[Row]:
     """The rows of the first ``n`` subjects of a cohort seed (read from and added to ``cache``); ``narrow``: the
-    cohort standing with its feet nearly together (bsv.bodies.NARROW_HIP_ABDUCTION_RANGE_DEG)."""
+    cohort standing with its feet nearly together (bsv.bodies.NARROW_HIP_ABDUCTION_RANGE_DEG); ``macros``: the
+    cohort's macro ranges (bsv.bodies.MACRO_RANGES; "wide": MakeHuman's gender, muscle and proportions over
+    their whole range)."""
     out = []
-    for i in tqdm(range(n), desc=f"seed {seed}{' narrow' if narrow else ''}", unit="subject"):
-        key = f"{seed}/{i}/{condition}" + ("/narrow" if narrow else "")
+    tag = (" narrow" if narrow else "") + ("" if macros == "standard" else f" {macros}")
+    for i in tqdm(range(n), desc=f"seed {seed}{tag}", unit="subject"):
+        key = f"{seed}/{i}/{condition}" + ("/narrow" if narrow else "") + ("" if macros == "standard" else f"/{macros}")
         if key not in cache:
-            s = (bsv.bodies.subject(i, seed, leg_range=NARROW_HIP_ABDUCTION_RANGE_DEG) if narrow
-                 else bsv.bodies.subject(i, seed))
+            s = bsv.bodies.subject(i, seed, leg_range=NARROW_HIP_ABDUCTION_RANGE_DEG if narrow
+                                   else HIP_ABDUCTION_RANGE_DEG, macros=macros)
             mesh = s.body.mesh()
             loops = {name: np.asarray(mesh.vertices)[v].mean(axis=0).tolist() for name, v, _ in boundary_rings(mesh)}
             with tempfile.TemporaryDirectory(prefix="bsv-capture-") as tmp:
@@ -77,7 +80,8 @@ def collect(n: int, seed: int, condition: str, cache: dict, narrow: bool = False
                           "frame": None if frame is None else frame.tolist(),
                           "sex": 0.0 if sex is None else float(sex.score),
                           "build": 0.0 if sex is None else float(build_score(sex.measurements)),
-                          "below": below, "thigh": thigh}
+                          "below": below, "thigh": thigh,
+                          "joints": {k: np.asarray(j.xyz).tolist() for k, j in joints.items()}}
         c = cache[key]
         out.append((None if c["crotch"] is None else np.array(c["crotch"]),
                     {k: np.array(v) for k, v in c["loops"].items()},
@@ -125,6 +129,8 @@ def main() -> None:
     ap.add_argument("--train-seeds", default="11,12,13,14,15,16")
     ap.add_argument("--eval-seeds", default="0,2")
     ap.add_argument("--narrow-seeds", default="", help="evaluation cohorts standing with their feet nearly together")
+    ap.add_argument("--wide-train-seeds", default="", help="training cohorts drawn with the wide macro ranges")
+    ap.add_argument("--wide-eval-seeds", default="", help="evaluation cohorts drawn with the wide macro ranges")
     ap.add_argument("--condition", default="noer")
     ap.add_argument("--cache", help="JSON file of measured crotches and true loops (read if present, then written)")
     a = ap.parse_args()
@@ -133,8 +139,12 @@ def main() -> None:
         cache = json.loads(Path(a.cache).read_text())
     try:
         train = [r for s in a.train_seeds.split(",") for r in collect(a.n, int(s), a.condition, cache)]
+        train += [r for s in a.wide_train_seeds.split(",") if s for r in collect(a.n, int(s), a.condition, cache,
+                                                                                 macros="wide")]
         evaluation = [r for s in a.eval_seeds.split(",") for r in collect(a.n, int(s), a.condition, cache)]
         narrow = [r for s in a.narrow_seeds.split(",") if s for r in collect(a.n, int(s), a.condition, cache, narrow=True)]
+        wide = [r for s in a.wide_eval_seeds.split(",") if s for r in collect(a.n, int(s), a.condition, cache,
+                                                                               macros="wide")]
     finally:
         if a.cache:
             Path(a.cache).write_text(json.dumps(cache))
@@ -146,7 +156,7 @@ def main() -> None:
     for i, p in enumerate(PREDICTORS):
         print(f'    "{p}": ({coef[i, 0]:.4f}, {coef[i, 1]:.4f}, {coef[i, 2]:.4f}),')
     print("}")
-    for name, every in (("train", train), ("eval", evaluation), ("narrow stance", narrow)):
+    for name, every in (("train", train), ("eval", evaluation), ("narrow stance", narrow), ("wide macros", wide)):
         if not every:
             continue
         rows = [r for r in every if not low(r, below)]

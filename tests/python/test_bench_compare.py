@@ -84,6 +84,16 @@ def test_several_seeds_pool_and_failed_pairs_are_left_out_and_counted(tmp_path: 
     assert "failed: 1 new" in compare_markdown(r)
 
 
+def test_two_engines_in_folders_of_one_name_keep_both_columns(tmp_path: Path) -> None:
+    a = read_runs([_write(tmp_path / "new" / "seed0", 0, "camera", {(0, "noer"): {"shin_r": 2.0}})])
+    b = read_runs([_write(tmp_path / "old" / "seed0", 0, "camera", {(0, "noer"): {"shin_r": 1.0}})])
+    r = compare_runs(a, b)
+    assert r["labels"] == ["seed0 (runs)", "seed0 (against)"]
+    assert r["conditions"]["noer"]["rows"]["shin_r"]["gap"] == pytest.approx(1.0)
+    with pytest.raises(BenchError, match="different labels"):
+        compare_runs(a, b, labels=("x", "x"))
+
+
 def test_other_bodies_no_shared_runs_and_bad_folders_are_refused(tmp_path: Path) -> None:
     err = {(0, "noer"): {}}
     a = read_runs([_write(tmp_path / "a", 0, "camera", err)])

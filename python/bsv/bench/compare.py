@@ -97,11 +97,14 @@ def read_runs(dirs: Sequence[str | Path], label: str | None = None, method: str 
 
 
 def default_labels(a: RunSet, b: RunSet) -> tuple[str, str]:
-    """The sets' labels: their segmentation ("camera", "oracle") when that is what differs, else their own."""
+    """The sets' labels: their segmentation ("camera", "oracle") when that is what differs, else their own
+    (marked "(runs)" and "(against)" when those are the same)."""
     seg_a = {str(c.get("segmentation")) for c in a.configs.values()}
     seg_b = {str(c.get("segmentation")) for c in b.configs.values()}
     if len(seg_a) == 1 and len(seg_b) == 1 and seg_a != seg_b:
         return seg_a.pop(), seg_b.pop()
+    if a.label == b.label:  # e.g. two engines' runs of one seed, each in a folder of the same name
+        return f"{a.label} (runs)", f"{b.label} (against)"
     return a.label, b.label
 
 
@@ -157,6 +160,8 @@ def compare_runs(a: RunSet, b: RunSet, max_gap: float = DEFAULT_MAX_GAP,
     if not (np.isfinite(max_gap) and max_gap >= 0):
         raise BenchError(f"compare: max_gap must be a number of points >= 0, got {max_gap!r}")
     la, lb = labels or default_labels(a, b)
+    if la == lb:
+        raise BenchError(f"compare: the two sets need different labels, got {la!r} twice")
     keys = pairs(a, b)
     out: dict[str, Any] = {"labels": [la, lb], "max_gap": float(max_gap),
                            "dirs": [[str(d) for d in a.dirs], [str(d) for d in b.dirs]], "conditions": {}}

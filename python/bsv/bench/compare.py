@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from ..bodies.variants import LIMB_SEGMENTS
-from ..errors import BenchError, OutputExistsError
+from ..errors import BenchError
 from .common import signed_error
 from .reference import ordered_conditions
 
@@ -258,13 +258,10 @@ def write_compare(out: str | Path, result: Mapping[str, Any], overwrite: bool = 
     """Writes compare.md, compare.json and compare.png into ``out`` (created). Existing ones are refused
     (:class:`bsv.errors.OutputExistsError`) unless ``overwrite``; each file is written under a temporary name
     and renamed only when all three are made, so a failure leaves no partial set."""
+    from .output import check_outputs
+
+    check_outputs(out, overwrite, existing)
     d = Path(out)
-    if d.exists() and not d.is_dir():
-        raise OutputExistsError(f"{d} exists and is not a folder; choose another --out folder")
-    found = existing(d)
-    if found and not overwrite:
-        raise OutputExistsError(f"{d} already holds {', '.join(found)}; pass --overwrite to replace them, or "
-                                "choose another --out folder")
     d.mkdir(parents=True, exist_ok=True)
     tmp = {n: d / f".{n}.partial" for n in OUTPUT_FILES}
     try:
@@ -284,9 +281,10 @@ def main_compare(runs: Iterable[str], against: Iterable[str], labels: tuple[str,
                  max_gap: float = DEFAULT_MAX_GAP, out: str | None = None, overwrite: bool = False) -> int:
     """``bsv bench compare``: prints the comparison's markdown and, with ``out``, writes its files; returns 0.
     An ``out`` already holding its files is refused before anything is read (unless ``overwrite``)."""
-    if out is not None and existing(out) and not overwrite:
-        raise OutputExistsError(f"{out} already holds {', '.join(existing(out))}; pass --overwrite to replace "
-                                "them, or choose another --out folder")
+    if out is not None:  # before anything is read
+        from .output import check_outputs
+
+        check_outputs(out, overwrite, existing)
     a, b = read_runs(list(runs)), read_runs(list(against))
     result = compare_runs(a, b, max_gap, labels)
     print(compare_markdown(result), end="")

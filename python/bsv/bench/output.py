@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import platform
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -48,13 +48,15 @@ def existing_outputs(out: str | Path) -> list[str]:
     return names
 
 
-def check_outputs(out: str | Path, overwrite: bool = False) -> None:
+def check_outputs(out: str | Path, overwrite: bool = False,
+                  existing: Callable[[str | Path], list[str]] = existing_outputs) -> None:
     """Refuses (:class:`bsv.errors.OutputExistsError`) an output folder that already holds benchmark
-    outputs, unless ``overwrite``; also refuses a file in place of the folder."""
+    outputs (the names ``existing`` finds in it: by default :func:`existing_outputs`), unless ``overwrite``;
+    also refuses a file in place of the folder."""
     d = Path(out)
     if d.exists() and not d.is_dir():
         raise OutputExistsError(f"{d} exists and is not a folder; choose another --out folder")
-    found = existing_outputs(d)
+    found = existing(d)
     if found and not overwrite:
         raise OutputExistsError(f"{d} already holds {', '.join(found)}; pass --overwrite (overwrite=True) to "
                                 "replace them, or choose another --out folder")

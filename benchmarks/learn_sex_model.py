@@ -12,6 +12,15 @@ shift: 0 is a known sex, 0.5 the average body) and the subjects named confidentl
 
     .venv/bin/python benchmarks/learn_sex_model.py --train-seeds 11,12,13,14,15,16,17,18 --eval-seeds 0,1,2,3,4,5,6,7
 
+With ``--wide-train-seeds`` (cohorts of the wide macro ranges, ``bsv.bodies.subject(macros="wide")``: MakeHuman's
+gender over its whole scale) it also fits a gender model, the same logistic form fitted to the fractional target
+1 - gender on the training seeds of both kinds, and prints, on every set, each model's score 2p - 1 against the
+true 1 - 2 x gender (rms, and the subjects on the wrong side of 0). Round 2 session 46 tried that model's score
+for the shoulder lines and did not keep it (BENCH.md):
+
+    .venv/bin/python benchmarks/learn_sex_model.py --train-seeds 11,12,13,14,15,16,17,18 --eval-seeds "" \
+        --wide-train-seeds 11,12,13,14 --wide-eval-seeds 0,1
+
 ``--cache FILE`` keeps the measurements (JSON) so that a second run re-learns without MediaPipe; ``--only-measure``
 fills the cache and stops (two such runs on disjoint seeds can share the two cores).
 """
@@ -30,19 +39,24 @@ from bsv.bench.joints import subject_segmentations
 from bsv.frontend.sex import NAMED_AT, SEX_MEASUREMENTS
 
 
-def measure(n: int, seed: int, cache: dict) -> list[tuple[dict[str, float], float]]:
-    """(measurements, 1 for a woman else 0) of the first ``n`` subjects of a cohort seed (read from and added to
-    ``cache``: key "seed/index" -> {"m": ..., "female": ...})."""
+def measure(n: int, seed: int, cache: dict, macros: str = "standard",
+            target: str = "female") -> list[tuple[dict[str, float], float]]:
+    """(measurements, target) of the first ``n`` subjects of a cohort seed drawn with the ``macros`` ranges (read
+    from and added to ``cache``: key "seed/index" (+ "/wide") -> {"m": ..., "female": ..., "gender": ...}). The
+    target: ``"female"`` 1 for a woman else 0; ``"gender"`` 1 - MakeHuman's gender macro (1 the most female body,
+    0 the most male)."""
     out = []
-    for i in tqdm(range(n), desc=f"seed {seed}", unit="subject"):
-        key = f"{seed}/{i}"
-        if key not in cache:
-            s = bsv.bodies.subject(i, seed)
+    for i in tqdm(range(n), desc=f"seed {seed}{'' if macros == 'standard' else ' ' + macros}", unit="subject"):
+        key = f"{seed}/{i}" + ("" if macros == "standard" else f"/{macros}")
+        if "gender" not in cache.get(key, {}):
+            s = bsv.bodies.subject(i, seed, macros=macros)
             segs, _ = subject_segmentations(s, "noer", seed * 1000 + i)
             est = segs["front"].sex
-            cache[key] = {"m": dict(est.measurements) if est is not None else {}, "female": s.sex == "female"}
+            cache[key] = {"m": dict(est.measurements) if est is not None else {}, "female": s.sex == "female",
+                          "gender": float(s.phenotype.gender)}
         c = cache[key]
-        out.append(({k: float(c["m"].get(k, np.nan)) for k in SEX_MEASUREMENTS}, 1.0 if c["female"] else 0.0))
+        y = (1.0 if c["female"] else 0.0) if target == "female" else 1.0 - float(c["gender"])
+        out.append(({k: float(c["m"].get(k, np.nan)) for k in SEX_MEASUREMENTS}, y))
     return out
 
 
@@ -91,6 +105,19 @@ def report(name: str, model: dict, rows: list[tuple[dict[str, float], float]]) -
           f"named wrongly {int(wrong.sum())}")
 
 
+def report_scores(name: str, models: dict[str, dict], rows: list[tuple[dict[str, float], float]]) -> None:
+    """Each model's score 2p - 1 against the true continuous score 1 - 2 x gender: rms and the subjects on the wrong
+    side of 0."""
+    truth = np.array([2 * y - 1 for _, y in rows])
+    cells = []
+    for label, model in models.items():
+        score = np.array([2 * probability(model, m) - 1 for m, _ in rows])
+        ok = np.isfinite(score)
+        cells.append(f"{label} rms {np.sqrt(np.mean((score[ok] - truth[ok]) ** 2)):.2f}, "
+                     f"wrong side {int(np.sum(np.sign(score[ok]) != np.sign(truth[ok])))}")
+    print(f"{name} (n {len(rows)}), the score against 1 - 2 gender: " + "; ".join(cells))
+
+
 def main() -> None:
     """Command line: measure, learn on the training seeds, evaluate on the others, print the table."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -101,6 +128,9 @@ def main() -> None:
     ap.add_argument("--cache", action="append", default=[],
                     help="JSON file of measurements (repeatable: all are read; the first is written)")
     ap.add_argument("--only-measure", action="store_true", help="fill the cache for the seeds given and stop")
+    ap.add_argument("--wide-train-seeds", default="", help="cohorts of the wide macro ranges (MakeHuman's gender "
+                    "over its whole scale) added to the training seeds for the gender model")
+    ap.add_argument("--wide-eval-seeds", default="", help="cohorts of the wide macro ranges to evaluate on")
     a = ap.parse_args()
     cache: dict = {}
     for f in a.cache:
@@ -110,6 +140,10 @@ def main() -> None:
     try:
         train = [r for s in seeds(a.train_seeds) for r in measure(a.n, s, cache)]
         evaluation = [r for s in seeds(a.eval_seeds) for r in measure(a.n, s, cache)]
+        gender = {name: [r for s in seeds(std) for r in measure(a.n, s, cache, target="gender")]
+                  + [r for s in seeds(wide) for r in measure(a.n, s, cache, macros="wide", target="gender")]
+                  for name, std, wide in (("train", a.train_seeds, a.wide_train_seeds), ("eval", a.eval_seeds, ""),
+                                          ("wide eval", "", a.wide_eval_seeds))}
     finally:
         if a.cache:
             Path(a.cache[0]).write_text(json.dumps(cache))
@@ -127,6 +161,20 @@ def main() -> None:
     report("train", model, train)
     if evaluation:
         report("eval", model, evaluation)
+    if not seeds(a.wide_train_seeds):
+        return
+    continuous = fit(gender["train"], a.ridge)  # fractional targets: the same Newton steps
+    print("gender model = {")
+    print(f'    "intercept": {continuous["intercept"]:.4f},')
+    for part in ("mean", "scale", "coef"):
+        cells = ", ".join(f'"{k}": {v:.4g}' for k, v in continuous[part].items())
+        print(f'    "{part}": {{{cells}}},')
+    cells = ", ".join(f'"{k}": ({a:.4g}, {b:.4g})' for k, (a, b) in continuous["range"].items())
+    print(f'    "range": {{{cells}}},')
+    print("}")
+    for name, rows in gender.items():
+        if rows:
+            report_scores(name, {"SEX_MODEL": model, "gender model": continuous}, rows)
 
 
 if __name__ == "__main__":

@@ -84,6 +84,18 @@ def test_several_seeds_pool_and_failed_pairs_are_left_out_and_counted(tmp_path: 
     assert "failed: 1 new" in compare_markdown(r)
 
 
+def test_one_pair_has_no_standard_error_and_unreadable_volumes_are_left_out(tmp_path: Path) -> None:
+    a = _write(tmp_path / "a", 0, "camera", {(0, "noer"): {"thigh_l": 2.0}, (1, "noer"): {"thigh_l": 1.0}})
+    doc = json.loads((a / "results.json").read_text())
+    doc["runs"][1]["estimated_l"]["thigh_l"] = None  # a damaged record: that pair's thigh is left out
+    (a / "results.json").write_text(json.dumps(doc))
+    r = compare_runs(read_runs([a]), read_runs([_write(tmp_path / "b", 0, "oracle", {(0, "noer"): {}, (1, "noer"): {}})]))
+    row = r["conditions"]["noer"]["rows"]["thigh_l"]
+    assert row["n"] == 1 and row["gap"] == pytest.approx(2.0) and row["gap_se"] is None
+    assert "| thigh_l |" in compare_markdown(r) and "+- n/a" in compare_markdown(r)
+    assert r["conditions"]["noer"]["rows"]["thigh_r"]["n"] == 2
+
+
 def test_two_engines_in_folders_of_one_name_keep_both_columns(tmp_path: Path) -> None:
     a = read_runs([_write(tmp_path / "new" / "seed0", 0, "camera", {(0, "noer"): {"shin_r": 2.0}})])
     b = read_runs([_write(tmp_path / "old" / "seed0", 0, "camera", {(0, "noer"): {"shin_r": 1.0}})])
@@ -111,6 +123,11 @@ def test_other_bodies_no_shared_runs_and_bad_folders_are_refused(tmp_path: Path)
     (tmp_path / "boxes" / "results.json").write_text(json.dumps({"config": {"seeds": 3}, "runs": []}))
     with pytest.raises(BenchError, match="not a `bsv bench synth` run"):
         read_runs([tmp_path / "boxes"])
+    (tmp_path / "seedless").mkdir()
+    (tmp_path / "seedless" / "results.json").write_text(json.dumps({"config": {"seed": "x", "segmentation": "camera"},
+                                                                    "runs": []}))
+    with pytest.raises(BenchError, match="not a whole number"):
+        read_runs([tmp_path / "seedless"])
     with pytest.raises(BenchError, match="both hold cohort seed 0"):
         read_runs([tmp_path / "a", tmp_path / "a"])
     with pytest.raises(BenchError, match="max_gap"):

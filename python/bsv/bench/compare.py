@@ -16,6 +16,7 @@ and what to run instead. A pair in which either registration failed is left out 
 from __future__ import annotations
 
 import json
+import math
 import os
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -86,12 +87,16 @@ def read_runs(dirs: Sequence[str | Path], label: str | None = None, method: str 
     where: dict[int, Path] = {}
     for d in paths:
         doc = _read_results(d)
-        seed = int(doc["config"]["seed"])
+        try:
+            seed = int(doc["config"]["seed"])
+        except (TypeError, ValueError):
+            raise BenchError(f"{d / 'results.json'}: its cohort seed {doc['config']['seed']!r} is not a whole number; "
+                             "run `bsv bench synth` into that folder again") from None
         if seed in configs:
             raise BenchError(f"{d} and {where[seed]} both hold cohort seed {seed}: give each seed once per set")
         configs[seed], where[seed] = doc["config"], d
         for r in doc["runs"]:
-            if isinstance(r, dict) and r.get("method") == method:
+            if isinstance(r, dict) and r.get("method") == method and "subject" in r and "condition" in r:
                 runs[(seed, str(r["subject"]), str(r["condition"]))] = r
     return RunSet(label or paths[0].name, paths, configs, runs)
 
@@ -116,13 +121,13 @@ def pairs(a: RunSet, b: RunSet) -> list[Key]:
         raise BenchError(f"compare: {a.label} (seeds {sorted(a.configs)}) and {b.label} (seeds {sorted(b.configs)}) "
                          "share no (seed, subject, condition): run both on the same --seed, --n and --conditions")
     for k in keys:
-        ta, tb = a.runs[k].get("truth_l") or {}, b.runs[k].get("truth_l") or {}
         for seg in ROWS[:-1]:
-            if seg in ta and seg in tb and abs(float(ta[seg]) - float(tb[seg])) > SAME_VOLUME_L:
+            ta, tb = _volume(a.runs[k].get("truth_l"), seg), _volume(b.runs[k].get("truth_l"), seg)
+            if ta is not None and tb is not None and abs(ta - tb) > SAME_VOLUME_L:
                 raise BenchError(
                     f"compare: seed {k[0]} {k[1]} is not the same body in {a.label} and {b.label} (true {seg} "
-                    f"{float(ta[seg]):.4f} L against {float(tb[seg]):.4f} L): compare runs of one cohort (the same "
-                    "--seed, --cohort, --macros, --bmi-shift and pose ranges)")
+                    f"{ta:.4f} L against {tb:.4f} L): compare runs of one cohort (the same --seed, --cohort, "
+                    "--macros, --bmi-shift and pose ranges)")
     return keys
 
 
@@ -135,10 +140,18 @@ def _errors(run: Mapping[str, Any], row: str) -> tuple[float, float]:
     return abs(e1), e1
 
 
+def _volume(table: Any, segment: str) -> float | None:
+    """A run's volume (litres) of ``segment`` in its ``estimated_l`` or ``truth_l`` table, None when it is missing
+    or not a finite positive number."""
+    v = table.get(segment) if isinstance(table, Mapping) else None
+    return float(v) if isinstance(v, (int, float)) and math.isfinite(v) and v > 0 else None
+
+
 def _has(run: Mapping[str, Any], row: str) -> bool:
+    """Whether a successful run holds the row's estimated and true volumes."""
     segs = LIMB_SEGMENTS if row == LIMBS_ROW else (row,)
-    return bool(run.get("ok")) and all(s in (run.get("estimated_l") or {}) and s in (run.get("truth_l") or {})
-                                       for s in segs)
+    return bool(run.get("ok")) and all(_volume(run.get("estimated_l"), s) is not None
+                                       and _volume(run.get("truth_l"), s) is not None for s in segs)
 
 
 def _side(runs: Sequence[Mapping[str, Any]], keys: Sequence[Key], row: str) -> dict[str, Any]:
@@ -156,7 +169,8 @@ def compare_runs(a: RunSet, b: RunSet, max_gap: float = DEFAULT_MAX_GAP,
     """The comparison of ``a`` against ``b`` (JSON-ready; see the module notes): ``labels``, ``max_gap``, and
     per condition the pairs used, the pairs left out because a run failed (by set) and one record per row of
     :data:`ROWS`: each set's ``mean_rve``, ``signed``, ``worst`` (signed %, and which run), the ``gap`` (first
-    less second, points), its paired standard error ``gap_se`` and ``over`` (gap > ``max_gap``)."""
+    less second, points), its paired standard error ``gap_se`` (None from one pair) and ``over`` (gap >
+    ``max_gap``)."""
     if not (np.isfinite(max_gap) and max_gap >= 0):
         raise BenchError(f"compare: max_gap must be a number of points >= 0, got {max_gap!r}")
     la, lb = labels or default_labels(a, b)
@@ -176,7 +190,7 @@ def compare_runs(a: RunSet, b: RunSet, max_gap: float = DEFAULT_MAX_GAP,
             ra, rb = [a.runs[k] for k in kk], [b.runs[k] for k in kk]
             sa, sb = _side(ra, kk, row), _side(rb, kk, row)
             d = np.array([_errors(r, row)[0] for r in ra]) - np.array([_errors(r, row)[0] for r in rb])
-            se = float(np.std(d, ddof=1) / np.sqrt(len(d))) if len(d) > 1 else float("nan")
+            se = float(np.std(d, ddof=1) / np.sqrt(len(d))) if len(d) > 1 else None
             gap = sa["mean_rve"] - sb["mean_rve"]
             rows[row] = {"n": len(kk), la: sa, lb: sb, "gap": float(gap), "gap_se": se, "over": bool(gap > max_gap)}
         used = sum(1 for k in ck if a.runs[k].get("ok") and b.runs[k].get("ok"))
@@ -202,7 +216,7 @@ def compare_markdown(result: Mapping[str, Any]) -> str:
         md += [f"### {cond} ({c['pairs']} pairs{'; failed: ' + fails if fails else ''})", "",
                f"| segment | {la} | {lb} | gap |", "|---|---|---|---|"]
         for row, r in c["rows"].items():
-            gap = f"{r['gap']:+.2f} +- {r['gap_se']:.2f}"
+            gap = f"{r['gap']:+.2f} +- " + ("n/a" if r["gap_se"] is None else f"{r['gap_se']:.2f}")
             if r["over"]:
                 gap = f"**{gap}**"
                 over.append(f"{row} {cond} ({r['gap']:+.2f})")

@@ -105,6 +105,18 @@ def report(name: str, model: dict, rows: list[tuple[dict[str, float], float]]) -
           f"named wrongly {int(wrong.sum())}")
 
 
+def print_model(name: str, model: dict) -> None:
+    """Prints a fitted model (:func:`fit`) as the Python table it is pasted as."""
+    print(f"{name} = {{")
+    print(f'    "intercept": {model["intercept"]:.4f},')
+    for part in ("mean", "scale", "coef"):
+        cells = ", ".join(f'"{k}": {v:.4g}' for k, v in model[part].items())
+        print(f'    "{part}": {{{cells}}},')
+    cells = ", ".join(f'"{k}": ({lo:.4g}, {hi:.4g})' for k, (lo, hi) in model["range"].items())
+    print(f'    "range": {{{cells}}},')
+    print("}")
+
+
 def report_scores(name: str, models: dict[str, dict], rows: list[tuple[dict[str, float], float]]) -> None:
     """Each model's score 2p - 1 against the true continuous score 1 - 2 x gender: rms and the subjects on the wrong
     side of 0."""
@@ -150,28 +162,14 @@ def main() -> None:
     if a.only_measure:
         return
     model = fit(train, a.ridge)
-    print("SEX_MODEL = {")
-    print(f'    "intercept": {model["intercept"]:.4f},')
-    for part in ("mean", "scale", "coef"):
-        cells = ", ".join(f'"{k}": {v:.4g}' for k, v in model[part].items())
-        print(f'    "{part}": {{{cells}}},')
-    cells = ", ".join(f'"{k}": ({a:.4g}, {b:.4g})' for k, (a, b) in model["range"].items())
-    print(f'    "range": {{{cells}}},')
-    print("}")
+    print_model("SEX_MODEL", model)
     report("train", model, train)
     if evaluation:
         report("eval", model, evaluation)
     if not seeds(a.wide_train_seeds):
         return
     continuous = fit(gender["train"], a.ridge)  # fractional targets: the same Newton steps
-    print("gender model = {")
-    print(f'    "intercept": {continuous["intercept"]:.4f},')
-    for part in ("mean", "scale", "coef"):
-        cells = ", ".join(f'"{k}": {v:.4g}' for k, v in continuous[part].items())
-        print(f'    "{part}": {{{cells}}},')
-    cells = ", ".join(f'"{k}": ({a:.4g}, {b:.4g})' for k, (a, b) in continuous["range"].items())
-    print(f'    "range": {{{cells}}},')
-    print("}")
+    print_model("gender model", continuous)
     for name, rows in gender.items():
         if rows:
             report_scores(name, {"SEX_MODEL": model, "gender model": continuous}, rows)

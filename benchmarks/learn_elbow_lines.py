@@ -25,7 +25,7 @@ import tempfile
 
 import cv2
 import numpy as np
-from learning import measured, parser
+from learning import learn
 from tqdm import tqdm
 
 import bsv
@@ -118,17 +118,15 @@ def evaluate(name: str, radii: dict[str, float] | None, rows: list[tuple[str, fl
 
 
 def main() -> None:
-    got = measured(parser(__doc__, "0", "1", 6).parse_args(), measure)
-    if got is None:
-        return
-    seeds, rows = got
-    radii = fit(rows["train_seeds"])
-    print("ELBOW_RADIUS_M =", radii)
-    for name, key in (("training", "train_seeds"), ("held out", "eval_seeds")):
-        print(f"{name} seeds {seeds[key]}:")
-        evaluate("as drawn", None, rows[key])
-        evaluate("learned", radii, rows[key])
-        evaluate("shipped", ELBOW_RADIUS_M, rows[key])
+    """Command line: measure, learn ELBOW_RADIUS_M on the training seeds, evaluate (as drawn, learned, shipped)
+    on both sets."""
+
+    def both(radii: dict[str, float], rows: list[tuple[str, float, float]]) -> None:
+        evaluate("as drawn", None, rows)
+        evaluate("learned", radii, rows)
+        evaluate("shipped", ELBOW_RADIUS_M, rows)
+
+    learn(__doc__, "0", "1", 6, measure, fit, "ELBOW_RADIUS_M", both)
 
 
 if __name__ == "__main__":

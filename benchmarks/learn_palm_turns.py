@@ -18,7 +18,7 @@ fills the cache and stops (two such runs on disjoint seeds can share the two cor
 from __future__ import annotations
 
 import numpy as np
-from learning import measured, parser
+from learning import learn
 from tqdm import tqdm
 
 import bsv
@@ -70,18 +70,15 @@ def evaluate(model: dict, rows: list[tuple[float, float | None, float | None]]) 
 
 
 def main() -> None:
-    got = measured(parser(__doc__, "40,41,42,43", "44,45", 10).parse_args(), measure)
-    if got is None:
-        return
-    seeds, rows = got
-    model = fit(rows["train_seeds"])
-    print("PALM_TURN_MODEL =", model)
-    print(f"training seeds {seeds['train_seeds']}:")
-    evaluate(model, rows["train_seeds"])
-    print(f"held out, seeds {seeds['eval_seeds']}:")
-    evaluate(model, rows["eval_seeds"])
-    print("the shipped model, held out:")
-    evaluate(PALM_TURN_MODEL, rows["eval_seeds"])
+    """Command line: measure, learn PALM_TURN_MODEL on the training seeds, evaluate it and the shipped model on both
+    sets."""
+
+    def both(model: dict, rows: list[tuple[float, float | None, float | None]]) -> None:
+        evaluate(model, rows)
+        print("  the shipped model:")
+        evaluate(PALM_TURN_MODEL, rows)
+
+    learn(__doc__, "40,41,42,43", "44,45", 10, measure, fit, "PALM_TURN_MODEL", both)
 
 
 if __name__ == "__main__":

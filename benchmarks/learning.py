@@ -1,5 +1,6 @@
 """What the learning scripts (``benchmarks/learn_palm_turns.py``, ``benchmarks/learn_elbow_lines.py``) share: the
-training and evaluation seeds, the subjects per seed, a JSON cache of the measurements and ``--only-measure``."""
+training and evaluation seeds, the subjects per seed, a JSON cache of the measurements, ``--only-measure``, and the
+run itself (:func:`learn`: measure, fit on the training seeds, print, evaluate on both sets)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ from pathlib import Path
 from typing import TypeVar
 
 T = TypeVar("T")
+M = TypeVar("M")
 
 
 def parser(doc: str, train_seeds: str, eval_seeds: str, n: int) -> argparse.ArgumentParser:
@@ -36,3 +38,19 @@ def measured(args: argparse.Namespace,
         if args.cache:
             args.cache.write_text(json.dumps(cache))
     return None if args.only_measure else (seeds, rows)
+
+
+def learn(doc: str, train_seeds: str, eval_seeds: str, n: int, measure: Callable[[int, int, dict], list[T]],
+          fit: Callable[[list[T]], M], constant: str, evaluate: Callable[[M, list[T]], None]) -> None:
+    """A learning script's whole run: its command line (:func:`parser` with these defaults), the rows
+    (:func:`measured`), the model ``fit`` gives on the training seeds printed as ``constant``, and ``evaluate``
+    of it on the training and the held-out seeds' rows."""
+    got = measured(parser(doc, train_seeds, eval_seeds, n).parse_args(), measure)
+    if got is None:
+        return
+    seeds, rows = got
+    model = fit(rows["train_seeds"])
+    print(f"{constant} =", model)
+    for name, key in (("training", "train_seeds"), ("held out", "eval_seeds")):
+        print(f"{name} seeds {seeds[key]}:")
+        evaluate(model, rows[key])

@@ -172,3 +172,30 @@ def test_the_command_prints_the_table_and_refuses_bad_input(tmp_path: Path, caps
         with pytest.raises(SystemExit) as e:
             bench_main(["compare", "--runs", str(a), "--against", str(b), *bad])
         assert e.value.code == 2
+
+
+def test_the_boundary_loops_are_summarised_per_set_from_the_loops_both_runs_measured(tmp_path: Path) -> None:
+    err = {(0, "noer"): {}, (1, "noer"): {}, (2, "noer"): {}}
+    loops_a = {0: {"elbow_l": 4.0, "elbow_r": -2.0, "knee_l": 1.0}, 1: {"elbow_l": 1.0, "elbow_r": 3.0},
+               2: {"elbow_l": -1.0, "elbow_r": None, "knee_l": 3.0}}
+    loops_b = {0: {"elbow_l": 1.0, "elbow_r": 0.0, "knee_l": 0.0}, 1: {"elbow_l": 0.0, "elbow_r": 1.0},
+               2: {"elbow_l": 2.0, "elbow_r": 0.5, "knee_l": 1.0}}
+    da, db = _write(tmp_path / "a", 0, "camera", err), _write(tmp_path / "b", 0, "oracle", err)
+    for d, loops in ((da, loops_a), (db, loops_b)):
+        doc = json.loads((d / "results.json").read_text())
+        for r in doc["runs"]:
+            r["info"] = {"boundary_errors_mm": loops[int(r["subject"][-3:])]}
+        (d / "results.json").write_text(json.dumps(doc))
+    r = compare_runs(read_runs([da]), read_runs([db]))
+    loops = r["conditions"]["noer"]["loops"]
+    # elbow_r of subject 2 is missing in the first set: its pair is left out of both sets' summaries
+    assert loops["elbow"]["n"] == 5
+    assert loops["elbow"]["camera"]["mean"] == pytest.approx(np.mean([4.0, -2.0, 1.0, 3.0, -1.0]))
+    assert loops["elbow"]["oracle"]["sd"] == pytest.approx(np.std([1.0, 0.0, 0.0, 1.0, 2.0], ddof=1))
+    assert loops["knee"]["n"] == 2 and "wrist" not in loops  # a kind no pair measured is left out
+    md = compare_markdown(r)
+    assert "| elbow (5) | +1.0 +- 2.5 | +0.8 +- 0.8 |" in md
+    # runs without boundary errors (older results) give no loops table
+    plain = compare_runs(read_runs([_write(tmp_path / "c", 0, "camera", err)]),
+                         read_runs([_write(tmp_path / "d", 0, "oracle", err)]))
+    assert plain["conditions"]["noer"]["loops"] == {} and "Boundary loops" not in compare_markdown(plain)

@@ -6,7 +6,9 @@ camera's labels less its mean RVE with the scanner's true labels (issue 12's tar
 cohort. Runs are paired by (cohort seed, subject, condition); per condition and segment the table gives each
 set's mean RVE, mean signed error and worst subject's signed error, the difference of the mean RVEs (first set
 less second) with its paired standard error, and marks a difference above ``max_gap``. The last row, ``limbs``,
-is each run's mean RVE over the eight limb segments (upper arms, forearms, thighs, shins), averaged.
+is each run's mean RVE over the eight limb segments (upper arms, forearms, thighs, shins), averaged. Under each
+condition's table, the boundary loops (:mod:`bsv.bench.boundaries`: how far each fitted loop lies from the true one
+along the limb, left and right pooled) give each set's mean and scatter: what places a segment's volume.
 
 Two sets are compared only when they hold the same bodies: every paired run must carry the same true volumes
 (the bodies are regenerated from the seed by each run), else :class:`bsv.errors.BenchError` names the subject
@@ -27,6 +29,8 @@ import numpy as np
 
 from ..bodies.variants import LIMB_SEGMENTS
 from ..errors import BenchError
+from .boundaries import ALL_KINDS as LOOP_KINDS
+from .boundaries import INFO_KEY as LOOPS_KEY
 from .common import signed_error
 from .reference import ordered_conditions
 
@@ -164,13 +168,41 @@ def _side(runs: Sequence[Mapping[str, Any]], keys: Sequence[Key], row: str) -> d
             "worst_run": f"seed {keys[worst][0]} {keys[worst][1]}"}
 
 
+def _loop_mm(run: Mapping[str, Any], name: str) -> float | None:
+    """A run's boundary error (mm) of loop ``name`` (e.g. ``elbow_l``), None when it has none."""
+    info = run.get("info")
+    table = info.get(LOOPS_KEY) if isinstance(info, Mapping) else None
+    v = table.get(name) if isinstance(table, Mapping) else None
+    return float(v) if isinstance(v, (int, float)) and math.isfinite(v) else None
+
+
+def compare_loops(ra: Sequence[Mapping[str, Any]], rb: Sequence[Mapping[str, Any]], la: str, lb: str,
+                  ) -> dict[str, Any]:
+    """Per loop kind of :data:`LOOP_KINDS` (left and right pooled) over paired runs ``ra`` / ``rb``: ``n`` and each
+    set's ``mean`` and ``sd`` (mm, + = the fitted loop distal of the true one), from the loops both runs of a pair
+    measured; a kind with fewer than two such loops is left out."""
+    out: dict[str, Any] = {}
+    for kind in LOOP_KINDS:
+        va, vb = [], []
+        for x, y in zip(ra, rb, strict=True):
+            for side in ("l", "r"):
+                p, q = _loop_mm(x, f"{kind}_{side}"), _loop_mm(y, f"{kind}_{side}")
+                if p is not None and q is not None:
+                    va.append(p)
+                    vb.append(q)
+        if len(va) >= 2:
+            out[kind] = {"n": len(va), la: {"mean": float(np.mean(va)), "sd": float(np.std(va, ddof=1))},
+                         lb: {"mean": float(np.mean(vb)), "sd": float(np.std(vb, ddof=1))}}
+    return out
+
+
 def compare_runs(a: RunSet, b: RunSet, max_gap: float = DEFAULT_MAX_GAP,
                  labels: tuple[str, str] | None = None) -> dict[str, Any]:
     """The comparison of ``a`` against ``b`` (JSON-ready; see the module notes): ``labels``, ``max_gap``, and
     per condition the pairs used, the pairs left out because a run failed (by set) and one record per row of
     :data:`ROWS`: each set's ``mean_rve``, ``signed``, ``worst`` (signed %, and which run), the ``gap`` (first
     less second, points), its paired standard error ``gap_se`` (None from one pair) and ``over`` (gap >
-    ``max_gap``)."""
+    ``max_gap``); and ``loops``, the boundary loops of the pairs (:func:`compare_loops`)."""
     if not (np.isfinite(max_gap) and max_gap >= 0):
         raise BenchError(f"compare: max_gap must be a number of points >= 0, got {max_gap!r}")
     la, lb = labels or default_labels(a, b)
@@ -193,8 +225,9 @@ def compare_runs(a: RunSet, b: RunSet, max_gap: float = DEFAULT_MAX_GAP,
             se = float(np.std(d, ddof=1) / np.sqrt(len(d))) if len(d) > 1 else None
             gap = sa["mean_rve"] - sb["mean_rve"]
             rows[row] = {"n": len(kk), la: sa, lb: sb, "gap": float(gap), "gap_se": se, "over": bool(gap > max_gap)}
-        used = sum(1 for k in ck if a.runs[k].get("ok") and b.runs[k].get("ok"))
-        out["conditions"][cond] = {"pairs": used, "failed": failed, "rows": rows}
+        ok = [k for k in ck if a.runs[k].get("ok") and b.runs[k].get("ok")]
+        loops = compare_loops([a.runs[k] for k in ok], [b.runs[k] for k in ok], la, lb)
+        out["conditions"][cond] = {"pairs": len(ok), "failed": failed, "rows": rows, "loops": loops}
     return out
 
 
@@ -222,6 +255,12 @@ def compare_markdown(result: Mapping[str, Any]) -> str:
                 over.append(f"{row} {cond} ({r['gap']:+.2f})")
             md.append(f"| {row} | {_cell(r[la])} | {_cell(r[lb])} | {gap} |")
         md.append("")
+        if c.get("loops"):
+            md += [("Boundary loops: where each fitted loop lies from the true one along the limb, mm (+ distal; "
+                    "left and right pooled), mean +- sd:"), "", f"| loop | {la} | {lb} |", "|---|---|---|"]
+            md += [f"| {kind} ({r['n']}) | {r[la]['mean']:+.1f} +- {r[la]['sd']:.1f} | "
+                   f"{r[lb]['mean']:+.1f} +- {r[lb]['sd']:.1f} |" for kind, r in c["loops"].items()]
+            md.append("")
     md.append(f"Over {result['max_gap']:g} point: {', '.join(over)}." if over
               else f"Every gap is within {result['max_gap']:g} point.")
     return "\n".join(md) + "\n"
@@ -308,5 +347,6 @@ def main_compare(runs: Iterable[str], against: Iterable[str], labels: tuple[str,
     return 0
 
 
-__all__ = ["DEFAULT_MAX_GAP", "LIMBS_ROW", "OUTPUT_FILES", "ROWS", "RunSet", "compare_figure", "compare_markdown",
-           "compare_runs", "default_labels", "main_compare", "pairs", "read_runs", "write_compare"]
+__all__ = ["DEFAULT_MAX_GAP", "LIMBS_ROW", "LOOP_KINDS", "OUTPUT_FILES", "ROWS", "RunSet", "compare_figure",
+           "compare_loops", "compare_markdown", "compare_runs", "default_labels", "main_compare", "pairs", "read_runs",
+           "write_compare"]

@@ -144,11 +144,17 @@ def _errors(run: Mapping[str, Any], row: str) -> tuple[float, float]:
     return abs(e1), e1
 
 
+def _number(table: Any, key: str) -> float | None:
+    """``table[key]`` as a float when ``table`` is a mapping holding a finite number there, else None."""
+    v = table.get(key) if isinstance(table, Mapping) else None
+    return float(v) if isinstance(v, (int, float)) and math.isfinite(v) else None
+
+
 def _volume(table: Any, segment: str) -> float | None:
     """A run's volume (litres) of ``segment`` in its ``estimated_l`` or ``truth_l`` table, None when it is missing
     or not a finite positive number."""
-    v = table.get(segment) if isinstance(table, Mapping) else None
-    return float(v) if isinstance(v, (int, float)) and math.isfinite(v) and v > 0 else None
+    v = _number(table, segment)
+    return v if v is not None and v > 0 else None
 
 
 def _has(run: Mapping[str, Any], row: str) -> bool:
@@ -171,9 +177,7 @@ def _side(runs: Sequence[Mapping[str, Any]], keys: Sequence[Key], row: str) -> d
 def _loop_mm(run: Mapping[str, Any], name: str) -> float | None:
     """A run's boundary error (mm) of loop ``name`` (e.g. ``elbow_l``), None when it has none."""
     info = run.get("info")
-    table = info.get(LOOPS_KEY) if isinstance(info, Mapping) else None
-    v = table.get(name) if isinstance(table, Mapping) else None
-    return float(v) if isinstance(v, (int, float)) and math.isfinite(v) else None
+    return _number(info.get(LOOPS_KEY) if isinstance(info, Mapping) else None, name)
 
 
 def compare_loops(ra: Sequence[Mapping[str, Any]], rb: Sequence[Mapping[str, Any]], la: str, lb: str,

@@ -199,3 +199,47 @@ def test_the_boundary_loops_are_summarised_per_set_from_the_loops_both_runs_meas
     plain = compare_runs(read_runs([_write(tmp_path / "c", 0, "camera", err)]),
                          read_runs([_write(tmp_path / "d", 0, "oracle", err)]))
     assert plain["conditions"]["noer"]["loops"] == {} and "Boundary loops" not in compare_markdown(plain)
+
+
+def test_each_loop_s_cost_is_the_limb_s_error_its_scatter_explains(tmp_path: Path) -> None:
+    rng = np.random.default_rng(0)
+    n = 8
+    elbow = {(i, x): float(rng.normal(0.0, 3.0)) for i in range(n) for x in "lr"}
+    wrist = {(i, x): float(rng.normal(-2.0, 4.0)) for i in range(n) for x in "lr"}
+    # the camera's forearms follow their loops exactly (-0.8 % per mm of elbow, +0.2 of wrist, +0.5 offset); the
+    # oracle's forearms err by a constant 0.3 % whatever their loops
+    cam = {(i, "noer"): {f"forearm_{x}": 0.5 - 0.8 * elbow[i, x] + 0.2 * wrist[i, x] for x in "lr"} for i in range(n)}
+    orc = {(i, "noer"): {"forearm_l": 0.3, "forearm_r": 0.3} for i in range(n)}
+    da, db = _write(tmp_path / "a", 0, "camera", cam), _write(tmp_path / "b", 0, "oracle", orc)
+    for d in (da, db):
+        doc = json.loads((d / "results.json").read_text())
+        for r in doc["runs"]:
+            i = int(r["subject"][-3:])
+            loops = {f"{k}_{x}": v[i, x] for k, v in (("elbow", elbow), ("wrist", wrist)) for x in "lr"}
+            r["info"] = {"boundary_errors_mm": {**loops, "elbow_r": None} if i == 0 else loops}
+        (d / "results.json").write_text(json.dumps(doc))
+    r = compare_runs(read_runs([da]), read_runs([db]))
+    costs = r["conditions"]["noer"]["loop_costs"]
+    assert set(costs) == {"forearm"}  # no other limb has both loops measured
+    fa = costs["forearm"]
+    assert (fa["proximal"], fa["distal"]) == ("elbow", "wrist")
+    cam_fit = fa["camera"]
+    assert cam_fit["n"] == 2 * n - 1  # subject 0's right elbow is missing
+    assert cam_fit["per_mm_proximal"] == pytest.approx(-0.8) and cam_fit["per_mm_distal"] == pytest.approx(0.2)
+    keep = [(i, x) for i in range(n) for x in "lr" if (i, x) != (0, "r")]
+    e = np.array([0.5 - 0.8 * elbow[k] + 0.2 * wrist[k] for k in keep])
+    assert cam_fit["rve"] == pytest.approx(np.mean(np.abs(e)), rel=1e-4)
+    # both loops at their means: every forearm errs by the error at the mean loops
+    at_mean = 0.5 - 0.8 * np.mean([elbow[k] for k in keep]) + 0.2 * np.mean([wrist[k] for k in keep])
+    assert cam_fit["rve_without_both"] == pytest.approx(abs(at_mean), rel=1e-4)
+    e_no_elbow = e + 0.8 * (np.array([elbow[k] for k in keep]) - np.mean([elbow[k] for k in keep]))
+    assert cam_fit["rve_without_proximal"] == pytest.approx(np.mean(np.abs(e_no_elbow)), rel=1e-4)
+    # the oracle's constant error owes nothing to its loops
+    assert fa["oracle"]["per_mm_proximal"] == pytest.approx(0.0, abs=1e-6)
+    assert fa["oracle"]["rve_without_both"] == pytest.approx(0.3, rel=1e-4)
+    md = compare_markdown(r)
+    assert "| forearm (elbow, wrist; 15) | camera | -0.80, +0.20 |" in md
+    # runs without boundary errors (older results) give no costs table
+    plain = compare_runs(read_runs([_write(tmp_path / "c", 0, "camera", cam)]),
+                         read_runs([_write(tmp_path / "d", 0, "oracle", orc)]))
+    assert plain["conditions"]["noer"]["loop_costs"] == {} and "scatter costs" not in compare_markdown(plain)

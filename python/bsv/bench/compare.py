@@ -8,7 +8,9 @@ set's mean RVE, mean signed error and worst subject's signed error, the differen
 less second) with its paired standard error, and marks a difference above ``max_gap``. The last row, ``limbs``,
 is each run's mean RVE over the eight limb segments (upper arms, forearms, thighs, shins), averaged. Under each
 condition's table, the boundary loops (:mod:`bsv.bench.boundaries`: how far each fitted loop lies from the true one
-along the limb, left and right pooled) give each set's mean and scatter: what places a segment's volume.
+along the limb, left and right pooled) give each set's mean and scatter: what places a segment's volume. Then what
+each loop's scatter costs each limb (:func:`loop_costs`): per set, the limb's signed error fitted on its two loops'
+errors, and the mean RVE left were one loop placed at its mean (the other as it is): where a gap comes from.
 
 Two sets are compared only when they hold the same bodies: every paired run must carry the same true volumes
 (the bodies are regenerated from the seed by each run), else :class:`bsv.errors.BenchError` names the subject
@@ -27,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from ..biomech.tables import JOINTS
 from ..bodies.variants import LIMB_SEGMENTS
 from ..errors import BenchError
 from .boundaries import ALL_KINDS as LOOP_KINDS
@@ -42,6 +45,16 @@ LIMBS_ROW = "limbs"
 ROWS: tuple[str, ...] = ("trunk_limbs", "torso", *LIMB_SEGMENTS, LIMBS_ROW)
 #: The files ``write_compare`` writes into its output folder.
 OUTPUT_FILES: tuple[str, ...] = ("compare.md", "compare.json", "compare.png")
+#: The limb kinds :func:`loop_costs` attributes, proximal to distal, each with its (proximal, distal) loop kinds
+#: from :data:`bsv.biomech.tables.JOINTS` (a joint's loop separates its first segment from its second).
+LIMB_LOOPS: dict[str, tuple[str, str]] = {
+    limb: (next(j[:-2] for j, (_, b) in JOINTS.items() if b == f"{limb}_l"),
+           next(j[:-2] for j, (a, _) in JOINTS.items() if a == f"{limb}_l"))
+    for limb in dict.fromkeys(s[:-2] for s in LIMB_SEGMENTS)
+}
+#: :func:`loop_costs` fits a limb's error on its loops only from at least this many limbs (left and right count
+#: apart).
+MIN_COST_LIMBS = 6
 #: Two true volumes (litres) closer than this are the same body's.
 SAME_VOLUME_L = 1e-6
 
@@ -200,13 +213,57 @@ def compare_loops(ra: Sequence[Mapping[str, Any]], rb: Sequence[Mapping[str, Any
     return out
 
 
+def _limb_rows(runs: Sequence[Mapping[str, Any]], limb: str) -> list[tuple[float, float, float] | None]:
+    """Per run and side (l, r in turn): (signed error %, proximal loop mm, distal loop mm) of ``limb``, or None
+    where the run lacks the segment's volumes or either loop."""
+    near, far = LIMB_LOOPS[limb]
+    out: list[tuple[float, float, float] | None] = []
+    for run in runs:
+        for side in ("l", "r"):
+            seg = f"{limb}_{side}"
+            p, d = _loop_mm(run, f"{near}_{side}"), _loop_mm(run, f"{far}_{side}")
+            out.append(None if p is None or d is None or not _has(run, seg) else (_errors(run, seg)[1], p, d))
+    return out
+
+
+def _costs(rows: Sequence[tuple[float, float, float]]) -> dict[str, float]:
+    """The least-squares fit of a limb's signed error on its proximal and distal loop errors (``per_mm``: % per mm
+    of each, + = the loop distal), its mean RVE, and the mean RVE with each loop's scatter taken out (the loop at
+    its mean, the error moved by its fitted share) and with both."""
+    e, p, d = (np.array(c, dtype=np.float64) for c in zip(*rows, strict=True))
+    design = np.column_stack([np.ones_like(e), p, d])
+    coef, *_ = np.linalg.lstsq(design, e, rcond=None)
+    share_p, share_d = coef[1] * (p - p.mean()), coef[2] * (d - d.mean())
+    return {"n": len(e), "per_mm_proximal": float(coef[1]), "per_mm_distal": float(coef[2]),
+            "rve": float(np.mean(np.abs(e))), "rve_without_proximal": float(np.mean(np.abs(e - share_p))),
+            "rve_without_distal": float(np.mean(np.abs(e - share_d))),
+            "rve_without_both": float(np.mean(np.abs(e - share_p - share_d)))}
+
+
+def loop_costs(ra: Sequence[Mapping[str, Any]], rb: Sequence[Mapping[str, Any]], la: str, lb: str,
+               ) -> dict[str, Any]:
+    """What each loop's scatter costs each limb kind of :data:`LIMB_LOOPS` (left and right pooled) over paired
+    runs ``ra`` / ``rb``, from the limbs whose volumes and two loops both runs of a pair hold: per kind its
+    ``proximal`` and ``distal`` loop kinds and per set the fit of :func:`_costs`. A kind with fewer than
+    :data:`MIN_COST_LIMBS` such limbs is left out (three coefficients need more)."""
+    out: dict[str, Any] = {}
+    for limb, (near, far) in LIMB_LOOPS.items():
+        both = [(x, y) for x, y in zip(_limb_rows(ra, limb), _limb_rows(rb, limb), strict=True)
+                if x is not None and y is not None]
+        if len(both) >= MIN_COST_LIMBS:
+            out[limb] = {"proximal": near, "distal": far, la: _costs([x for x, _ in both]),
+                         lb: _costs([y for _, y in both])}
+    return out
+
+
 def compare_runs(a: RunSet, b: RunSet, max_gap: float = DEFAULT_MAX_GAP,
                  labels: tuple[str, str] | None = None) -> dict[str, Any]:
     """The comparison of ``a`` against ``b`` (JSON-ready; see the module notes): ``labels``, ``max_gap``, and
     per condition the pairs used, the pairs left out because a run failed (by set) and one record per row of
     :data:`ROWS`: each set's ``mean_rve``, ``signed``, ``worst`` (signed %, and which run), the ``gap`` (first
     less second, points), its paired standard error ``gap_se`` (None from one pair) and ``over`` (gap >
-    ``max_gap``); and ``loops``, the boundary loops of the pairs (:func:`compare_loops`)."""
+    ``max_gap``); ``loops``, the boundary loops of the pairs (:func:`compare_loops`); and ``loop_costs``, what
+    each loop's scatter costs each limb (:func:`loop_costs`)."""
     if not (np.isfinite(max_gap) and max_gap >= 0):
         raise BenchError(f"compare: max_gap must be a number of points >= 0, got {max_gap!r}")
     la, lb = labels or default_labels(a, b)
@@ -230,8 +287,9 @@ def compare_runs(a: RunSet, b: RunSet, max_gap: float = DEFAULT_MAX_GAP,
             gap = sa["mean_rve"] - sb["mean_rve"]
             rows[row] = {"n": len(kk), la: sa, lb: sb, "gap": float(gap), "gap_se": se, "over": bool(gap > max_gap)}
         ok = [k for k in ck if a.runs[k].get("ok") and b.runs[k].get("ok")]
-        loops = compare_loops([a.runs[k] for k in ok], [b.runs[k] for k in ok], la, lb)
-        out["conditions"][cond] = {"pairs": len(ok), "failed": failed, "rows": rows, "loops": loops}
+        ra, rb = [a.runs[k] for k in ok], [b.runs[k] for k in ok]
+        out["conditions"][cond] = {"pairs": len(ok), "failed": failed, "rows": rows,
+                                   "loops": compare_loops(ra, rb, la, lb), "loop_costs": loop_costs(ra, rb, la, lb)}
     return out
 
 
@@ -264,6 +322,20 @@ def compare_markdown(result: Mapping[str, Any]) -> str:
                     "left and right pooled), mean +- sd:"), "", f"| loop | {la} | {lb} |", "|---|---|---|"]
             md += [f"| {kind} ({r['n']}) | {r[la]['mean']:+.1f} +- {r[la]['sd']:.1f} | "
                    f"{r[lb]['mean']:+.1f} +- {r[lb]['sd']:.1f} |" for kind, r in c["loops"].items()]
+            md.append("")
+        if c.get("loop_costs"):
+            md += [("What each loop's scatter costs (left and right pooled): the limb's signed error fitted on its "
+                    "two loops' errors, % per mm of each (+ = the loop distal); its mean RVE, and the mean RVE were "
+                    "the proximal loop, the distal loop or both placed at their mean:"), "",
+                   "| limb | set | % per mm proximal, distal | mean RVE | without proximal | without distal | without both |",
+                   "|---|---|---|---|---|---|---|"]
+            for limb, r in c["loop_costs"].items():
+                for lab in (la, lb):
+                    q = r[lab]
+                    md.append(f"| {limb} ({r['proximal']}, {r['distal']}; {q['n']}) | {lab} | "
+                              f"{q['per_mm_proximal']:+.2f}, {q['per_mm_distal']:+.2f} | {q['rve']:.2f} | "
+                              f"{q['rve_without_proximal']:.2f} | {q['rve_without_distal']:.2f} | "
+                              f"{q['rve_without_both']:.2f} |")
             md.append("")
     md.append(f"Over {result['max_gap']:g} point: {', '.join(over)}." if over
               else f"Every gap is within {result['max_gap']:g} point.")
@@ -351,6 +423,6 @@ def main_compare(runs: Iterable[str], against: Iterable[str], labels: tuple[str,
     return 0
 
 
-__all__ = ["DEFAULT_MAX_GAP", "LIMBS_ROW", "LOOP_KINDS", "OUTPUT_FILES", "ROWS", "RunSet", "compare_figure",
-           "compare_loops", "compare_markdown", "compare_runs", "default_labels", "main_compare", "pairs", "read_runs",
-           "write_compare"]
+__all__ = ["DEFAULT_MAX_GAP", "LIMBS_ROW", "LIMB_LOOPS", "LOOP_KINDS", "MIN_COST_LIMBS", "OUTPUT_FILES", "ROWS", "RunSet",
+           "compare_figure", "compare_loops", "compare_markdown", "compare_runs", "default_labels", "loop_costs",
+           "main_compare", "pairs", "read_runs", "write_compare"]

@@ -40,6 +40,7 @@ import bsv
 from bsv.bench.synth import scan_seed
 from bsv.bodies import subject
 from bsv.bodies.joints import rig_joints
+from bsv.errors import BsvError
 from bsv.frontend.background import showing
 from bsv.frontend.capture import read_capture
 from bsv.frontend.landmarks import Camera
@@ -263,7 +264,10 @@ def main() -> None:
         for seed, i in tqdm(todo, desc="subjects"):
             folder = args.out / f"{seed}_{i}"
             render(seed, i, folder)
-            rows += measure(model, folder)
+            try:
+                rows += measure(model, folder)
+            except BsvError as exc:  # a capture the camera path cannot read is left out, and said so
+                tqdm.write(f"{folder}: left out ({exc})")
         (args.out / f"rows_{args.seeds.replace(',', '-')}_n{args.n}.json").write_text(json.dumps(rows))
     report([r for f in sorted(args.out.glob("rows_*.json")) for r in json.loads(f.read_text())])
 

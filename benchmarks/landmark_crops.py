@@ -8,7 +8,7 @@ subjects with the rig's true joints, runs the camera path's detection as shipped
 (``pose_landmark_heavy.tflite``) through LiteRT on crops it builds itself, each on the image and its mirror image:
 
 - ``std``: MediaPipe's region of interest (iterated three times from the model's own auxiliary landmarks; it
-  reproduces the shipped landmarks to 1-2 px at the elbows);
+  reproduces the shipped elbow landmarks to within 2.5 px);
 - ``arm<s>`` / ``leg<s>``: the same crop scaled by ``s`` (0.8, 0.65) and centred on the arms' (shoulders, elbows,
   wrists) or the legs' (hips, knees, ankles) landmarks: a finer view of the limb;
 - each also without MediaPipe's refinement from the heatmap (``/raw``: the model's regression output).
@@ -191,10 +191,7 @@ def measure(model: LandmarkModel, folder: Path) -> list[dict[str, Any]]:
         shipped = detect(img, view, depth=depth, camera=cam).pose
         width = img.shape[1]
         flipped = np.ascontiguousarray(shown[:, ::-1])
-        ref_m = shipped.copy()
-        ref_m[:, 0] = width - 1 - ref_m[:, 0]
-        for a, b in PAIRS:
-            ref_m[[a, b]] = ref_m[[b, a]]
+        ref_m = mirrored({"pose": shipped}, width)["pose"]
         runs = {}
         for name, crop in CROPS.items():
             first = oriented(model.detect(shown, shipped, crop), shipped)
